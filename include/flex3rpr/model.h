@@ -1,0 +1,80 @@
+/* f3r_model: built once from a scene, then read-only. Several simulations may share one model.
+ *
+ * Generalized coordinates q (paper eq. 19 order), nq = 9 + sum of the links' mode counts:
+ *   q[0..2] rho_i   stroke |A_i B_i| (m)
+ *   q[3..5] theta_i direction of leg i from +X at A_i (rad)
+ *   q[6..8] X_p, Y_p, phi_p platform pose (m, m, rad)
+ *   q[9..]  eta of link 1 (link_modes[0] values), then link 2, then link 3 (m)
+ * A rigid link contributes no modal coordinates. */
+#ifndef FLEX3RPR_MODEL_H
+#define FLEX3RPR_MODEL_H
+
+#include "flex3rpr/scene.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+#define F3R_MAX_Q (9 + 3 * F3R_MAX_MODES)
+
+typedef struct {
+  f3r_link_model model;
+  int modes;    /* r_i */
+  int eta_index;/* index of this link's first modal coordinate in q */
+  double alpha[F3R_MAX_MODES];        /* roots of the frequency equation */
+  double mean[F3R_MAX_MODES];         /* int_0^1 psi_j dxi */
+  double first_moment[F3R_MAX_MODES]; /* int_0^1 xi psi_j dxi */
+  double tip[F3R_MAX_MODES];          /* psi_j(1): 0 for fixed-pinned */
+  double stiffness[F3R_MAX_MODES];    /* EI/l^3 int psi_j''^2 (N/m), diagonal modal stiffness */
+  double omega_clamped[F3R_MAX_MODES];/* alpha_j^2 sqrt(EI/(m l^3)) (rad/s) */
+} f3r_link_params;
+
+typedef struct {
+  f3r_scene scene;       /* the scene the model was built from (validated) */
+
+  /* geometry (../shared/MODEL.md) */
+  double base_joint[3][2];   /* A_i (m) */
+  double platform_angle[3];  /* phi_i of C_i on the platform: -pi/6, pi/2, 7pi/6 */
+  double platform_radius;    /* r_PC (m) */
+
+  /* inertia and stiffness */
+  double link_length;        /* l (m) */
+  double link_mass;          /* m (kg) */
+  double bending_stiffness;  /* EI (N m^2) */
+  double cylinder_inertia;   /* I_c about A_i (kg m^2) */
+  double platform_mass;      /* m_p (kg) */
+  double platform_inertia;   /* I_p (kg m^2) */
+
+  f3r_link_params link[3];
+  int exact_kinematics;
+
+  int nq;                    /* number of generalized coordinates */
+  int n_independent;         /* 3 + sum r_i: platform pose and modal coordinates */
+  double theta_branch[3];    /* leg directions at the scene's initial pose: branch of atan2 */
+} f3r_model;
+
+/* Builds a model from a scene (validating it first). The result owns no pointers, so a model is
+ * freed with f3r_model_destroy or simply copied. */
+f3r_status f3r_model_create(const f3r_scene* scene, f3r_model** model, f3r_error* err);
+void f3r_model_destroy(f3r_model* model);
+
+/* Closed-form loop closure (../shared/MODEL.md): the full coordinates q (nq) from the platform
+ * pose and the modal coordinates in q (which are read), filling rho and theta of each link.
+ * Returns F3R_ERR_SINGULAR if a link would need rho_i + l <= 0. */
+f3r_status f3r_model_close_loops(const f3r_model* model, double* q);
+
+/* Rates of rho and theta in qdot (nq) from the platform and modal rates in qdot and the pose q. */
+void f3r_model_close_loop_rates(const f3r_model* model, const double* q, double* qdot);
+
+/* Beam station k of link i (k = 0..count-1, evenly spaced from B_i to C_i): position (x, y) in
+ * the world and tangent angle of the deflected centre line, and the deflection w there. */
+void f3r_model_beam_point(const f3r_model* model, const double* q, int link, double xi,
+                          double position[2], double* tangent_angle, double* deflection);
+
+/* Tip deflection w_i(l) of link i (m), and its rate for given qdot. */
+double f3r_model_tip_deflection(const f3r_model* model, const double* q, int link);
+
+#ifdef __cplusplus
+}
+#endif
+#endif

@@ -1,0 +1,71 @@
+/* The model as a residual F(t, y, y') = 0 in one of two formulations, with its Jacobian
+ * dF/dy + cj dF/dy'. Public so that any DAE or ODE solver can integrate the same model.
+ *
+ * dae (stabilised index 2, Gear-Gupta-Leimkuhler), ny = 2 nq + 13:
+ *   y = [q (nq) | v (nq) | lambda (6) | mu (6) | W (1)]
+ *   F = [ q' - v + G^T mu
+ *         M v' + h + k - Q - G^T lambda
+ *         g(q)
+ *         G v
+ *         W' - Q . v ]
+ *   lambda and mu are algebraic (mu = 0 along exact solutions); q, v and W are differential.
+ * minimal (independent coordinates z = q[6..nq) = (X_p, Y_p, phi_p, eta)), ny = 2 nz + 1:
+ *   y = [z (nz) | u (nz) | W (1)],  rho and theta from the closed-form loop closure,
+ *   F = [ z' - u
+ *         B^T (M a + h + k - Q)      with v = B u, a = B u' + c
+ *         W' - Q . v ]
+ *   where B = dq/dz and c = dB/dt u. B^T eliminates the multipliers: lambda follows from the
+ *   solved accelerations.
+ * W is the work done by the generalized forces Q, so T + V - W is conserved. */
+#ifndef FLEX3RPR_RESIDUAL_H
+#define FLEX3RPR_RESIDUAL_H
+
+#include <stddef.h>
+
+#include "flex3rpr/model.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+typedef struct f3r_workspace f3r_workspace;
+
+f3r_workspace* f3r_workspace_create(const f3r_model* model);
+void f3r_workspace_destroy(f3r_workspace* ws);
+
+int f3r_state_size(const f3r_model* model, f3r_formulation form);
+/* 1 for differential components of y, 0 for algebraic ones (lambda and mu of dae). */
+void f3r_state_kinds(const f3r_model* model, f3r_formulation form, double* id);
+
+/* held: the caller's generalized forces (nq), or NULL. Returns F3R_OK, F3R_ERR_SINGULAR for a
+ * configuration the loop closure cannot reach, or F3R_ERR_NONFINITE. */
+f3r_status f3r_residual(const f3r_model* model, f3r_formulation form, double t, const double* y,
+                        const double* yp, const double* held, double* res, f3r_workspace* ws);
+
+/* J (ny x ny, column-major, leading dimension ld) = dF/dy + cj dF/dy'. For dae it is exact and
+ * analytic. For minimal the columns of z and u come from forward differences of the residual
+ * (the cj dF/dy' part is analytic). */
+f3r_status f3r_residual_jacobian(const f3r_model* model, f3r_formulation form, double t,
+                                 double cj, const double* y, const double* yp,
+                                 const double* held, double* J, int ld, f3r_workspace* ws);
+
+/* The minimal formulation as an explicit ODE y' = f(t, y), y = [z | u | W]: one residual
+ * evaluation and one solve with B^T M B. For explicit integrators and ODE peers. */
+f3r_status f3r_explicit_rhs(const f3r_model* model, double t, const double* y,
+                            const double* held, double* ydot, f3r_workspace* ws);
+
+/* Full coordinates q, v (nq each) of a state y. */
+f3r_status f3r_state_to_full(const f3r_model* model, f3r_formulation form, const double* y,
+                             double* q, double* v);
+
+/* Consistent y and y' at time t from full q, v that satisfy the constraints, with work W:
+ * accelerations and multipliers from f3r_solve_accelerations. lambda may be NULL. */
+f3r_status f3r_consistent_state(const f3r_model* model, f3r_formulation form, double t,
+                                const double* q, const double* v, const double* held,
+                                double work, double* y, double* yp, double* lambda,
+                                f3r_workspace* ws);
+
+#ifdef __cplusplus
+}
+#endif
+#endif

@@ -1,0 +1,118 @@
+/* f3r_scene: everything one run asks for, as a plain struct with documented defaults.
+ * f3r_default_scene() gives Table I of the paper with the conventions of ../shared/MODEL.md,
+ * rigid links, no inputs; a caller (or the YAML loader) changes only what it needs.
+ * All quantities are SI: m, kg, s, N, rad. */
+#ifndef FLEX3RPR_SCENE_H
+#define FLEX3RPR_SCENE_H
+
+#include "flex3rpr/beam_modes.h"
+#include "flex3rpr/status.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+typedef enum {
+  F3R_LINK_RIGID = 0,
+  F3R_LINK_FIXED_PINNED = F3R_BEAM_FIXED_PINNED,
+  F3R_LINK_FIXED_FREE = F3R_BEAM_FIXED_FREE
+} f3r_link_model;
+
+typedef enum {
+  F3R_FORMULATION_DAE = 0,    /* redundant coordinates + multipliers, GGL index-2 */
+  F3R_FORMULATION_MINIMAL = 1 /* platform pose + modal coordinates, implicit ODE */
+} f3r_formulation;
+
+typedef enum {
+  F3R_INTEGRATOR_IDA = 0, /* SUNDIALS IDA: variable-order BDF, implicit (both formulations) */
+  F3R_INTEGRATOR_ERK = 1  /* SUNDIALS ARKODE ERKStep, Verner 8(7), explicit (minimal only) */
+} f3r_integrator;
+
+/* A scripted generalized force f(t). */
+typedef enum {
+  F3R_INPUT_NONE = 0,
+  F3R_INPUT_CONSTANT = 1, /* f = offset */
+  F3R_INPUT_HARMONIC = 2  /* f = offset + amplitude cos(omega t + phase) */
+} f3r_input_kind;
+
+typedef struct {
+  f3r_input_kind kind;
+  double offset;    /* N or N m */
+  double amplitude; /* N or N m */
+  double omega;     /* rad/s */
+  double phase;     /* rad */
+} f3r_input;
+
+/* Index of a rigid generalized force in f3r_scene.inputs and in force vectors. */
+enum {
+  F3R_FORCE_RHO = 0,      /* 0..2: force along leg i on its piston (N) */
+  F3R_FORCE_THETA = 3,    /* 3..5: torque on cylinder i about A_i (N m) */
+  F3R_FORCE_PLATFORM = 6, /* 6, 7, 8: platform F_x (N), F_y (N), torque (N m) */
+  F3R_RIGID_FORCES = 9
+};
+
+typedef struct {
+  f3r_link_model model;
+  int modes;                         /* 1..F3R_MAX_MODES for a flexible link; 0 for rigid */
+  double eta0[F3R_MAX_MODES];        /* initial modal deflections (m) */
+  double eta_rate0[F3R_MAX_MODES];   /* initial modal rates (m/s) */
+} f3r_link_scene;
+
+typedef struct {
+  /* geometry and materials (Table I) */
+  double base_side;               /* |A_i A_j| (m), 0.66 */
+  double platform_side;           /* b = |C_i C_j| (m), 0.1 */
+  double platform_mass;           /* m_p (kg), 0.2 */
+  double platform_inertia;        /* I_p about P (kg m^2); default m_p b^2 / 12 */
+  double link_length;             /* l (m), 0.2 */
+  double link_diameter;           /* solid round section (m), 0.010 */
+  double link_density;            /* kg/m^3, 2270 */
+  double link_youngs_modulus;     /* E (Pa), 73e9 */
+  double cylinder_length;         /* L (m), 0.2 */
+  double cylinder_inner_diameter; /* m, 0.014 */
+  double cylinder_outer_diameter; /* m, 0.016 */
+  double cylinder_density;        /* kg/m^3, 2270 */
+
+  f3r_link_scene links[3];
+  int exact_kinematics; /* 1: keep the axial velocity -w theta_dot of a beam point (default 0) */
+
+  /* initial state: platform pose (X_p, Y_p, phi_p) and its rate; deflections are in links[] */
+  double platform_pose0[3];
+  double platform_velocity0[3];
+
+  /* scripted generalized forces, indexed by F3R_FORCE_* (modal forces come from the caller) */
+  f3r_input inputs[F3R_RIGID_FORCES];
+
+  /* solver */
+  f3r_formulation formulation; /* default dae */
+  f3r_integrator integrator;   /* default ida */
+  double rtol;                 /* default 1e-8 */
+  double atol;                 /* default 1e-10 (m, m/s) */
+  double max_step;             /* s; 0 means no limit */
+
+  /* run */
+  double duration;    /* s, default 0.5 */
+  double output_step; /* s, default 1e-4 */
+  int beam_points;    /* stations per link for beam outputs, default 11 */
+} f3r_scene;
+
+/* Table I, rigid links, home pose (P = O, phi_p = 0), no inputs, dae at rtol 1e-8. */
+f3r_scene f3r_default_scene(void);
+
+/* Checks every field against its allowed range. The message names the field, the value and the
+ * range, e.g. "links[1].modes: 25 is out of range 1..20". */
+f3r_status f3r_scene_validate(const f3r_scene* scene, f3r_error* err);
+
+/* Reads a scene YAML file over the defaults, then validates it. Errors start with "path:line: ". */
+f3r_status f3r_scene_load(const char* path, f3r_scene* scene, f3r_error* err);
+
+/* Scene name of rigid generalized force `index` (F3R_FORCE_*), e.g. "rho_1", "platform_torque". */
+const char* f3r_input_name(int index);
+
+/* Value of a scripted input at time t. */
+double f3r_input_value(const f3r_input* input, double t);
+
+#ifdef __cplusplus
+}
+#endif
+#endif

@@ -1,0 +1,82 @@
+/* f3r_sim: one run of a model, integrated by SUNDIALS IDA. It owns the state, the integrator
+ * memory, the caller's held forces and the outputs; a model may serve several simulations.
+ * Nothing is allocated after f3r_sim_create. */
+#ifndef FLEX3RPR_SIM_H
+#define FLEX3RPR_SIM_H
+
+#include "flex3rpr/residual.h"
+#include "flex3rpr/stages.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+typedef struct f3r_sim f3r_sim;
+
+typedef struct {
+  f3r_formulation formulation;
+  f3r_integrator integrator;
+  double rtol, atol;      /* atol applies to positions (m, rad) and rates; see sim.c for others */
+  double max_step;        /* s; 0: no limit */
+  int analytic_jacobian;  /* 1: f3r_residual_jacobian; 0: IDA's difference quotients */
+  int stop_at_outputs;    /* 1: never step past the requested output time (for live input) */
+} f3r_solver_settings;
+
+/* The scene's solver settings, analytic Jacobian, interpolated outputs. */
+f3r_solver_settings f3r_solver_settings_from_scene(const f3r_scene* scene);
+
+typedef struct {
+  long steps, residual_evals, jacobian_evals;
+  long error_test_failures, nonlinear_failures;
+  long restarts;          /* integrator re-initialisations (force changes, resets) */
+  long recoverable_errors;/* residual calls that asked IDA to cut the step */
+  double last_step;       /* s */
+  int last_order;
+} f3r_sim_stats;
+
+typedef struct {
+  double t;                      /* s */
+  double q[F3R_MAX_Q];           /* generalized coordinates (model.h layout) */
+  double v[F3R_MAX_Q];           /* their rates */
+  double forces[F3R_MAX_Q];      /* applied generalized forces Q at t */
+  double lambda[F3R_NCON];       /* multipliers: constraint force on the loop (x, y per link), N */
+  double tip_deflection[3];      /* w_i(l), m */
+  double tip_deflection_rate[3]; /* m/s */
+  double kinetic_energy;         /* J */
+  double potential_energy;       /* J */
+  double external_work;          /* J, work of Q since t = 0 */
+  double energy_balance_error;   /* |T + V - W - (T0 + V0 - W0)|, J */
+  double constraint_residual;    /* max |g_k(q)|, m */
+  double velocity_residual;      /* max |(G v)_k|, m/s */
+  f3r_sim_stats stats;
+} f3r_outputs;
+
+f3r_status f3r_sim_create(const f3r_model* model, const f3r_solver_settings* settings,
+                          f3r_sim** sim, f3r_error* err);
+void f3r_sim_destroy(f3r_sim* sim);
+
+/* Back to the scene's initial state at t = 0 with no held forces. */
+f3r_status f3r_sim_reset(f3r_sim* sim, f3r_error* err);
+
+/* Held generalized forces (nq values, model.h layout), added to the scene's scripted inputs from
+ * the current time on. The integrator restarts there, so it never integrates across the jump.
+ * Non-finite values are rejected and change nothing. */
+f3r_status f3r_sim_set_forces(f3r_sim* sim, const double* held, f3r_error* err);
+
+/* Integrates to t_out (> current time). On failure the last good state is kept. */
+f3r_status f3r_sim_advance(f3r_sim* sim, double t_out, f3r_error* err);
+
+double f3r_sim_time(const f3r_sim* sim);
+const f3r_model* f3r_sim_model(const f3r_sim* sim);
+f3r_formulation f3r_sim_formulation(const f3r_sim* sim);
+
+/* Outputs at the current time, computed from the state on request. */
+const f3r_outputs* f3r_sim_outputs(f3r_sim* sim);
+
+/* Current state vector y of the formulation (f3r_state_size values). */
+const double* f3r_sim_state(const f3r_sim* sim);
+
+#ifdef __cplusplus
+}
+#endif
+#endif

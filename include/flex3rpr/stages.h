@@ -1,0 +1,80 @@
+/* The stages the equations of motion are built from, in the redundant coordinates q of model.h.
+ * Public so that another solver or formulation can assemble the same model from them.
+ *
+ * Equations of motion (paper eq. 18-19, derived from eqs. 8-17, ../shared/MODEL.md):
+ *   M(q) a + h(q, v) + k(q) = Q(t, q, v) + G(q)^T lambda,     g(q) = 0
+ * with v = dq/dt, a = dv/dt, M the mass matrix, h = dM/dt v - dT/dq the velocity-dependent
+ * (Coriolis and centrifugal) forces, k = dV/dq the elastic forces, Q the generalized forces,
+ * g the six loop-closure constraints (two per link, eqs. 14-17) and G = dg/dq.
+ *
+ * Matrices are dense and column-major with a leading dimension `ld` (as SUNDIALS' dense
+ * matrices): element (i, j) is at A[j*ld + i]. Functions named `f3r_add_*` add `scale` times
+ * their matrix into A, so that a Jacobian can be assembled block by block in place. */
+#ifndef FLEX3RPR_STAGES_H
+#define FLEX3RPR_STAGES_H
+
+#include "flex3rpr/model.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+#define F3R_NCON 6 /* constraints: (x, y) of the loop of each link */
+
+/* --- inertia ------------------------------------------------------------------------------- */
+/* scale * M(q) (nq x nq) added into A. */
+void f3r_add_mass_matrix(const f3r_model* m, const double* q, double scale, double* A, int ld);
+/* out = M(q) a (nq). */
+void f3r_mass_times(const f3r_model* m, const double* q, const double* a, double* out);
+/* scale * d(M(q) a)/dq added into A (nq x nq), a held fixed. */
+void f3r_add_mass_times_dq(const f3r_model* m, const double* q, const double* a, double scale,
+                           double* A, int ld);
+
+/* --- velocity-dependent forces h(q, v) --------------------------------------------------------- */
+void f3r_velocity_forces(const f3r_model* m, const double* q, const double* v, double* h);
+void f3r_add_velocity_forces_dq(const f3r_model* m, const double* q, const double* v,
+                                double scale, double* A, int ld);
+void f3r_add_velocity_forces_dv(const f3r_model* m, const double* q, const double* v,
+                                double scale, double* A, int ld);
+
+/* --- elastic forces k(q) = dV/dq --------------------------------------------------------------- */
+void f3r_elastic_forces(const f3r_model* m, const double* q, double* k);
+void f3r_add_elastic_forces_dq(const f3r_model* m, double scale, double* A, int ld);
+
+/* --- generalized forces Q = held + scripted inputs(t) ------------------------------------------ */
+/* held (nq) are the caller's forces (may be NULL for none). */
+void f3r_generalized_forces(const f3r_model* m, double t, const double* held, double* Q);
+
+/* --- constraints -------------------------------------------------------------------------------- */
+void f3r_constraints(const f3r_model* m, const double* q, double* g);          /* g (6) */
+void f3r_add_constraint_jacobian(const f3r_model* m, const double* q, double scale, double* A,
+                                 int ld);                                       /* G (6 x nq) */
+void f3r_add_constraint_jacobian_transpose(const f3r_model* m, const double* q, double scale,
+                                           double* A, int ld);                  /* G^T (nq x 6) */
+void f3r_constraint_times(const f3r_model* m, const double* q, const double* v, double* out);
+void f3r_constraint_transpose_times(const f3r_model* m, const double* q, const double* lambda,
+                                    double* out);
+/* d(G(q)^T lambda)/dq (nq x nq) and d(G(q) v)/dq (6 x nq). */
+void f3r_add_constraint_transpose_times_dq(const f3r_model* m, const double* q,
+                                           const double* lambda, double scale, double* A, int ld);
+void f3r_add_constraint_times_dq(const f3r_model* m, const double* q, const double* v,
+                                 double scale, double* A, int ld);
+/* gamma = (dG/dt) v, so that G a + gamma = 0 along a motion. */
+void f3r_constraint_bias(const f3r_model* m, const double* q, const double* v, double* gamma);
+
+/* --- energy ------------------------------------------------------------------------------------- */
+double f3r_kinetic_energy(const f3r_model* m, const double* q, const double* v);
+double f3r_potential_energy(const f3r_model* m, const double* q);
+
+/* --- accelerations ------------------------------------------------------------------------------ */
+/* Solves [M -G^T; G 0] [a; lambda] = [Q - h - k; -gamma] for the accelerations a (nq) and the
+ * multipliers lambda (6) at (q, v). work holds (nq+6)^2 + 2(nq+6) doubles.
+ * Returns F3R_ERR_SINGULAR if the system is singular. */
+f3r_status f3r_solve_accelerations(const f3r_model* m, const double* q, const double* v,
+                                   const double* Q, double* a, double* lambda, double* work);
+size_t f3r_solve_accelerations_work_size(const f3r_model* m);
+
+#ifdef __cplusplus
+}
+#endif
+#endif

@@ -1,0 +1,174 @@
+/* Loop-closure constraints (paper eqs. 13-17) and their derivatives.
+ *
+ * With e = (cos th, sin th), n = (-sin th, cos th), L = rho + l, w = w_i(l) the tip deflection
+ * (0 for rigid and fixed-pinned links, whose modes vanish at the tip), and C_i on the platform at
+ * P + r_PC e_c, e_c = (cos(phi_i + phi_p), sin(phi_i + phi_p)), n_c its normal:
+ *   g_i = A_i + L e + w n - P - r_PC e_c                                  (2 rows per link)
+ *   G_i: d/drho = e, d/dth = L n - w e, d/deta_j = psi_j(1) n, d/dP = -I, d/dphi_p = -r_PC n_c
+ *   gamma_i = (dG_i/dt) v = 2 rho' th' n - L th'^2 e - 2 w' th' e - w th'^2 n + r_PC phi'^2 e_c */
+#include <math.h>
+
+#include "dense.h"
+#include "flex3rpr/stages.h"
+#include "link_state.h"
+
+void f3r_constraints(const f3r_model* m, const double* q, double* g) {
+  for (int i = 0; i < 3; ++i) {
+    f3r_link_state k;
+    f3r_link_state_fill(m, i, q, 0, &k);
+    const f3r_platform_joint pj = f3r_platform_joint_at(m, i, q);
+    const double r = m->platform_radius;
+    g[2 * i] = m->base_joint[i][0] + k.len * k.c - k.w * k.s - q[6] - r * pj.cc;
+    g[2 * i + 1] = m->base_joint[i][1] + k.len * k.s + k.w * k.c - q[7] - r * pj.sc;
+  }
+}
+
+/* Calls put(row, col, value) for every nonzero of G, so G and G^T share one definition. */
+#define F3R_FOR_EACH_G_ENTRY(m, q, PUT)                                                    \
+  for (int i = 0; i < 3; ++i) {                                                            \
+    f3r_link_state k;                                                                      \
+    f3r_link_state_fill(m, i, q, 0, &k);                                                   \
+    const f3r_platform_joint pj = f3r_platform_joint_at(m, i, q);                          \
+    const double r = (m)->platform_radius;                                                 \
+    const int gx = 2 * i, gy = 2 * i + 1;                                                  \
+    PUT(gx, i, k.c);                                                                       \
+    PUT(gy, i, k.s);                                                                       \
+    PUT(gx, 3 + i, -k.len * k.s - k.w * k.c);                                              \
+    PUT(gy, 3 + i, k.len * k.c - k.w * k.s);                                               \
+    PUT(gx, 6, -1.0);                                                                      \
+    PUT(gy, 7, -1.0);                                                                      \
+    PUT(gx, 8, r * pj.sc);                                                                 \
+    PUT(gy, 8, -r * pj.cc);                                                                \
+    const f3r_link_params* lp = &(m)->link[i];                                             \
+    if (lp->model == F3R_LINK_FIXED_FREE)                                                  \
+      for (int j = 0; j < lp->modes; ++j) {                                                \
+        PUT(gx, lp->eta_index + j, -lp->tip[j] * k.s);                                     \
+        PUT(gy, lp->eta_index + j, lp->tip[j] * k.c);                                      \
+      }                                                                                    \
+  }
+
+void f3r_add_constraint_jacobian(const f3r_model* m, const double* q, double scale, double* A,
+                                 int ld) {
+#define PUT_G(row, col, value) F3R_AT(A, ld, row, col) += scale * (value)
+  F3R_FOR_EACH_G_ENTRY(m, q, PUT_G)
+#undef PUT_G
+}
+
+void f3r_add_constraint_jacobian_transpose(const f3r_model* m, const double* q, double scale,
+                                           double* A, int ld) {
+#define PUT_GT(row, col, value) F3R_AT(A, ld, col, row) += scale * (value)
+  F3R_FOR_EACH_G_ENTRY(m, q, PUT_GT)
+#undef PUT_GT
+}
+
+void f3r_constraint_times(const f3r_model* m, const double* q, const double* v, double* out) {
+  for (int c = 0; c < F3R_NCON; ++c) out[c] = 0.0;
+#define PUT_GV(row, col, value) out[row] += (value) * v[col]
+  F3R_FOR_EACH_G_ENTRY(m, q, PUT_GV)
+#undef PUT_GV
+}
+
+void f3r_constraint_transpose_times(const f3r_model* m, const double* q, const double* lambda,
+                                    double* out) {
+  for (int n = 0; n < m->nq; ++n) out[n] = 0.0;
+#define PUT_GTL(row, col, value) out[col] += (value) * lambda[row]
+  F3R_FOR_EACH_G_ENTRY(m, q, PUT_GTL)
+#undef PUT_GTL
+}
+
+/* Second derivatives of g: for a 6-vector y, d(G^T y)/dq and, with the same terms transposed,
+ * d(G v)/dq. Nonzero only in the (rho, theta, eta) block of each link and at (phi_p, phi_p). */
+void f3r_add_constraint_transpose_times_dq(const f3r_model* m, const double* q,
+                                           const double* lambda, double scale, double* A, int ld) {
+  double phi_phi = 0.0;
+  for (int i = 0; i < 3; ++i) {
+    f3r_link_state k;
+    f3r_link_state_fill(m, i, q, 0, &k);
+    const f3r_platform_joint pj = f3r_platform_joint_at(m, i, q);
+    const double lx = lambda[2 * i], ly = lambda[2 * i + 1];
+    const double e_l = k.c * lx + k.s * ly, n_l = -k.s * lx + k.c * ly;
+    const int r = i, t = 3 + i;
+    F3R_AT(A, ld, r, t) += scale * n_l;
+    F3R_AT(A, ld, t, r) += scale * n_l;
+    F3R_AT(A, ld, t, t) += scale * (-k.len * e_l - k.w * n_l);
+    const f3r_link_params* lp = &m->link[i];
+    if (lp->model == F3R_LINK_FIXED_FREE)
+      for (int j = 0; j < lp->modes; ++j) {
+        const int col = lp->eta_index + j;
+        F3R_AT(A, ld, t, col) += scale * (-lp->tip[j] * e_l);
+        F3R_AT(A, ld, col, t) += scale * (-lp->tip[j] * e_l);
+      }
+    phi_phi += m->platform_radius * (pj.cc * lx + pj.sc * ly);
+  }
+  F3R_AT(A, ld, 8, 8) += scale * phi_phi;
+}
+
+void f3r_add_constraint_times_dq(const f3r_model* m, const double* q, const double* v,
+                                 double scale, double* A, int ld) {
+  for (int i = 0; i < 3; ++i) {
+    f3r_link_state k;
+    f3r_link_state_fill(m, i, q, v, &k);
+    const f3r_platform_joint pj = f3r_platform_joint_at(m, i, q);
+    const int gx = 2 * i, gy = 2 * i + 1, r = i, t = 3 + i;
+    const double rd = k.rho_dot, td = k.theta_dot;
+    /* d/drho = n th' */
+    F3R_AT(A, ld, gx, r) += scale * (-k.s * td);
+    F3R_AT(A, ld, gy, r) += scale * (k.c * td);
+    /* d/dth = n rho' - (L e + w n) th' - w' e */
+    F3R_AT(A, ld, gx, t) += scale * (-k.s * rd - (k.len * k.c - k.w * k.s) * td - k.w_dot * k.c);
+    F3R_AT(A, ld, gy, t) += scale * (k.c * rd - (k.len * k.s + k.w * k.c) * td - k.w_dot * k.s);
+    const f3r_link_params* lp = &m->link[i];
+    if (lp->model == F3R_LINK_FIXED_FREE)
+      for (int j = 0; j < lp->modes; ++j) { /* d/deta_j = -psi_j(1) e th' */
+        const int col = lp->eta_index + j;
+        F3R_AT(A, ld, gx, col) += scale * (-lp->tip[j] * k.c * td);
+        F3R_AT(A, ld, gy, col) += scale * (-lp->tip[j] * k.s * td);
+      }
+    /* d/dphi_p = r_PC e_c phi' */
+    F3R_AT(A, ld, gx, 8) += scale * (m->platform_radius * pj.cc * v[8]);
+    F3R_AT(A, ld, gy, 8) += scale * (m->platform_radius * pj.sc * v[8]);
+  }
+}
+
+void f3r_constraint_bias(const f3r_model* m, const double* q, const double* v, double* gamma) {
+  for (int i = 0; i < 3; ++i) {
+    f3r_link_state k;
+    f3r_link_state_fill(m, i, q, v, &k);
+    const f3r_platform_joint pj = f3r_platform_joint_at(m, i, q);
+    const double rd = k.rho_dot, td = k.theta_dot, pd = v[8];
+    const double along = -k.len * td * td - 2.0 * k.w_dot * td; /* e component */
+    const double across = 2.0 * rd * td - k.w * td * td;        /* n component */
+    const double rp = m->platform_radius * pd * pd;
+    gamma[2 * i] = along * k.c - across * k.s + rp * pj.cc;
+    gamma[2 * i + 1] = along * k.s + across * k.c + rp * pj.sc;
+  }
+}
+
+size_t f3r_solve_accelerations_work_size(const f3r_model* m) {
+  const size_t n = (size_t)m->nq + F3R_NCON;
+  return n * n + 2 * n + 2 * (size_t)F3R_MAX_Q;
+}
+
+f3r_status f3r_solve_accelerations(const f3r_model* m, const double* q, const double* v,
+                                   const double* Q, double* a, double* lambda, double* work) {
+  const int nq = m->nq, n = nq + F3R_NCON;
+  double* K = work;
+  double* b = K + (size_t)n * n;
+  int* piv = (int*)(b + n); /* n ints fit in n doubles */
+  double* h = b + 2 * n;
+  double* el = h + F3R_MAX_Q;
+  for (size_t z = 0; z < (size_t)n * n; ++z) K[z] = 0.0;
+  f3r_add_mass_matrix(m, q, 1.0, K, n);
+  f3r_add_constraint_jacobian_transpose(m, q, -1.0, K + (size_t)nq * n, n); /* -G^T, top right */
+  f3r_add_constraint_jacobian(m, q, 1.0, K + nq, n);                        /* G, bottom left */
+  f3r_velocity_forces(m, q, v, h);
+  f3r_elastic_forces(m, q, el);
+  for (int r = 0; r < nq; ++r) b[r] = Q[r] - h[r] - el[r];
+  f3r_constraint_bias(m, q, v, b + nq);
+  for (int c = 0; c < F3R_NCON; ++c) b[nq + c] = -b[nq + c];
+  if (f3r_lu_factor(K, n, piv)) return F3R_ERR_SINGULAR;
+  f3r_lu_solve(K, n, piv, b);
+  for (int r = 0; r < nq; ++r) a[r] = b[r];
+  for (int c = 0; c < F3R_NCON; ++c) lambda[c] = b[nq + c];
+  return F3R_OK;
+}

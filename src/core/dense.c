@@ -1,0 +1,45 @@
+#include "dense.h"
+
+#include <math.h>
+
+int f3r_lu_factor(double* A, int n, int* piv) {
+  for (int k = 0; k < n; ++k) {
+    int p = k;
+    double best = fabs(F3R_AT(A, n, k, k));
+    for (int i = k + 1; i < n; ++i) {
+      const double v = fabs(F3R_AT(A, n, i, k));
+      if (v > best) { best = v; p = i; }
+    }
+    if (!(best > 0.0) || !isfinite(best)) return 1;
+    piv[k] = p;
+    if (p != k) {
+      for (int j = 0; j < n; ++j) {
+        const double t = F3R_AT(A, n, k, j);
+        F3R_AT(A, n, k, j) = F3R_AT(A, n, p, j);
+        F3R_AT(A, n, p, j) = t;
+      }
+    }
+    const double inv = 1.0 / F3R_AT(A, n, k, k);
+    for (int i = k + 1; i < n; ++i) F3R_AT(A, n, i, k) *= inv;
+    for (int j = k + 1; j < n; ++j) {
+      const double akj = F3R_AT(A, n, k, j);
+      if (akj == 0.0) continue;
+      for (int i = k + 1; i < n; ++i) F3R_AT(A, n, i, j) -= F3R_AT(A, n, i, k) * akj;
+    }
+  }
+  return 0;
+}
+
+void f3r_lu_solve(const double* A, int n, const int* piv, double* b) {
+  /* The factorisation swapped whole rows, so all swaps apply to b before substitution. */
+  for (int k = 0; k < n; ++k) {
+    const int p = piv[k];
+    if (p != k) { const double t = b[k]; b[k] = b[p]; b[p] = t; }
+  }
+  for (int k = 0; k < n; ++k)
+    for (int i = k + 1; i < n; ++i) b[i] -= F3R_AT(A, n, i, k) * b[k];
+  for (int k = n - 1; k >= 0; --k) {
+    b[k] /= F3R_AT(A, n, k, k);
+    for (int i = 0; i < k; ++i) b[i] -= F3R_AT(A, n, i, k) * b[k];
+  }
+}

@@ -1,0 +1,15 @@
+/* Column-major dense helpers shared by the core. Private. */
+#ifndef FLEX3RPR_DENSE_H
+#define FLEX3RPR_DENSE_H
+
+#include <stddef.h>
+
+#define F3R_AT(A, ld, i, j) ((A)[(size_t)(j) * (size_t)(ld) + (size_t)(i)])
+
+/* LU factorisation with partial pivoting of the n x n matrix A (column-major, leading dimension
+ * n) in place; pivots in piv. Returns 0, or 1 if a pivot is zero or not finite. */
+int f3r_lu_factor(double* A, int n, int* piv);
+/* Solves with the factors of f3r_lu_factor; b is overwritten with the solution. */
+void f3r_lu_solve(const double* A, int n, const int* piv, double* b);
+
+#endif

@@ -1,0 +1,196 @@
+/* Inertia, velocity-dependent and elastic forces of the 3-RPR manipulator, from its energies.
+ *
+ * Kinetic energy of link i (eq. 9 with w = sum eta_j psi_j(x/l), m = rho_A l, modes orthonormal):
+ *   T_i = 1/2 I_c th'^2 + 1/2 m rho'^2 + 1/2 J th'^2 + th' sum c_j eta_j' + 1/2 m |eta'|^2
+ *         [exact kinematics: - m rho' th' s + 1/2 m th'^2 |eta|^2]
+ *   J = m (l^2/3 + l rho + rho^2),  c_j = m (l a_j + rho b_j),  s = sum b_j eta_j,
+ *   a_j = int xi psi_j, b_j = int psi_j.
+ * The exact terms come from the axial velocity rho' - w th' of a beam point, which the paper's
+ * eq. (9) drops. With e = 1 for exact kinematics and 0 otherwise, h = dM/dt v - dT/dq is
+ *   h_rho = -1/2 m (l + 2 rho) th'^2 - (1 + e) m th' s'
+ *   h_th  = m (l + 2 rho) rho' th' + (1 - e) m rho' s' + 2 e m th' eta.eta'
+ *   h_eta_k = (1 + e) m rho' th' b_k - e m th'^2 eta_k
+ * (the paper's F_c = -h, with its F_c_eta corrected as ../shared/MODEL.md says). The platform
+ * (eq. 10) adds diag(m_p, m_p, I_p) and no velocity terms. Bending energy (eq. 12):
+ *   V = 1/2 sum EI/l^3 alpha_j^4 eta_j^2. */
+#include <math.h>
+#include <string.h>
+
+#include "dense.h"
+#include "flex3rpr/stages.h"
+#include "link_state.h"
+
+static double exact_flag(const f3r_model* m) { return m->exact_kinematics ? 1.0 : 0.0; }
+
+static double theta_inertia(const f3r_model* m, const f3r_link_state* k) {
+  const double l = m->link_length, mass = m->link_mass;
+  return m->cylinder_inertia + mass * (l * l / 3.0 + l * k->rho + k->rho * k->rho) +
+         exact_flag(m) * mass * k->eta_sq;
+}
+
+static double theta_eta_coupling(const f3r_model* m, int i, int j, double rho) {
+  const f3r_link_params* lp = &m->link[i];
+  return m->link_mass * (m->link_length * lp->first_moment[j] + rho * lp->mean[j]);
+}
+
+void f3r_add_mass_matrix(const f3r_model* m, const double* q, double scale, double* A, int ld) {
+  const double mass = m->link_mass, e = exact_flag(m);
+  for (int i = 0; i < 3; ++i) {
+    f3r_link_state k;
+    f3r_link_state_fill(m, i, q, 0, &k);
+    const int r = i, t = 3 + i, base = m->link[i].eta_index;
+    F3R_AT(A, ld, r, r) += scale * mass;
+    F3R_AT(A, ld, r, t) += scale * (-e * mass * k.mean_defl);
+    F3R_AT(A, ld, t, r) += scale * (-e * mass * k.mean_defl);
+    F3R_AT(A, ld, t, t) += scale * theta_inertia(m, &k);
+    for (int j = 0; j < m->link[i].modes; ++j) {
+      const double cj = theta_eta_coupling(m, i, j, k.rho);
+      F3R_AT(A, ld, t, base + j) += scale * cj;
+      F3R_AT(A, ld, base + j, t) += scale * cj;
+      F3R_AT(A, ld, base + j, base + j) += scale * mass;
+    }
+  }
+  F3R_AT(A, ld, 6, 6) += scale * m->platform_mass;
+  F3R_AT(A, ld, 7, 7) += scale * m->platform_mass;
+  F3R_AT(A, ld, 8, 8) += scale * m->platform_inertia;
+}
+
+void f3r_mass_times(const f3r_model* m, const double* q, const double* a, double* out) {
+  const double mass = m->link_mass, e = exact_flag(m);
+  for (int i = 0; i < 3; ++i) {
+    f3r_link_state k;
+    f3r_link_state_fill(m, i, q, 0, &k);
+    const int base = m->link[i].eta_index;
+    double coupled = 0.0;
+    for (int j = 0; j < m->link[i].modes; ++j) {
+      const double cj = theta_eta_coupling(m, i, j, k.rho);
+      coupled += cj * a[base + j];
+      out[base + j] = cj * a[3 + i] + mass * a[base + j];
+    }
+    out[i] = mass * a[i] - e * mass * k.mean_defl * a[3 + i];
+    out[3 + i] = -e * mass * k.mean_defl * a[i] + theta_inertia(m, &k) * a[3 + i] + coupled;
+  }
+  out[6] = m->platform_mass * a[6];
+  out[7] = m->platform_mass * a[7];
+  out[8] = m->platform_inertia * a[8];
+}
+
+void f3r_add_mass_times_dq(const f3r_model* m, const double* q, const double* a, double scale,
+                           double* A, int ld) {
+  const double mass = m->link_mass, l = m->link_length, e = exact_flag(m);
+  for (int i = 0; i < 3; ++i) {
+    const f3r_link_params* lp = &m->link[i];
+    const int r = i, t = 3 + i, base = lp->eta_index;
+    const double rho = q[i];
+    double d_theta_d_rho = mass * (l + 2.0 * rho) * a[t];
+    for (int j = 0; j < lp->modes; ++j) {
+      const int col = base + j;
+      d_theta_d_rho += mass * lp->mean[j] * a[col];
+      F3R_AT(A, ld, r, col) += scale * (-e * mass * lp->mean[j] * a[t]);
+      F3R_AT(A, ld, t, col) += scale * (-e * mass * lp->mean[j] * a[r] + 2.0 * e * mass * q[col] * a[t]);
+      F3R_AT(A, ld, col, r) += scale * mass * lp->mean[j] * a[t];
+    }
+    F3R_AT(A, ld, t, r) += scale * d_theta_d_rho;
+  }
+}
+
+void f3r_velocity_forces(const f3r_model* m, const double* q, const double* v, double* h) {
+  const double mass = m->link_mass, l = m->link_length, e = exact_flag(m);
+  for (int i = 0; i < 3; ++i) {
+    f3r_link_state k;
+    f3r_link_state_fill(m, i, q, v, &k);
+    const double rd = k.rho_dot, td = k.theta_dot, arm = l + 2.0 * k.rho;
+    h[i] = -0.5 * mass * arm * td * td - (1.0 + e) * mass * td * k.mean_defl_dot;
+    h[3 + i] = mass * arm * rd * td + (1.0 - e) * mass * rd * k.mean_defl_dot +
+               2.0 * e * mass * td * k.eta_eta_dot;
+    const f3r_link_params* lp = &m->link[i];
+    for (int j = 0; j < lp->modes; ++j)
+      h[lp->eta_index + j] = (1.0 + e) * mass * rd * td * lp->mean[j] - e * mass * td * td * k.eta[j];
+  }
+  h[6] = h[7] = h[8] = 0.0;
+}
+
+void f3r_add_velocity_forces_dq(const f3r_model* m, const double* q, const double* v,
+                                double scale, double* A, int ld) {
+  const double mass = m->link_mass, e = exact_flag(m);
+  for (int i = 0; i < 3; ++i) {
+    const f3r_link_params* lp = &m->link[i];
+    const int r = i, t = 3 + i;
+    const double rd = v[r], td = v[t];
+    F3R_AT(A, ld, r, r) += scale * (-mass * td * td);
+    F3R_AT(A, ld, t, r) += scale * (2.0 * mass * rd * td);
+    if (e == 0.0) continue;
+    for (int j = 0; j < lp->modes; ++j) {
+      const int col = lp->eta_index + j;
+      F3R_AT(A, ld, t, col) += scale * (2.0 * mass * td * v[col]);
+      F3R_AT(A, ld, col, col) += scale * (-mass * td * td);
+    }
+  }
+  (void)q;
+}
+
+void f3r_add_velocity_forces_dv(const f3r_model* m, const double* q, const double* v,
+                                double scale, double* A, int ld) {
+  const double mass = m->link_mass, l = m->link_length, e = exact_flag(m);
+  for (int i = 0; i < 3; ++i) {
+    f3r_link_state k;
+    f3r_link_state_fill(m, i, q, v, &k);
+    const f3r_link_params* lp = &m->link[i];
+    const int r = i, t = 3 + i;
+    const double rd = k.rho_dot, td = k.theta_dot, arm = l + 2.0 * k.rho;
+    F3R_AT(A, ld, r, t) += scale * (-mass * arm * td - (1.0 + e) * mass * k.mean_defl_dot);
+    F3R_AT(A, ld, t, r) += scale * (mass * arm * td + (1.0 - e) * mass * k.mean_defl_dot);
+    F3R_AT(A, ld, t, t) += scale * (mass * arm * rd + 2.0 * e * mass * k.eta_eta_dot);
+    for (int j = 0; j < lp->modes; ++j) {
+      const int col = lp->eta_index + j;
+      const double b = lp->mean[j];
+      F3R_AT(A, ld, r, col) += scale * (-(1.0 + e) * mass * td * b);
+      F3R_AT(A, ld, t, col) += scale * ((1.0 - e) * mass * rd * b + 2.0 * e * mass * td * k.eta[j]);
+      F3R_AT(A, ld, col, r) += scale * ((1.0 + e) * mass * td * b);
+      F3R_AT(A, ld, col, t) += scale * ((1.0 + e) * mass * rd * b - 2.0 * e * mass * td * k.eta[j]);
+    }
+  }
+}
+
+void f3r_elastic_forces(const f3r_model* m, const double* q, double* k) {
+  for (int n = 0; n < 9; ++n) k[n] = 0.0;
+  for (int i = 0; i < 3; ++i) {
+    const f3r_link_params* lp = &m->link[i];
+    for (int j = 0; j < lp->modes; ++j) k[lp->eta_index + j] = lp->stiffness[j] * q[lp->eta_index + j];
+  }
+}
+
+void f3r_add_elastic_forces_dq(const f3r_model* m, double scale, double* A, int ld) {
+  for (int i = 0; i < 3; ++i) {
+    const f3r_link_params* lp = &m->link[i];
+    for (int j = 0; j < lp->modes; ++j) {
+      const int col = lp->eta_index + j;
+      F3R_AT(A, ld, col, col) += scale * lp->stiffness[j];
+    }
+  }
+}
+
+void f3r_generalized_forces(const f3r_model* m, double t, const double* held, double* Q) {
+  for (int n = 0; n < m->nq; ++n) Q[n] = held ? held[n] : 0.0;
+  for (int n = 0; n < F3R_RIGID_FORCES; ++n) Q[n] += f3r_input_value(&m->scene.inputs[n], t);
+}
+
+double f3r_kinetic_energy(const f3r_model* m, const double* q, const double* v) {
+  double Mv[F3R_MAX_Q];
+  f3r_mass_times(m, q, v, Mv);
+  double T = 0.0;
+  for (int n = 0; n < m->nq; ++n) T += 0.5 * v[n] * Mv[n];
+  return T;
+}
+
+double f3r_potential_energy(const f3r_model* m, const double* q) {
+  double V = 0.0;
+  for (int i = 0; i < 3; ++i) {
+    const f3r_link_params* lp = &m->link[i];
+    for (int j = 0; j < lp->modes; ++j) {
+      const double eta = q[lp->eta_index + j];
+      V += 0.5 * lp->stiffness[j] * eta * eta;
+    }
+  }
+  return V;
+}

@@ -1,0 +1,71 @@
+/* The stabilised index-2 (Gear-Gupta-Leimkuhler) residual and its exact Jacobian.
+ * Layout and equations: include/flex3rpr/residual.h. */
+#include "dense.h"
+#include "workspace.h"
+
+f3r_status f3r_dae_residual(const f3r_model* m, double t, const double* y, const double* yp,
+                            const double* held, double* res, f3r_workspace* ws) {
+  const int nq = m->nq;
+  const double *q = y, *v = y + nq, *lambda = y + 2 * nq, *mu = lambda + F3R_NCON;
+  const double *qd = yp, *vd = yp + nq;
+  double* tmp = ws->tmp;
+
+  f3r_constraint_transpose_times(m, q, mu, tmp);
+  for (int n = 0; n < nq; ++n) res[n] = qd[n] - v[n] + tmp[n];
+
+  double* dyn = res + nq;
+  f3r_mass_times(m, q, vd, dyn);
+  f3r_velocity_forces(m, q, v, ws->h);
+  f3r_elastic_forces(m, q, ws->k);
+  f3r_generalized_forces(m, t, held, ws->Q);
+  f3r_constraint_transpose_times(m, q, lambda, tmp);
+  double power = 0.0;
+  for (int n = 0; n < nq; ++n) {
+    dyn[n] += ws->h[n] + ws->k[n] - ws->Q[n] - tmp[n];
+    power += ws->Q[n] * v[n];
+  }
+  f3r_constraints(m, q, res + 2 * nq);
+  f3r_constraint_times(m, q, v, res + 2 * nq + F3R_NCON);
+  res[2 * nq + 2 * F3R_NCON] = yp[2 * nq + 2 * F3R_NCON] - power;
+  return F3R_OK;
+}
+
+f3r_status f3r_dae_jacobian(const f3r_model* m, double t, double cj, const double* y,
+                            const double* yp, const double* held, double* J, int ld,
+                            f3r_workspace* ws) {
+  const int nq = m->nq;
+  const int row_v = nq, row_g = 2 * nq, row_gv = 2 * nq + F3R_NCON, row_w = 2 * nq + 2 * F3R_NCON;
+  const int col_v = nq, col_lambda = 2 * nq, col_mu = 2 * nq + F3R_NCON, col_w = row_w;
+  const double *q = y, *v = y + nq, *lambda = y + 2 * nq, *mu = lambda + F3R_NCON;
+  const double* vd = yp + nq;
+#define BLOCK(row, col) (J + (size_t)(col) * (size_t)ld + (row))
+
+  /* q' - v + G^T mu */
+  for (int n = 0; n < nq; ++n) {
+    F3R_AT(J, ld, n, n) += cj;
+    F3R_AT(J, ld, n, col_v + n) -= 1.0;
+  }
+  f3r_add_constraint_transpose_times_dq(m, q, mu, 1.0, BLOCK(0, 0), ld);
+  f3r_add_constraint_jacobian_transpose(m, q, 1.0, BLOCK(0, col_mu), ld);
+
+  /* M v' + h + k - Q - G^T lambda */
+  f3r_add_mass_times_dq(m, q, vd, 1.0, BLOCK(row_v, 0), ld);
+  f3r_add_velocity_forces_dq(m, q, v, 1.0, BLOCK(row_v, 0), ld);
+  f3r_add_elastic_forces_dq(m, 1.0, BLOCK(row_v, 0), ld);
+  f3r_add_constraint_transpose_times_dq(m, q, lambda, -1.0, BLOCK(row_v, 0), ld);
+  f3r_add_mass_matrix(m, q, cj, BLOCK(row_v, col_v), ld);
+  f3r_add_velocity_forces_dv(m, q, v, 1.0, BLOCK(row_v, col_v), ld);
+  f3r_add_constraint_jacobian_transpose(m, q, -1.0, BLOCK(row_v, col_lambda), ld);
+
+  /* g(q) and G v */
+  f3r_add_constraint_jacobian(m, q, 1.0, BLOCK(row_g, 0), ld);
+  f3r_add_constraint_times_dq(m, q, v, 1.0, BLOCK(row_gv, 0), ld);
+  f3r_add_constraint_jacobian(m, q, 1.0, BLOCK(row_gv, col_v), ld);
+
+  /* W' - Q . v */
+  f3r_generalized_forces(m, t, held, ws->Q);
+  for (int n = 0; n < nq; ++n) F3R_AT(J, ld, row_w, col_v + n) -= ws->Q[n];
+  F3R_AT(J, ld, row_w, col_w) += cj;
+#undef BLOCK
+  return F3R_OK;
+}

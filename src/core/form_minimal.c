@@ -1,0 +1,161 @@
+/* The minimal-coordinate residual: independent z = (X_p, Y_p, phi_p, eta), with rho and theta
+ * from the closed-form loop closure. Layout and equations: include/flex3rpr/residual.h.
+ *
+ * Per link, the dependent block of G is G_d = [e, L n - w e], det = L = rho + l, so
+ *   G_d x = V     gives  theta = (n.V)/L,  rho = e.V + w theta,
+ *   G_d^T x = R   gives  x = R_rho e + ((R_theta + w R_rho)/L) n.
+ * Accelerations: a_d = G_d^{-1} (-G_z a_z - gamma). The reduced equations B^T R = 0 are
+ * R_z - G_z^T lambda with lambda = G_d^{-T} R_d, which is also the constraint force. */
+#include <math.h>
+#include <string.h>
+
+#include "dense.h"
+#include "link_state.h"
+#include "workspace.h"
+
+/* x (rho and theta entries of each link) from G_d x = V, V holding (x, y) per link. */
+static void solve_dependent(const f3r_model* m, const double* q, const double* V, double* x) {
+  for (int i = 0; i < 3; ++i) {
+    f3r_link_state k;
+    f3r_link_state_fill(m, i, q, 0, &k);
+    const double vn = -k.s * V[2 * i] + k.c * V[2 * i + 1];
+    const double ve = k.c * V[2 * i] + k.s * V[2 * i + 1];
+    x[3 + i] = vn / k.len;
+    x[i] = ve + k.w * x[3 + i];
+  }
+}
+
+/* Full q, v, a from the minimal state and its derivative. */
+static f3r_status expand(const f3r_model* m, const double* y, const double* yp,
+                         f3r_workspace* ws) {
+  const int nz = m->n_independent;
+  double *q = ws->q, *v = ws->v, *a = ws->a;
+  memcpy(q + 6, y, (size_t)nz * sizeof(double));
+  memcpy(v + 6, y + nz, (size_t)nz * sizeof(double));
+  const f3r_status st = f3r_model_close_loops(m, q);
+  if (st != F3R_OK) return st;
+  f3r_model_close_loop_rates(m, q, v);
+  for (int n = 0; n < 6; ++n) a[n] = 0.0;
+  memcpy(a + 6, yp + nz, (size_t)nz * sizeof(double));
+  double rhs[F3R_NCON];
+  f3r_constraint_times(m, q, a, rhs); /* G_z a_z */
+  f3r_constraint_bias(m, q, v, ws->gamma);
+  for (int c = 0; c < F3R_NCON; ++c) rhs[c] = -rhs[c] - ws->gamma[c];
+  solve_dependent(m, q, rhs, a);
+  return F3R_OK;
+}
+
+f3r_status f3r_minimal_residual(const f3r_model* m, double t, const double* y, const double* yp,
+                                const double* held, double* res, f3r_workspace* ws) {
+  const int nq = m->nq, nz = m->n_independent;
+  const f3r_status st = expand(m, y, yp, ws);
+  if (st != F3R_OK) return st;
+  const double *q = ws->q, *v = ws->v;
+  double* R = ws->R;
+  f3r_mass_times(m, q, ws->a, R);
+  f3r_velocity_forces(m, q, v, ws->h);
+  f3r_elastic_forces(m, q, ws->k);
+  f3r_generalized_forces(m, t, held, ws->Q);
+  double power = 0.0;
+  for (int n = 0; n < nq; ++n) {
+    R[n] += ws->h[n] + ws->k[n] - ws->Q[n];
+    power += ws->Q[n] * v[n];
+  }
+  for (int i = 0; i < 3; ++i) {
+    f3r_link_state k;
+    f3r_link_state_fill(m, i, q, 0, &k);
+    const double along = R[i], across = (R[3 + i] + k.w * R[i]) / k.len;
+    ws->lambda[2 * i] = along * k.c - across * k.s;
+    ws->lambda[2 * i + 1] = along * k.s + across * k.c;
+  }
+  f3r_constraint_transpose_times(m, q, ws->lambda, ws->tmp);
+  for (int j = 0; j < nz; ++j) {
+    res[j] = yp[j] - y[nz + j];
+    res[nz + j] = R[6 + j] - ws->tmp[6 + j];
+  }
+  res[2 * nz] = yp[2 * nz] - power;
+  return F3R_OK;
+}
+
+/* Typical magnitudes that set the difference increments: m for the pose, m for modal
+ * coordinates, and their rates. */
+static double typical_size(const f3r_model* m, int index) {
+  const int nz = m->n_independent;
+  const int j = index % nz;
+  const int is_rate = index >= nz;
+  if (j < 3) return is_rate ? 1e-1 : 1e-1;
+  return is_rate ? 1e-2 : 1e-5;
+}
+
+/* B (nq x nz) and M B at the configuration in ws->q. */
+static void assemble_velocity_map(const f3r_model* m, f3r_workspace* ws) {
+  const int nq = m->nq, nz = m->n_independent;
+  double* B = ws->B;
+  memset(B, 0, (size_t)nq * (size_t)nz * sizeof(double));
+  for (int j = 0; j < nz; ++j) {
+    double* col = B + (size_t)j * (size_t)nq;
+    double V[F3R_NCON];
+    col[6 + j] = 1.0;
+    f3r_constraint_times(m, ws->q, col, V);
+    for (int c = 0; c < F3R_NCON; ++c) V[c] = -V[c];
+    solve_dependent(m, ws->q, V, col);
+    f3r_mass_times(m, ws->q, col, ws->MB + (size_t)j * (size_t)nq);
+  }
+}
+
+/* (B^T M B)(i, j) */
+static double reduced_mass(const f3r_model* m, const f3r_workspace* ws, int i, int j) {
+  const int nq = m->nq;
+  double s = 0.0;
+  for (int n = 0; n < nq; ++n) s += ws->B[(size_t)i * nq + n] * ws->MB[(size_t)j * nq + n];
+  return s;
+}
+
+f3r_status f3r_minimal_rhs(const f3r_model* m, double t, const double* y, const double* held,
+                           double* ydot, f3r_workspace* ws) {
+  const int nz = m->n_independent, ny = 2 * nz + 1;
+  /* F_u is linear in u': F_u(u') = F_u(0) + B^T M B u'. */
+  double* zero_rate = ws->y_perturbed;
+  memset(zero_rate, 0, (size_t)ny * sizeof(double));
+  f3r_status st = f3r_minimal_residual(m, t, y, zero_rate, held, ws->res_base, ws);
+  if (st != F3R_OK) return st;
+  assemble_velocity_map(m, ws);
+  double* K = ws->solve_work; /* nz x nz fits in the (nq + 6)^2 of the acceleration solver */
+  int* piv = (int*)(K + (size_t)nz * nz);
+  for (int j = 0; j < nz; ++j)
+    for (int i = 0; i < nz; ++i) F3R_AT(K, nz, i, j) = reduced_mass(m, ws, i, j);
+  double* rate = ydot + nz;
+  for (int i = 0; i < nz; ++i) rate[i] = -ws->res_base[nz + i];
+  if (f3r_lu_factor(K, nz, piv)) return F3R_ERR_SINGULAR;
+  f3r_lu_solve(K, nz, piv, rate);
+  for (int i = 0; i < nz; ++i) ydot[i] = y[nz + i];
+  ydot[2 * nz] = -ws->res_base[2 * nz]; /* F_W(W' = 0) = -Q.v */
+  return F3R_OK;
+}
+
+f3r_status f3r_minimal_jacobian(const f3r_model* m, double t, double cj, const double* y,
+                                const double* yp, const double* held, double* J, int ld,
+                                f3r_workspace* ws) {
+  const int nz = m->n_independent, ny = 2 * nz + 1;
+  f3r_status st = f3r_minimal_residual(m, t, y, yp, held, ws->res_base, ws);
+  if (st != F3R_OK) return st;
+  memcpy(ws->y_perturbed, y, (size_t)ny * sizeof(double));
+  for (int j = 0; j < 2 * nz; ++j) {
+    const double inc = 1.5e-8 * fmax(fabs(y[j]), typical_size(m, j));
+    ws->y_perturbed[j] = y[j] + inc;
+    st = f3r_minimal_residual(m, t, ws->y_perturbed, yp, held, ws->res_perturbed, ws);
+    ws->y_perturbed[j] = y[j];
+    if (st != F3R_OK) return st;
+    for (int i = 0; i < ny; ++i)
+      F3R_AT(J, ld, i, j) += (ws->res_perturbed[i] - ws->res_base[i]) / inc;
+  }
+  /* cj dF/dy': identity for z and W, B^T M B for u. */
+  for (int j = 0; j < nz; ++j) F3R_AT(J, ld, j, j) += cj;
+  F3R_AT(J, ld, 2 * nz, 2 * nz) += cj;
+  st = expand(m, y, yp, ws); /* restores q at y */
+  if (st != F3R_OK) return st;
+  assemble_velocity_map(m, ws);
+  for (int j = 0; j < nz; ++j)
+    for (int i = 0; i < nz; ++i) F3R_AT(J, ld, nz + i, nz + j) += cj * reduced_mass(m, ws, i, j);
+  return F3R_OK;
+}

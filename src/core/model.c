@@ -1,0 +1,153 @@
+/* Scene to model: geometry, inertia, modal constants and the coordinate layout, computed once. */
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "flex3rpr/model.h"
+#include "link_state.h"
+
+/* Legs whose beam root comes closer than this fraction of l to A_i are degenerate: there the
+ * constraint Jacobian loses rank (det of the leg's 2x2 block is rho + l). */
+#define F3R_MIN_LEG_FRACTION 1e-3
+
+static const double kPlatformAngle[3] = {-M_PI / 6.0, M_PI / 2.0, 7.0 * M_PI / 6.0};
+
+f3r_status f3r_model_create(const f3r_scene* scene, f3r_model** out, f3r_error* err) {
+  if (!scene || !out) return f3r_error_set(err, F3R_ERR_ARGUMENT, "f3r_model_create: NULL argument");
+  *out = NULL;
+  f3r_status st = f3r_scene_validate(scene, err);
+  if (st != F3R_OK) return st;
+  f3r_model* m = calloc(1, sizeof *m);
+  if (!m) return f3r_error_set(err, F3R_ERR_MEMORY, "f3r_model_create: out of memory");
+  m->scene = *scene;
+
+  const double base_radius = scene->base_side / sqrt(3.0);
+  m->platform_radius = scene->platform_side / sqrt(3.0);
+  for (int i = 0; i < 3; ++i) {
+    m->platform_angle[i] = kPlatformAngle[i];
+    m->base_joint[i][0] = base_radius * cos(kPlatformAngle[i]);
+    m->base_joint[i][1] = base_radius * sin(kPlatformAngle[i]);
+  }
+  const double l = scene->link_length, d = scene->link_diameter;
+  m->link_length = l;
+  m->link_mass = scene->link_density * M_PI * d * d / 4.0 * l;
+  m->bending_stiffness = scene->link_youngs_modulus * M_PI * d * d * d * d / 64.0;
+  const double ro = scene->cylinder_outer_diameter / 2.0, ri = scene->cylinder_inner_diameter / 2.0;
+  const double Lc = scene->cylinder_length;
+  const double cylinder_mass = scene->cylinder_density * M_PI * (ro * ro - ri * ri) * Lc;
+  m->cylinder_inertia = cylinder_mass * (Lc * Lc / 3.0 + (ro * ro + ri * ri) / 4.0);
+  m->platform_mass = scene->platform_mass;
+  m->platform_inertia = scene->platform_inertia > 0.0
+                            ? scene->platform_inertia
+                            : scene->platform_mass * scene->platform_side * scene->platform_side / 12.0;
+  m->exact_kinematics = scene->exact_kinematics;
+
+  int next = 9;
+  const double EI_l3 = m->bending_stiffness / (l * l * l);
+  for (int i = 0; i < 3; ++i) {
+    f3r_link_params* lp = &m->link[i];
+    lp->model = scene->links[i].model;
+    lp->modes = lp->model == F3R_LINK_RIGID ? 0 : scene->links[i].modes;
+    lp->eta_index = next;
+    next += lp->modes;
+    if (!lp->modes) continue;
+    const f3r_beam_end end = (f3r_beam_end)lp->model;
+    double bending[F3R_MAX_MODES * F3R_MAX_MODES];
+    if (f3r_beam_roots(end, lp->modes, lp->alpha) ||
+        f3r_beam_modal_integrals(end, lp->modes, lp->mean, lp->first_moment, NULL, bending,
+                                 lp->tip)) {
+      const int modes = lp->modes;
+      free(m);
+      return f3r_error_set(err, F3R_ERR_SCENE, "links[%d].modes: %d is out of range 1..%d", i,
+                           modes, F3R_MAX_MODES);
+    }
+    for (int j = 0; j < lp->modes; ++j) {
+      lp->stiffness[j] = EI_l3 * bending[j * lp->modes + j];
+      lp->omega_clamped[j] = lp->alpha[j] * lp->alpha[j] * sqrt(EI_l3 / m->link_mass);
+    }
+  }
+  m->nq = next;
+  m->n_independent = next - 6;
+
+  /* The branch of each leg's direction is fixed by the scene's initial pose. */
+  double q[F3R_MAX_Q] = {0};
+  for (int k = 0; k < 3; ++k) q[6 + k] = scene->platform_pose0[k];
+  for (int i = 0; i < 3; ++i) {
+    const double* P = scene->platform_pose0;
+    const double cx = P[0] + m->platform_radius * cos(m->platform_angle[i] + P[2]);
+    const double cy = P[1] + m->platform_radius * sin(m->platform_angle[i] + P[2]);
+    m->theta_branch[i] = atan2(cy - m->base_joint[i][1], cx - m->base_joint[i][0]);
+  }
+  for (int i = 0; i < 3; ++i)
+    for (int j = 0; j < m->link[i].modes; ++j) q[m->link[i].eta_index + j] = scene->links[i].eta0[j];
+  if (f3r_model_close_loops(m, q) != F3R_OK) {
+    free(m);
+    return f3r_error_set(err, F3R_ERR_SCENE,
+                         "initial.platform_pose: (%g, %g, %g) cannot be reached by the legs",
+                         scene->platform_pose0[0], scene->platform_pose0[1],
+                         scene->platform_pose0[2]);
+  }
+  *out = m;
+  return F3R_OK;
+}
+
+void f3r_model_destroy(f3r_model* model) { free(model); }
+
+double f3r_model_tip_deflection(const f3r_model* m, const double* q, int link) {
+  const f3r_link_params* lp = &m->link[link];
+  double w = 0.0;
+  for (int j = 0; j < lp->modes; ++j) w += lp->tip[j] * q[lp->eta_index + j];
+  return w;
+}
+
+/* Each loop closes in closed form: |C_i - A_i|^2 = L^2 + w^2, and the direction of C_i - A_i
+ * is theta_i + atan2(w, L), with L = rho_i + l and w the tip deflection. */
+f3r_status f3r_model_close_loops(const f3r_model* m, double* q) {
+  for (int i = 0; i < 3; ++i) {
+    const f3r_platform_joint pj = f3r_platform_joint_at(m, i, q);
+    const double dx = q[6] + m->platform_radius * pj.cc - m->base_joint[i][0];
+    const double dy = q[7] + m->platform_radius * pj.sc - m->base_joint[i][1];
+    const double w = f3r_model_tip_deflection(m, q, i);
+    const double len_sq = dx * dx + dy * dy - w * w;
+    const double min_len = F3R_MIN_LEG_FRACTION * m->link_length;
+    if (!(len_sq > min_len * min_len)) return F3R_ERR_SINGULAR;
+    const double len = sqrt(len_sq);
+    const double raw = atan2(dy, dx) - atan2(w, len);
+    q[i] = len - m->link_length;
+    q[3 + i] = m->theta_branch[i] + remainder(raw - m->theta_branch[i], 2.0 * M_PI);
+  }
+  return F3R_OK;
+}
+
+/* From G q' = 0 for link i: with C' the velocity of C_i and w' the tip deflection rate,
+ * theta' = (n . C' - w') / L and rho' = e . C' + w theta'. */
+void f3r_model_close_loop_rates(const f3r_model* m, const double* q, double* qdot) {
+  for (int i = 0; i < 3; ++i) {
+    f3r_link_state k = {0};
+    f3r_link_state_fill(m, i, q, qdot, &k);
+    const f3r_platform_joint pj = f3r_platform_joint_at(m, i, q);
+    const double r = m->platform_radius;
+    const double cx = qdot[6] - r * pj.sc * qdot[8], cy = qdot[7] + r * pj.cc * qdot[8];
+    const double theta_dot = (-k.s * cx + k.c * cy - k.w_dot) / k.len;
+    qdot[i] = k.c * cx + k.s * cy + k.w * theta_dot;
+    qdot[3 + i] = theta_dot;
+  }
+}
+
+void f3r_model_beam_point(const f3r_model* m, const double* q, int link, double xi,
+                          double position[2], double* tangent_angle, double* deflection) {
+  const f3r_link_params* lp = &m->link[link];
+  const double theta = q[3 + link], c = cos(theta), s = sin(theta), l = m->link_length;
+  double w = 0.0, slope = 0.0;
+  for (int j = 0; j < lp->modes; ++j) {
+    double psi, dpsi;
+    f3r_beam_mode_eval((f3r_beam_end)lp->model, lp->alpha[j], xi, &psi, &dpsi, NULL);
+    w += psi * q[lp->eta_index + j];
+    slope += dpsi * q[lp->eta_index + j] / l;
+  }
+  const double along = q[link] + xi * l;
+  position[0] = m->base_joint[link][0] + along * c - w * s;
+  position[1] = m->base_joint[link][1] + along * s + w * c;
+  if (tangent_angle) *tangent_angle = theta + atan(slope);
+  if (deflection) *deflection = w;
+}

@@ -1,0 +1,129 @@
+/* The public residual interface: workspace, state layouts and dispatch to a formulation. */
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "workspace.h"
+
+f3r_workspace* f3r_workspace_create(const f3r_model* m) {
+  f3r_workspace* ws = calloc(1, sizeof *ws);
+  if (!ws) return NULL;
+  ws->nq = m->nq;
+  ws->nz = m->n_independent;
+  const int ny_dae = f3r_state_size(m, F3R_FORMULATION_DAE);
+  ws->ny = ny_dae;
+  ws->solve_work = calloc(f3r_solve_accelerations_work_size(m), sizeof(double));
+  ws->y_perturbed = calloc((size_t)ny_dae, sizeof(double));
+  ws->res_base = calloc((size_t)ny_dae, sizeof(double));
+  ws->res_perturbed = calloc((size_t)ny_dae, sizeof(double));
+  ws->B = calloc((size_t)m->nq * (size_t)ws->nz, sizeof(double));
+  ws->MB = calloc((size_t)m->nq * (size_t)ws->nz, sizeof(double));
+  if (!ws->solve_work || !ws->y_perturbed || !ws->res_base || !ws->res_perturbed || !ws->B ||
+      !ws->MB) {
+    f3r_workspace_destroy(ws);
+    return NULL;
+  }
+  return ws;
+}
+
+void f3r_workspace_destroy(f3r_workspace* ws) {
+  if (!ws) return;
+  free(ws->solve_work);
+  free(ws->y_perturbed);
+  free(ws->res_base);
+  free(ws->res_perturbed);
+  free(ws->B);
+  free(ws->MB);
+  free(ws);
+}
+
+int f3r_state_size(const f3r_model* m, f3r_formulation form) {
+  return form == F3R_FORMULATION_DAE ? 2 * m->nq + 2 * F3R_NCON + 1 : 2 * m->n_independent + 1;
+}
+
+void f3r_state_kinds(const f3r_model* m, f3r_formulation form, double* id) {
+  const int ny = f3r_state_size(m, form);
+  for (int n = 0; n < ny; ++n) id[n] = 1.0;
+  if (form == F3R_FORMULATION_DAE)
+    for (int c = 0; c < 2 * F3R_NCON; ++c) id[2 * m->nq + c] = 0.0;
+}
+
+static f3r_status check_finite(const double* x, int n) {
+  for (int i = 0; i < n; ++i)
+    if (!isfinite(x[i])) return F3R_ERR_NONFINITE;
+  return F3R_OK;
+}
+
+f3r_status f3r_residual(const f3r_model* m, f3r_formulation form, double t, const double* y,
+                        const double* yp, const double* held, double* res, f3r_workspace* ws) {
+  const f3r_status st = form == F3R_FORMULATION_DAE
+                            ? f3r_dae_residual(m, t, y, yp, held, res, ws)
+                            : f3r_minimal_residual(m, t, y, yp, held, res, ws);
+  if (st != F3R_OK) return st;
+  return check_finite(res, f3r_state_size(m, form));
+}
+
+f3r_status f3r_residual_jacobian(const f3r_model* m, f3r_formulation form, double t, double cj,
+                                 const double* y, const double* yp, const double* held,
+                                 double* J, int ld, f3r_workspace* ws) {
+  const int ny = f3r_state_size(m, form);
+  for (int j = 0; j < ny; ++j) memset(J + (size_t)j * (size_t)ld, 0, (size_t)ny * sizeof(double));
+  return form == F3R_FORMULATION_DAE ? f3r_dae_jacobian(m, t, cj, y, yp, held, J, ld, ws)
+                                     : f3r_minimal_jacobian(m, t, cj, y, yp, held, J, ld, ws);
+}
+
+f3r_status f3r_explicit_rhs(const f3r_model* m, double t, const double* y, const double* held,
+                            double* ydot, f3r_workspace* ws) {
+  const f3r_status st = f3r_minimal_rhs(m, t, y, held, ydot, ws);
+  if (st != F3R_OK) return st;
+  return check_finite(ydot, f3r_state_size(m, F3R_FORMULATION_MINIMAL));
+}
+
+f3r_status f3r_state_to_full(const f3r_model* m, f3r_formulation form, const double* y,
+                             double* q, double* v) {
+  const int nq = m->nq, nz = m->n_independent;
+  if (form == F3R_FORMULATION_DAE) {
+    memcpy(q, y, (size_t)nq * sizeof(double));
+    memcpy(v, y + nq, (size_t)nq * sizeof(double));
+    return F3R_OK;
+  }
+  memcpy(q + 6, y, (size_t)nz * sizeof(double));
+  memcpy(v + 6, y + nz, (size_t)nz * sizeof(double));
+  const f3r_status st = f3r_model_close_loops(m, q);
+  if (st != F3R_OK) return st;
+  f3r_model_close_loop_rates(m, q, v);
+  return F3R_OK;
+}
+
+f3r_status f3r_consistent_state(const f3r_model* m, f3r_formulation form, double t,
+                                const double* q, const double* v, const double* held,
+                                double work, double* y, double* yp, double* lambda_out,
+                                f3r_workspace* ws) {
+  const int nq = m->nq, nz = m->n_independent;
+  f3r_generalized_forces(m, t, held, ws->Q);
+  const f3r_status st = f3r_solve_accelerations(m, q, v, ws->Q, ws->a, ws->lambda, ws->solve_work);
+  if (st != F3R_OK) return st;
+  double power = 0.0;
+  for (int n = 0; n < nq; ++n) power += ws->Q[n] * v[n];
+  if (lambda_out) memcpy(lambda_out, ws->lambda, sizeof ws->lambda);
+  if (form == F3R_FORMULATION_DAE) {
+    const int ny = f3r_state_size(m, form);
+    memset(y, 0, (size_t)ny * sizeof(double));
+    memset(yp, 0, (size_t)ny * sizeof(double));
+    memcpy(y, q, (size_t)nq * sizeof(double));
+    memcpy(y + nq, v, (size_t)nq * sizeof(double));
+    memcpy(y + 2 * nq, ws->lambda, sizeof ws->lambda);
+    memcpy(yp, v, (size_t)nq * sizeof(double));
+    memcpy(yp + nq, ws->a, (size_t)nq * sizeof(double));
+    y[ny - 1] = work;
+    yp[ny - 1] = power;
+  } else {
+    memcpy(y, q + 6, (size_t)nz * sizeof(double));
+    memcpy(y + nz, v + 6, (size_t)nz * sizeof(double));
+    memcpy(yp, v + 6, (size_t)nz * sizeof(double));
+    memcpy(yp + nz, ws->a + 6, (size_t)nz * sizeof(double));
+    y[2 * nz] = work;
+    yp[2 * nz] = power;
+  }
+  return check_finite(y, f3r_state_size(m, form));
+}

@@ -1,0 +1,156 @@
+/* Scene defaults (Table I, ../shared/MODEL.md), range checks and scripted inputs. */
+#include <math.h>
+#include <stdio.h>
+#include <string.h>
+
+#include "flex3rpr/scene.h"
+
+f3r_scene f3r_default_scene(void) {
+  f3r_scene s;
+  memset(&s, 0, sizeof s);
+  s.base_side = 0.66;
+  s.platform_side = 0.1;
+  s.platform_mass = 0.2;
+  s.platform_inertia = 0.0; /* 0: uniform thin triangular plate, m_p b^2 / 12 */
+  s.link_length = 0.2;
+  s.link_diameter = 0.010;
+  s.link_density = 2270.0;
+  s.link_youngs_modulus = 73e9;
+  s.cylinder_length = 0.2;
+  s.cylinder_inner_diameter = 0.014;
+  s.cylinder_outer_diameter = 0.016;
+  s.cylinder_density = 2270.0;
+  for (int i = 0; i < 3; ++i) s.links[i].model = F3R_LINK_RIGID;
+  s.formulation = F3R_FORMULATION_DAE;
+  s.rtol = 1e-8;
+  s.atol = 1e-10;
+  s.duration = 0.5;
+  s.output_step = 1e-4;
+  s.beam_points = 11;
+  return s;
+}
+
+static const char* const kInputNames[F3R_RIGID_FORCES] = {
+    "rho_1", "rho_2", "rho_3", "theta_1", "theta_2", "theta_3",
+    "platform_force_x", "platform_force_y", "platform_torque"};
+
+const char* f3r_input_name(int index) {
+  return index >= 0 && index < F3R_RIGID_FORCES ? kInputNames[index] : "unknown";
+}
+
+double f3r_input_value(const f3r_input* in, double t) {
+  switch (in->kind) {
+    case F3R_INPUT_NONE: return 0.0;
+    case F3R_INPUT_CONSTANT: return in->offset;
+    case F3R_INPUT_HARMONIC: return in->offset + in->amplitude * cos(in->omega * t + in->phase);
+  }
+  return 0.0;
+}
+
+#define CHECK_RANGE(field, value, lo, hi)                                                   \
+  do {                                                                                      \
+    const double v_ = (value);                                                              \
+    if (!(v_ >= (lo) && v_ <= (hi)))                                                        \
+      return f3r_error_set(err, F3R_ERR_SCENE, "%s: %g is out of range %g..%g", field, v_, \
+                           (double)(lo), (double)(hi));                                     \
+  } while (0)
+
+#define CHECK_POSITIVE(field, value)                                                       \
+  do {                                                                                     \
+    const double v_ = (value);                                                             \
+    if (!(v_ > 0.0 && isfinite(v_)))                                                       \
+      return f3r_error_set(err, F3R_ERR_SCENE, "%s: %g must be positive and finite", field, \
+                           v_);                                                            \
+  } while (0)
+
+#define CHECK_FINITE(field, value)                                                          \
+  do {                                                                                      \
+    if (!isfinite(value))                                                                   \
+      return f3r_error_set(err, F3R_ERR_SCENE, "%s: %g must be finite", field, (value));    \
+  } while (0)
+
+f3r_status f3r_scene_validate(const f3r_scene* s, f3r_error* err) {
+  char name[64];
+  CHECK_POSITIVE("geometry.base_side", s->base_side);
+  CHECK_POSITIVE("geometry.platform_side", s->platform_side);
+  if (!(s->platform_side < s->base_side))
+    return f3r_error_set(err, F3R_ERR_SCENE,
+                         "geometry.platform_side: %g must be smaller than base_side %g",
+                         s->platform_side, s->base_side);
+  CHECK_POSITIVE("platform.mass", s->platform_mass);
+  CHECK_RANGE("platform.inertia", s->platform_inertia, 0.0, 1e6);
+  CHECK_POSITIVE("link.length", s->link_length);
+  CHECK_POSITIVE("link.diameter", s->link_diameter);
+  CHECK_POSITIVE("link.density", s->link_density);
+  CHECK_POSITIVE("link.youngs_modulus", s->link_youngs_modulus);
+  CHECK_POSITIVE("cylinder.length", s->cylinder_length);
+  CHECK_RANGE("cylinder.inner_diameter", s->cylinder_inner_diameter, 0.0, 1e3);
+  CHECK_POSITIVE("cylinder.outer_diameter", s->cylinder_outer_diameter);
+  if (!(s->cylinder_inner_diameter < s->cylinder_outer_diameter))
+    return f3r_error_set(err, F3R_ERR_SCENE,
+                         "cylinder.inner_diameter: %g must be smaller than outer_diameter %g",
+                         s->cylinder_inner_diameter, s->cylinder_outer_diameter);
+  CHECK_POSITIVE("cylinder.density", s->cylinder_density);
+  for (int i = 0; i < 3; ++i) {
+    const f3r_link_scene* L = &s->links[i];
+    if (L->model != F3R_LINK_RIGID && L->model != F3R_LINK_FIXED_PINNED &&
+        L->model != F3R_LINK_FIXED_FREE)
+      return f3r_error_set(err, F3R_ERR_SCENE,
+                           "links[%d].model: %d is not one of rigid, fixed_pinned, fixed_free", i,
+                           (int)L->model);
+    if (L->model == F3R_LINK_RIGID) {
+      if (L->modes != 0)
+        return f3r_error_set(err, F3R_ERR_SCENE,
+                             "links[%d].modes: %d given for a rigid link, which has no modes", i,
+                             L->modes);
+    } else if (L->modes < 1 || L->modes > F3R_MAX_MODES) {
+      return f3r_error_set(err, F3R_ERR_SCENE, "links[%d].modes: %d is out of range 1..%d", i,
+                           L->modes, F3R_MAX_MODES);
+    }
+    for (int j = 0; j < F3R_MAX_MODES; ++j) {
+      snprintf(name, sizeof name, "links[%d].initial_deflection[%d]", i, j);
+      CHECK_RANGE(name, L->eta0[j], -0.1, 0.1);
+      snprintf(name, sizeof name, "links[%d].initial_rate[%d]", i, j);
+      CHECK_RANGE(name, L->eta_rate0[j], -100.0, 100.0);
+      if (j >= L->modes && (L->eta0[j] != 0.0 || L->eta_rate0[j] != 0.0))
+        return f3r_error_set(err, F3R_ERR_SCENE,
+                             "links[%d].initial_deflection: mode %d given but the link has %d "
+                             "modes", i, j + 1, L->modes);
+    }
+  }
+  for (int k = 0; k < 3; ++k) {
+    snprintf(name, sizeof name, "initial.platform_pose[%d]", k);
+    CHECK_RANGE(name, s->platform_pose0[k], k < 2 ? -1.0 : -1e3, k < 2 ? 1.0 : 1e3);
+    snprintf(name, sizeof name, "initial.platform_velocity[%d]", k);
+    CHECK_RANGE(name, s->platform_velocity0[k], -1e3, 1e3);
+  }
+  for (int n = 0; n < F3R_RIGID_FORCES; ++n) {
+    const f3r_input* in = &s->inputs[n];
+    snprintf(name, sizeof name, "inputs.%s", kInputNames[n]);
+    if ((int)in->kind < F3R_INPUT_NONE || (int)in->kind > F3R_INPUT_HARMONIC)
+      return f3r_error_set(err, F3R_ERR_SCENE, "%s.kind: %d is not a known input kind", name,
+                           (int)in->kind);
+    CHECK_FINITE(name, in->offset);
+    CHECK_FINITE(name, in->amplitude);
+    CHECK_FINITE(name, in->omega);
+    CHECK_FINITE(name, in->phase);
+  }
+  if (s->formulation != F3R_FORMULATION_DAE && s->formulation != F3R_FORMULATION_MINIMAL)
+    return f3r_error_set(err, F3R_ERR_SCENE, "solver.formulation: %d is not one of dae, minimal",
+                         (int)s->formulation);
+  if (s->integrator != F3R_INTEGRATOR_IDA && s->integrator != F3R_INTEGRATOR_ERK)
+    return f3r_error_set(err, F3R_ERR_SCENE, "solver.integrator: %d is not one of ida, erk",
+                         (int)s->integrator);
+  if (s->integrator == F3R_INTEGRATOR_ERK && s->formulation != F3R_FORMULATION_MINIMAL)
+    return f3r_error_set(err, F3R_ERR_SCENE,
+                         "solver.integrator: erk integrates the minimal formulation only");
+  CHECK_RANGE("solver.rtol", s->rtol, 1e-14, 1e-1);
+  CHECK_RANGE("solver.atol", s->atol, 1e-16, 1e-1);
+  CHECK_RANGE("solver.max_step", s->max_step, 0.0, 1e3);
+  CHECK_RANGE("run.duration", s->duration, 0.0, 1e6);
+  CHECK_RANGE("run.output_step", s->output_step, 1e-7, 1e3);
+  if ((double)s->beam_points < 2 || s->beam_points > 101)
+    return f3r_error_set(err, F3R_ERR_SCENE, "run.beam_points: %d is out of range 2..101",
+                         s->beam_points);
+  return F3R_OK;
+}

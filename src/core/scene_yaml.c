@@ -1,0 +1,388 @@
+/* Scene YAML (libyaml document API) into f3r_scene. Unknown keys are errors; every error reads
+ * "path:line: field: what is wrong". Range checks are f3r_scene_validate's; the loader remembers
+ * the line of each field so that those messages carry it too. */
+#include <errno.h>
+#include <math.h>
+#include <stdarg.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <yaml.h>
+
+#include "flex3rpr/scene.h"
+
+#define MAX_FIELDS 256
+
+typedef struct {
+  const char* path;
+  yaml_document_t doc;
+  f3r_scene* scene;
+  f3r_error* err;
+  int n_fields;
+  char field_name[MAX_FIELDS][96];
+  int field_line[MAX_FIELDS];
+} loader;
+
+static int line_of(const yaml_node_t* node) { return (int)node->start_mark.line + 1; }
+
+static f3r_status fail(loader* L, const yaml_node_t* node, const char* field, const char* fmt, ...) {
+  char what[384];
+  va_list args;
+  va_start(args, fmt);
+  vsnprintf(what, sizeof what, fmt, args);
+  va_end(args);
+  return f3r_error_set(L->err, F3R_ERR_SCENE, "%s:%d: %s: %s", L->path, node ? line_of(node) : 0,
+                       field, what);
+}
+
+static void remember(loader* L, const char* field, const yaml_node_t* node) {
+  if (L->n_fields >= MAX_FIELDS) return;
+  snprintf(L->field_name[L->n_fields], sizeof L->field_name[0], "%s", field);
+  L->field_line[L->n_fields++] = line_of(node);
+}
+
+static const char* scalar(const yaml_node_t* n) {
+  return n->type == YAML_SCALAR_NODE ? (const char*)n->data.scalar.value : NULL;
+}
+
+static f3r_status read_number(loader* L, const yaml_node_t* n, const char* field, double* out) {
+  const char* s = scalar(n);
+  if (!s) return fail(L, n, field, "expected a number");
+  char* end = NULL;
+  errno = 0;
+  const double v = strtod(s, &end);
+  if (end == s || *end != '\0' || errno == ERANGE || !isfinite(v))
+    return fail(L, n, field, "'%s' is not a finite number", s);
+  *out = v;
+  remember(L, field, n);
+  return F3R_OK;
+}
+
+static f3r_status read_int(loader* L, const yaml_node_t* n, const char* field, int* out) {
+  double v;
+  f3r_status st = read_number(L, n, field, &v);
+  if (st != F3R_OK) return st;
+  if (v != floor(v) || fabs(v) > 1e6) return fail(L, n, field, "%g is not a whole number", v);
+  *out = (int)v;
+  return F3R_OK;
+}
+
+static f3r_status read_bool(loader* L, const yaml_node_t* n, const char* field, int* out) {
+  const char* s = scalar(n);
+  if (s && (!strcmp(s, "true") || !strcmp(s, "on") || !strcmp(s, "yes"))) *out = 1;
+  else if (s && (!strcmp(s, "false") || !strcmp(s, "off") || !strcmp(s, "no"))) *out = 0;
+  else return fail(L, n, field, "expected true or false");
+  remember(L, field, n);
+  return F3R_OK;
+}
+
+static f3r_status read_vector(loader* L, const yaml_node_t* n, const char* field, double* out,
+                              int count) {
+  if (n->type != YAML_SEQUENCE_NODE) return fail(L, n, field, "expected a list of %d numbers", count);
+  const int len = (int)(n->data.sequence.items.top - n->data.sequence.items.start);
+  if (len != count) return fail(L, n, field, "has %d values, expected %d", len, count);
+  for (int k = 0; k < len; ++k) {
+    char name[96];
+    snprintf(name, sizeof name, "%s[%d]", field, k);
+    const yaml_node_t* item = yaml_document_get_node(&L->doc, n->data.sequence.items.start[k]);
+    f3r_status st = read_number(L, item, name, &out[k]);
+    if (st != F3R_OK) return st;
+  }
+  remember(L, field, n);
+  return F3R_OK;
+}
+
+/* Iterates the pairs of a mapping node; KEY is the key string, VALUE the value node. */
+#define FOR_EACH_PAIR(L, map, KEY, VALUE)                                                   \
+  for (yaml_node_pair_t* pair_ = (map)->data.mapping.pairs.start;                           \
+       pair_ < (map)->data.mapping.pairs.top; ++pair_)                                      \
+    for (int once_ = 1; once_; once_ = 0)                                                   \
+      for (const yaml_node_t *key_node_ = yaml_document_get_node(&(L)->doc, pair_->key),    \
+                             *VALUE = yaml_document_get_node(&(L)->doc, pair_->value);      \
+           once_; once_ = 0)                                                                \
+        for (const char* KEY = scalar(key_node_) ? scalar(key_node_) : ""; once_; once_ = 0)
+
+static f3r_status expect_mapping(loader* L, const yaml_node_t* n, const char* field) {
+  return n->type == YAML_MAPPING_NODE ? F3R_OK : fail(L, n, field, "expected a mapping");
+}
+
+typedef struct {
+  const char* key;
+  double* target;
+} number_field;
+
+/* Reads a mapping whose keys are all numbers from `fields`. */
+static f3r_status read_numbers(loader* L, const yaml_node_t* map, const char* section,
+                               const number_field* fields, int count) {
+  f3r_status st = expect_mapping(L, map, section);
+  if (st != F3R_OK) return st;
+  FOR_EACH_PAIR(L, map, key, value) {
+    char name[96];
+    snprintf(name, sizeof name, "%s.%s", section, key);
+    int found = 0;
+    for (int k = 0; k < count && !found; ++k)
+      if (!strcmp(key, fields[k].key)) {
+        found = 1;
+        if ((st = read_number(L, value, name, fields[k].target)) != F3R_OK) return st;
+      }
+    if (!found) {
+      char allowed[256] = "";
+      for (int k = 0; k < count; ++k) {
+        strncat(allowed, fields[k].key, sizeof allowed - strlen(allowed) - 1);
+        if (k + 1 < count) strncat(allowed, ", ", sizeof allowed - strlen(allowed) - 1);
+      }
+      return fail(L, value, name, "unknown key (allowed: %s)", allowed);
+    }
+  }
+  return F3R_OK;
+}
+
+static f3r_status read_link(loader* L, const yaml_node_t* map, int i) {
+  char section[32];
+  snprintf(section, sizeof section, "links[%d]", i);
+  f3r_status st = expect_mapping(L, map, section);
+  if (st != F3R_OK) return st;
+  f3r_link_scene* link = &L->scene->links[i];
+  FOR_EACH_PAIR(L, map, key, value) {
+    char name[96];
+    snprintf(name, sizeof name, "%s.%s", section, key);
+    if (!strcmp(key, "model")) {
+      const char* s = scalar(value);
+      if (s && !strcmp(s, "rigid")) link->model = F3R_LINK_RIGID;
+      else if (s && !strcmp(s, "fixed_pinned")) link->model = F3R_LINK_FIXED_PINNED;
+      else if (s && !strcmp(s, "fixed_free")) link->model = F3R_LINK_FIXED_FREE;
+      else return fail(L, value, name, "'%s' is not one of rigid, fixed_pinned, fixed_free", s ? s : "?");
+      remember(L, name, value);
+    } else if (!strcmp(key, "modes")) {
+      if ((st = read_int(L, value, name, &link->modes)) != F3R_OK) return st;
+    } else if (!strcmp(key, "initial_deflection") || !strcmp(key, "initial_rate")) {
+      double* target = key[8] == 'd' ? link->eta0 : link->eta_rate0;
+      if (value->type != YAML_SEQUENCE_NODE) return fail(L, value, name, "expected a list");
+      const int len = (int)(value->data.sequence.items.top - value->data.sequence.items.start);
+      if (len > F3R_MAX_MODES)
+        return fail(L, value, name, "has %d values, at most %d allowed", len, F3R_MAX_MODES);
+      if ((st = read_vector(L, value, name, target, len)) != F3R_OK) return st;
+    } else {
+      return fail(L, value, name,
+                  "unknown key (allowed: model, modes, initial_deflection, initial_rate)");
+    }
+  }
+  return F3R_OK;
+}
+
+static f3r_status read_links(loader* L, const yaml_node_t* n) {
+  if (n->type == YAML_MAPPING_NODE) { /* one mapping applies to all three links */
+    for (int i = 0; i < 3; ++i) {
+      f3r_status st = read_link(L, n, i);
+      if (st != F3R_OK) return st;
+    }
+    return F3R_OK;
+  }
+  if (n->type != YAML_SEQUENCE_NODE) return fail(L, n, "links", "expected a list of 3 links or one mapping for all");
+  const int len = (int)(n->data.sequence.items.top - n->data.sequence.items.start);
+  if (len != 3) return fail(L, n, "links", "has %d entries, expected 3", len);
+  for (int i = 0; i < 3; ++i) {
+    f3r_status st = read_link(L, yaml_document_get_node(&L->doc, n->data.sequence.items.start[i]), i);
+    if (st != F3R_OK) return st;
+  }
+  return F3R_OK;
+}
+
+static f3r_status read_input(loader* L, const yaml_node_t* map, const char* name, f3r_input* in) {
+  f3r_status st = expect_mapping(L, map, name);
+  if (st != F3R_OK) return st;
+  double frequency = NAN;
+  in->kind = F3R_INPUT_CONSTANT;
+  FOR_EACH_PAIR(L, map, key, value) {
+    char field[96];
+    snprintf(field, sizeof field, "%s.%s", name, key);
+    double* target = !strcmp(key, "offset")      ? &in->offset
+                     : !strcmp(key, "amplitude") ? &in->amplitude
+                     : !strcmp(key, "omega")     ? &in->omega
+                     : !strcmp(key, "phase")     ? &in->phase
+                     : !strcmp(key, "frequency") ? &frequency
+                                                 : NULL;
+    if (!target)
+      return fail(L, value, field, "unknown key (allowed: offset, amplitude, frequency, omega, phase)");
+    if ((st = read_number(L, value, field, target)) != F3R_OK) return st;
+    if (target != &in->offset) in->kind = F3R_INPUT_HARMONIC;
+  }
+  if (!isnan(frequency)) {
+    if (in->omega != 0.0) return fail(L, map, name, "give frequency (Hz) or omega (rad/s), not both");
+    in->omega = 2.0 * M_PI * frequency;
+  }
+  return F3R_OK;
+}
+
+static f3r_status read_inputs(loader* L, const yaml_node_t* map) {
+  f3r_status st = expect_mapping(L, map, "inputs");
+  if (st != F3R_OK) return st;
+  FOR_EACH_PAIR(L, map, key, value) {
+    char name[96];
+    snprintf(name, sizeof name, "inputs.%s", key);
+    int index = -1;
+    for (int k = 0; k < F3R_RIGID_FORCES; ++k)
+      if (!strcmp(key, f3r_input_name(k))) index = k;
+    if (index < 0)
+      return fail(L, value, name,
+                  "unknown input (allowed: rho_1..3, theta_1..3, platform_force_x, "
+                  "platform_force_y, platform_torque)");
+    if ((st = read_input(L, value, name, &L->scene->inputs[index])) != F3R_OK) return st;
+  }
+  return F3R_OK;
+}
+
+static f3r_status read_solver(loader* L, const yaml_node_t* map) {
+  f3r_status st = expect_mapping(L, map, "solver");
+  if (st != F3R_OK) return st;
+  f3r_scene* s = L->scene;
+  FOR_EACH_PAIR(L, map, key, value) {
+    char name[96];
+    snprintf(name, sizeof name, "solver.%s", key);
+    if (!strcmp(key, "formulation")) {
+      const char* v = scalar(value);
+      if (v && !strcmp(v, "dae")) s->formulation = F3R_FORMULATION_DAE;
+      else if (v && !strcmp(v, "minimal")) s->formulation = F3R_FORMULATION_MINIMAL;
+      else return fail(L, value, name, "'%s' is not one of dae, minimal", v ? v : "?");
+      remember(L, name, value);
+    } else if (!strcmp(key, "integrator")) {
+      const char* v = scalar(value);
+      if (v && !strcmp(v, "ida")) s->integrator = F3R_INTEGRATOR_IDA;
+      else if (v && !strcmp(v, "erk")) s->integrator = F3R_INTEGRATOR_ERK;
+      else return fail(L, value, name, "'%s' is not one of ida, erk", v ? v : "?");
+      remember(L, name, value);
+    } else if (!strcmp(key, "rtol")) { st = read_number(L, value, name, &s->rtol);
+    } else if (!strcmp(key, "atol")) { st = read_number(L, value, name, &s->atol);
+    } else if (!strcmp(key, "max_step")) { st = read_number(L, value, name, &s->max_step);
+    } else {
+      return fail(L, value, name, "unknown key (allowed: formulation, integrator, rtol, atol, max_step)");
+    }
+    if (st != F3R_OK) return st;
+  }
+  return F3R_OK;
+}
+
+static f3r_status read_root(loader* L, const yaml_node_t* root) {
+  f3r_scene* s = L->scene;
+  f3r_status st = expect_mapping(L, root, "scene");
+  if (st != F3R_OK) return st;
+  FOR_EACH_PAIR(L, root, key, value) {
+    if (!strcmp(key, "geometry")) {
+      const number_field f[] = {{"base_side", &s->base_side}, {"platform_side", &s->platform_side}};
+      st = read_numbers(L, value, "geometry", f, 2);
+    } else if (!strcmp(key, "platform")) {
+      const number_field f[] = {{"mass", &s->platform_mass}, {"inertia", &s->platform_inertia}};
+      st = read_numbers(L, value, "platform", f, 2);
+    } else if (!strcmp(key, "link")) {
+      const number_field f[] = {{"length", &s->link_length}, {"diameter", &s->link_diameter},
+                                {"density", &s->link_density},
+                                {"youngs_modulus", &s->link_youngs_modulus}};
+      st = read_numbers(L, value, "link", f, 4);
+    } else if (!strcmp(key, "cylinder")) {
+      const number_field f[] = {{"length", &s->cylinder_length},
+                                {"inner_diameter", &s->cylinder_inner_diameter},
+                                {"outer_diameter", &s->cylinder_outer_diameter},
+                                {"density", &s->cylinder_density}};
+      st = read_numbers(L, value, "cylinder", f, 4);
+    } else if (!strcmp(key, "links")) {
+      st = read_links(L, value);
+    } else if (!strcmp(key, "effects")) {
+      if ((st = expect_mapping(L, value, "effects")) != F3R_OK) return st;
+      FOR_EACH_PAIR(L, value, ekey, evalue) {
+        char name[96];
+        snprintf(name, sizeof name, "effects.%s", ekey);
+        if (strcmp(ekey, "exact_kinematics"))
+          return fail(L, evalue, name, "unknown effect (allowed: exact_kinematics)");
+        if ((st = read_bool(L, evalue, name, &s->exact_kinematics)) != F3R_OK) return st;
+      }
+    } else if (!strcmp(key, "initial")) {
+      if ((st = expect_mapping(L, value, "initial")) != F3R_OK) return st;
+      FOR_EACH_PAIR(L, value, ikey, ivalue) {
+        char name[96];
+        snprintf(name, sizeof name, "initial.%s", ikey);
+        if (!strcmp(ikey, "platform_pose")) st = read_vector(L, ivalue, name, s->platform_pose0, 3);
+        else if (!strcmp(ikey, "platform_velocity"))
+          st = read_vector(L, ivalue, name, s->platform_velocity0, 3);
+        else return fail(L, ivalue, name, "unknown key (allowed: platform_pose, platform_velocity)");
+        if (st != F3R_OK) return st;
+      }
+    } else if (!strcmp(key, "inputs")) {
+      st = read_inputs(L, value);
+    } else if (!strcmp(key, "solver")) {
+      st = read_solver(L, value);
+    } else if (!strcmp(key, "run")) {
+      if ((st = expect_mapping(L, value, "run")) != F3R_OK) return st;
+      FOR_EACH_PAIR(L, value, rkey, rvalue) {
+        char name[96];
+        snprintf(name, sizeof name, "run.%s", rkey);
+        if (!strcmp(rkey, "duration")) st = read_number(L, rvalue, name, &s->duration);
+        else if (!strcmp(rkey, "output_step")) st = read_number(L, rvalue, name, &s->output_step);
+        else if (!strcmp(rkey, "beam_points")) st = read_int(L, rvalue, name, &s->beam_points);
+        else return fail(L, rvalue, name, "unknown key (allowed: duration, output_step, beam_points)");
+        if (st != F3R_OK) return st;
+      }
+    } else {
+      return fail(L, value, key,
+                  "unknown section (allowed: geometry, platform, link, cylinder, links, effects, "
+                  "initial, inputs, solver, run)");
+    }
+    if (st != F3R_OK) return st;
+  }
+  return F3R_OK;
+}
+
+/* Prefixes a validation message with the file and the line of the field it names. */
+static f3r_status locate_validation_error(loader* L, f3r_error* err) {
+  char field[96] = "";
+  sscanf(err->message, "%95[^:]", field);
+  int line = 0;
+  for (int k = 0; k < L->n_fields; ++k)
+    if (!strcmp(L->field_name[k], field)) line = L->field_line[k];
+  if (!line) { /* a field within a list: try its parent, e.g. links[1].modes for links[1] */
+    for (int k = 0; k < L->n_fields; ++k)
+      if (!strncmp(field, L->field_name[k], strlen(L->field_name[k]))) line = L->field_line[k];
+  }
+  char message[sizeof err->message];
+  snprintf(message, sizeof message, "%s:%d: %s", L->path, line, err->message);
+  return f3r_error_set(err, err->code, "%s", message);
+}
+
+f3r_status f3r_scene_load(const char* path, f3r_scene* scene, f3r_error* err) {
+  if (!path || !scene) return f3r_error_set(err, F3R_ERR_ARGUMENT, "f3r_scene_load: NULL argument");
+  FILE* file = fopen(path, "rb");
+  if (!file) return f3r_error_set(err, F3R_ERR_SCENE, "%s: cannot open: %s", path, strerror(errno));
+  loader* L = calloc(1, sizeof *L);
+  if (!L) {
+    fclose(file);
+    return f3r_error_set(err, F3R_ERR_MEMORY, "%s: out of memory", path);
+  }
+  L->path = path;
+  L->err = err;
+  f3r_scene parsed = f3r_default_scene();
+  L->scene = &parsed;
+  yaml_parser_t parser;
+  yaml_parser_initialize(&parser);
+  yaml_parser_set_input_file(&parser, file);
+  f3r_status st;
+  if (!yaml_parser_load(&parser, &L->doc)) {
+    st = f3r_error_set(err, F3R_ERR_SCENE, "%s:%d: YAML syntax: %s", path,
+                       (int)parser.problem_mark.line + 1, parser.problem ? parser.problem : "?");
+    yaml_parser_delete(&parser);
+    fclose(file);
+    free(L);
+    return st;
+  }
+  const yaml_node_t* root = yaml_document_get_root_node(&L->doc);
+  if (!root) st = f3r_error_set(err, F3R_ERR_SCENE, "%s:1: the file holds no scene", path);
+  else st = read_root(L, root);
+  if (st == F3R_OK) {
+    st = f3r_scene_validate(&parsed, err);
+    if (st != F3R_OK) st = locate_validation_error(L, err);
+  }
+  if (st == F3R_OK) *scene = parsed;
+  yaml_document_delete(&L->doc);
+  yaml_parser_delete(&parser);
+  fclose(file);
+  free(L);
+  return st;
+}

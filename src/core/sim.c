@@ -1,0 +1,217 @@
+/* The run API: initial state, held forces with clean restarts, outputs. The integration itself
+ * is a stepper's (stepper_ida.c, stepper_erk.c). Nothing is allocated after f3r_sim_create. */
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "flex3rpr/sim.h"
+#include "flex3rpr/stages.h"
+#include "stepper.h"
+#include "workspace.h"
+
+struct f3r_sim {
+  const f3r_model* model;
+  f3r_solver_settings settings;
+  const f3r_stepper_ops* ops;
+  f3r_stepper stepper;
+  int ny;
+  N_Vector y, yp;
+  f3r_workspace* out_ws; /* scratch for outputs, so outputs never disturb the residual's */
+  double held[F3R_MAX_Q];
+  double t;              /* time of the current state */
+  double energy0;        /* T + V at t = 0 (W = 0 there) */
+  f3r_outputs out;
+};
+
+f3r_solver_settings f3r_solver_settings_from_scene(const f3r_scene* scene) {
+  f3r_solver_settings st;
+  st.formulation = scene->formulation;
+  st.integrator = scene->integrator;
+  st.rtol = scene->rtol;
+  st.atol = scene->atol;
+  st.max_step = scene->max_step;
+  st.analytic_jacobian = 1;
+  st.stop_at_outputs = 0;
+  return st;
+}
+
+static f3r_status initial_coordinates(const f3r_model* m, double* q, double* v) {
+  const f3r_scene* sc = &m->scene;
+  memset(q, 0, F3R_MAX_Q * sizeof(double));
+  memset(v, 0, F3R_MAX_Q * sizeof(double));
+  for (int k = 0; k < 3; ++k) {
+    q[6 + k] = sc->platform_pose0[k];
+    v[6 + k] = sc->platform_velocity0[k];
+  }
+  for (int i = 0; i < 3; ++i)
+    for (int j = 0; j < m->link[i].modes; ++j) {
+      q[m->link[i].eta_index + j] = sc->links[i].eta0[j];
+      v[m->link[i].eta_index + j] = sc->links[i].eta_rate0[j];
+    }
+  const f3r_status st = f3r_model_close_loops(m, q);
+  if (st != F3R_OK) return st;
+  f3r_model_close_loop_rates(m, q, v);
+  return F3R_OK;
+}
+
+/* y, y' at s->t from full coordinates and work W, consistent by construction. */
+static f3r_status consistent(f3r_sim* s, const double* q, const double* v, double work,
+                             f3r_error* err) {
+  const f3r_status st = f3r_consistent_state(s->model, s->settings.formulation, s->t, q, v,
+                                             s->held, work, N_VGetArrayPointer(s->y),
+                                             N_VGetArrayPointer(s->yp), NULL, s->stepper.ws);
+  if (st != F3R_OK)
+    return f3r_error_set(err, st, "no consistent state at t = %.9g: %s", s->t,
+                         st == F3R_ERR_SINGULAR ? "the constrained mass matrix is singular"
+                                                : "non-finite values");
+  return F3R_OK;
+}
+
+f3r_status f3r_sim_create(const f3r_model* model, const f3r_solver_settings* settings,
+                          f3r_sim** out, f3r_error* err) {
+  if (!model || !out) return f3r_error_set(err, F3R_ERR_ARGUMENT, "f3r_sim_create: NULL argument");
+  *out = NULL;
+  f3r_sim* s = calloc(1, sizeof *s);
+  if (!s) return f3r_error_set(err, F3R_ERR_MEMORY, "f3r_sim_create: out of memory");
+  s->model = model;
+  s->settings = settings ? *settings : f3r_solver_settings_from_scene(&model->scene);
+  s->ops = s->settings.integrator == F3R_INTEGRATOR_ERK ? &f3r_erk_stepper : &f3r_ida_stepper;
+  s->ny = f3r_state_size(model, s->settings.formulation);
+  f3r_stepper* stp = &s->stepper;
+  stp->model = model;
+  stp->settings = s->settings;
+  stp->held = s->held;
+  f3r_status st = F3R_OK;
+  double q[F3R_MAX_Q], v[F3R_MAX_Q];
+  if (!(s->settings.rtol > 0.0) || !(s->settings.atol > 0.0)) {
+    st = f3r_error_set(err, F3R_ERR_ARGUMENT, "rtol %g and atol %g must be positive",
+                       s->settings.rtol, s->settings.atol);
+    goto fail;
+  }
+  if (SUNContext_Create(NULL, &stp->ctx) != 0) {
+    st = f3r_error_set(err, F3R_ERR_SOLVER, "SUNContext_Create failed");
+    goto fail;
+  }
+  s->y = N_VNew_Serial(s->ny, stp->ctx);
+  s->yp = N_VNew_Serial(s->ny, stp->ctx);
+  stp->ws = f3r_workspace_create(model);
+  s->out_ws = f3r_workspace_create(model);
+  if (!s->y || !s->yp || !stp->ws || !s->out_ws) {
+    st = f3r_error_set(err, F3R_ERR_MEMORY, "f3r_sim_create: out of memory");
+    goto fail;
+  }
+  if (initial_coordinates(model, q, v) != F3R_OK) {
+    st = f3r_error_set(err, F3R_ERR_SCENE, "initial.platform_pose: the legs cannot reach it");
+    goto fail;
+  }
+  s->energy0 = f3r_kinetic_energy(model, q, v) + f3r_potential_energy(model, q);
+  if ((st = consistent(s, q, v, 0.0, err)) != F3R_OK) goto fail;
+  if ((st = s->ops->setup(stp, s->y, s->yp, 0.0, err)) != F3R_OK) goto fail;
+  *out = s;
+  return F3R_OK;
+fail:
+  f3r_sim_destroy(s);
+  return st;
+}
+
+void f3r_sim_destroy(f3r_sim* s) {
+  if (!s) return;
+  s->ops->release(&s->stepper);
+  if (s->y) N_VDestroy(s->y);
+  if (s->yp) N_VDestroy(s->yp);
+  f3r_workspace_destroy(s->stepper.ws);
+  f3r_workspace_destroy(s->out_ws);
+  if (s->stepper.ctx) SUNContext_Free(&s->stepper.ctx);
+  free(s);
+}
+
+f3r_status f3r_sim_reset(f3r_sim* s, f3r_error* err) {
+  double q[F3R_MAX_Q], v[F3R_MAX_Q];
+  f3r_status st = initial_coordinates(s->model, q, v);
+  if (st != F3R_OK) return f3r_error_set(err, st, "the initial pose cannot be reached");
+  memset(s->held, 0, sizeof s->held);
+  s->t = 0.0;
+  if ((st = consistent(s, q, v, 0.0, err)) != F3R_OK) return st;
+  st = s->ops->restart(&s->stepper, s->y, s->yp, 0.0, err);
+  memset(&s->stepper.base, 0, sizeof s->stepper.base); /* a reset starts the count anew */
+  s->stepper.recoverable = 0;
+  return st;
+}
+
+f3r_status f3r_sim_set_forces(f3r_sim* s, const double* held, f3r_error* err) {
+  const int nq = s->model->nq;
+  int changed = 0;
+  for (int n = 0; n < nq; ++n) {
+    if (!isfinite(held[n]))
+      return f3r_error_set(err, F3R_ERR_ARGUMENT, "force[%d] is %g, not finite", n, held[n]);
+    changed |= held[n] != s->held[n];
+  }
+  if (!changed) return F3R_OK;
+  double q[F3R_MAX_Q], v[F3R_MAX_Q], keep[F3R_MAX_Q];
+  const double* y = N_VGetArrayPointer(s->y);
+  f3r_status st = f3r_state_to_full(s->model, s->settings.formulation, y, q, v);
+  if (st != F3R_OK) return f3r_error_set(err, st, "the current state cannot be closed");
+  memcpy(keep, s->held, sizeof keep);
+  memcpy(s->held, held, (size_t)nq * sizeof(double));
+  st = consistent(s, q, v, y[s->ny - 1], err);
+  if (st == F3R_OK) st = s->ops->restart(&s->stepper, s->y, s->yp, s->t, err);
+  if (st != F3R_OK) memcpy(s->held, keep, sizeof keep);
+  return st;
+}
+
+f3r_status f3r_sim_advance(f3r_sim* s, double t_out, f3r_error* err) {
+  if (!(t_out > s->t)) return F3R_OK;
+  double t_reached = s->t;
+  const f3r_status st = s->ops->advance(&s->stepper, t_out, s->y, s->yp, &t_reached, err);
+  if (st != F3R_OK) {
+    s->t = t_reached;
+    return st;
+  }
+  const double* y = N_VGetArrayPointer(s->y);
+  for (int n = 0; n < s->ny; ++n)
+    if (!isfinite(y[n]))
+      return f3r_error_set(err, F3R_ERR_NONFINITE, "non-finite state at t = %.9g", t_reached);
+  s->t = t_out;
+  return F3R_OK;
+}
+
+double f3r_sim_time(const f3r_sim* s) { return s->t; }
+const f3r_model* f3r_sim_model(const f3r_sim* s) { return s->model; }
+f3r_formulation f3r_sim_formulation(const f3r_sim* s) { return s->settings.formulation; }
+const double* f3r_sim_state(const f3r_sim* s) { return N_VGetArrayPointer(s->y); }
+
+const f3r_outputs* f3r_sim_outputs(f3r_sim* s) {
+  const f3r_model* m = s->model;
+  f3r_outputs* o = &s->out;
+  const double* y = N_VGetArrayPointer(s->y);
+  o->t = s->t;
+  if (f3r_state_to_full(m, s->settings.formulation, y, o->q, o->v) != F3R_OK) return o;
+  f3r_generalized_forces(m, s->t, s->held, o->forces);
+  if (s->settings.formulation == F3R_FORMULATION_DAE) {
+    memcpy(o->lambda, y + 2 * m->nq, sizeof o->lambda);
+  } else {
+    double a[F3R_MAX_Q];
+    if (f3r_solve_accelerations(m, o->q, o->v, o->forces, a, o->lambda, s->out_ws->solve_work) !=
+        F3R_OK)
+      memset(o->lambda, 0, sizeof o->lambda);
+  }
+  for (int i = 0; i < 3; ++i) {
+    o->tip_deflection[i] = f3r_model_tip_deflection(m, o->q, i);
+    o->tip_deflection_rate[i] = f3r_model_tip_deflection(m, o->v, i);
+  }
+  o->kinetic_energy = f3r_kinetic_energy(m, o->q, o->v);
+  o->potential_energy = f3r_potential_energy(m, o->q);
+  o->external_work = y[s->ny - 1];
+  o->energy_balance_error =
+      fabs(o->kinetic_energy + o->potential_energy - o->external_work - s->energy0);
+  double g[F3R_NCON], gv[F3R_NCON];
+  f3r_constraints(m, o->q, g);
+  f3r_constraint_times(m, o->q, o->v, gv);
+  o->constraint_residual = o->velocity_residual = 0.0;
+  for (int c = 0; c < F3R_NCON; ++c) {
+    o->constraint_residual = fmax(o->constraint_residual, fabs(g[c]));
+    o->velocity_residual = fmax(o->velocity_residual, fabs(gv[c]));
+  }
+  s->ops->stats(&s->stepper, &o->stats);
+  return o;
+}

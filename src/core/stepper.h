@@ -1,0 +1,49 @@
+/* The integrators behind f3r_sim: one interface, two SUNDIALS back ends. Private.
+ *   IDA (variable-order BDF, implicit; both formulations)
+ *   ARKODE ERKStep (explicit Verner 8(7); minimal formulation only) */
+#ifndef FLEX3RPR_STEPPER_H
+#define FLEX3RPR_STEPPER_H
+
+#include <nvector/nvector_serial.h>
+#include <sundials/sundials_context.h>
+#include <sunlinsol/sunlinsol_dense.h>
+#include <sunmatrix/sunmatrix_dense.h>
+
+#include "flex3rpr/sim.h"
+
+typedef struct {
+  const f3r_model* model;
+  f3r_solver_settings settings;
+  const double* held;     /* the simulation's held forces */
+  f3r_workspace* ws;      /* residual scratch */
+  SUNContext ctx;
+  void* mem;              /* IDA or ERKStep memory */
+  N_Vector id, atol;      /* IDA only */
+  SUNMatrix J;            /* IDA only */
+  SUNLinearSolver ls;     /* IDA only */
+  f3r_sim_stats base;     /* statistics accumulated before the last restart */
+  long recoverable;       /* right-hand side calls that asked for a smaller step */
+  char message[256];      /* the solver's last error message: the core never prints */
+} f3r_stepper;
+
+typedef struct {
+  /* Creates the solver at t0 from a consistent y, y'. */
+  f3r_status (*setup)(f3r_stepper* st, N_Vector y, N_Vector yp, double t0, f3r_error* err);
+  /* Restarts at t from a consistent y, y' (after a jump in the forces). */
+  f3r_status (*restart)(f3r_stepper* st, N_Vector y, N_Vector yp, double t, f3r_error* err);
+  /* Integrates to tout; y (and y') receive the state there, or the last good one on failure. */
+  f3r_status (*advance)(f3r_stepper* st, double tout, N_Vector y, N_Vector yp,
+                        double* t_reached, f3r_error* err);
+  /* Statistics since creation (base plus the current solver's counters). */
+  void (*stats)(const f3r_stepper* st, f3r_sim_stats* out);
+  void (*release)(f3r_stepper* st);
+} f3r_stepper_ops;
+
+extern const f3r_stepper_ops f3r_ida_stepper;
+extern const f3r_stepper_ops f3r_erk_stepper;
+
+/* Stores a SUNDIALS error message in the stepper (user data of the error handler). */
+void f3r_stepper_error_handler(int code, const char* module, const char* function, char* msg,
+                               void* user);
+
+#endif

@@ -1,0 +1,151 @@
+/* IDA back end: dense direct solver, analytic (or difference-quotient) Jacobian, algebraic
+ * unknowns marked and suppressed from the error test. Every SUNDIALS call is checked. */
+#include <ida/ida.h>
+#include <math.h>
+#include <stdio.h>
+
+#include "stepper.h"
+
+/* The algebraic unknowns (lambda, mu) are not in the error test, but their weights enter IDA's
+ * Newton convergence test. In an index-2 system they are only determined to about
+ * M eps |q| / h^2 (lambda) and eps |q| / h (mu): roundoff in g(q) amplified by the step. Weights
+ * tighter than that make Newton fail at the first step. Measured on the four paper scenes at
+ * rtol 1e-10..1e-12: a floor of 1e-8 still fails on two, 1e-6 passes all; without the floor
+ * every scene fails at rtol 1e-12. Multipliers are forces (N), so they also scale with atol. */
+#define F3R_ALGEBRAIC_ATOL_SCALE 1e4
+#define F3R_ALGEBRAIC_ATOL_MIN 1e-6
+/* The first step is given explicitly: IDA's own estimate assumes an index-1 start. */
+#define F3R_INITIAL_STEP 1e-7
+
+static int residual_fn(realtype t, N_Vector y, N_Vector yp, N_Vector res, void* user) {
+  f3r_stepper* st = user;
+  const f3r_status s = f3r_residual(st->model, st->settings.formulation, t, N_VGetArrayPointer(y),
+                                    N_VGetArrayPointer(yp), st->held, N_VGetArrayPointer(res),
+                                    st->ws);
+  if (s == F3R_OK) return 0;
+  st->recoverable++;
+  return 1; /* recoverable: IDA cuts the step */
+}
+
+static int jacobian_fn(realtype t, realtype cj, N_Vector y, N_Vector yp, N_Vector r, SUNMatrix J,
+                       void* user, N_Vector t1, N_Vector t2, N_Vector t3) {
+  (void)r, (void)t1, (void)t2, (void)t3;
+  f3r_stepper* st = user;
+  const f3r_status s = f3r_residual_jacobian(
+      st->model, st->settings.formulation, t, cj, N_VGetArrayPointer(y), N_VGetArrayPointer(yp),
+      st->held, SM_DATA_D(J), (int)SM_ROWS_D(J), st->ws);
+  if (s == F3R_OK) return 0;
+  st->recoverable++;
+  return 1;
+}
+
+static f3r_status failed(f3r_stepper* st, f3r_error* err, const char* call, int flag) {
+  return f3r_error_set(err, F3R_ERR_SOLVER, "%s failed: %s (%s)", call,
+                       IDAGetReturnFlagName(flag), st->message);
+}
+
+#define CHECK(call)                                               \
+  do {                                                            \
+    const int flag_ = (call);                                     \
+    if (flag_ < 0) return failed(st, err, #call, flag_);          \
+  } while (0)
+
+static f3r_status ida_setup(f3r_stepper* st, N_Vector y, N_Vector yp, double t0, f3r_error* err) {
+  const f3r_model* m = st->model;
+  const int ny = (int)N_VGetLength(y);
+  st->mem = IDACreate(st->ctx);
+  if (!st->mem) return f3r_error_set(err, F3R_ERR_SOLVER, "IDACreate failed");
+  CHECK(IDASetErrHandlerFn(st->mem, f3r_stepper_error_handler, st));
+  CHECK(IDAInit(st->mem, residual_fn, t0, y, yp));
+  st->id = N_VNew_Serial(ny, st->ctx);
+  st->atol = N_VNew_Serial(ny, st->ctx);
+  if (!st->id || !st->atol) return f3r_error_set(err, F3R_ERR_MEMORY, "N_VNew_Serial failed");
+  f3r_state_kinds(m, st->settings.formulation, N_VGetArrayPointer(st->id));
+  double* atol = N_VGetArrayPointer(st->atol);
+  for (int n = 0; n < ny; ++n) atol[n] = st->settings.atol;
+  if (st->settings.formulation == F3R_FORMULATION_DAE)
+    for (int c = 0; c < 2 * F3R_NCON; ++c)
+      atol[2 * m->nq + c] = fmax(st->settings.atol * F3R_ALGEBRAIC_ATOL_SCALE, F3R_ALGEBRAIC_ATOL_MIN);
+  CHECK(IDASVtolerances(st->mem, st->settings.rtol, st->atol));
+  CHECK(IDASetUserData(st->mem, st));
+  CHECK(IDASetId(st->mem, st->id));
+  if (st->settings.formulation == F3R_FORMULATION_DAE) CHECK(IDASetSuppressAlg(st->mem, SUNTRUE));
+  CHECK(IDASetMaxNumSteps(st->mem, 100000000L));
+  if (st->settings.max_step > 0.0) CHECK(IDASetMaxStep(st->mem, st->settings.max_step));
+  CHECK(IDASetInitStep(st->mem, F3R_INITIAL_STEP));
+  st->J = SUNDenseMatrix(ny, ny, st->ctx);
+  if (!st->J) return f3r_error_set(err, F3R_ERR_MEMORY, "SUNDenseMatrix failed");
+  st->ls = SUNLinSol_Dense(y, st->J, st->ctx);
+  if (!st->ls) return f3r_error_set(err, F3R_ERR_MEMORY, "SUNLinSol_Dense failed");
+  CHECK(IDASetLinearSolver(st->mem, st->ls, st->J));
+  if (st->settings.analytic_jacobian) CHECK(IDASetJacFn(st->mem, jacobian_fn));
+  return F3R_OK;
+}
+
+static void ida_stats(const f3r_stepper* st, f3r_sim_stats* out) {
+  long nst = 0, nre = 0, nje = 0, netf = 0, nncf = 0, nre_ls = 0;
+  realtype hlast = 0.0;
+  int kord = 0;
+  IDAGetNumSteps(st->mem, &nst);
+  IDAGetNumResEvals(st->mem, &nre);
+  IDAGetNumJacEvals(st->mem, &nje);
+  IDAGetNumLinResEvals(st->mem, &nre_ls);
+  IDAGetNumErrTestFails(st->mem, &netf);
+  IDAGetNumNonlinSolvConvFails(st->mem, &nncf);
+  IDAGetLastStep(st->mem, &hlast);
+  IDAGetLastOrder(st->mem, &kord);
+  *out = st->base;
+  out->steps += nst;
+  out->residual_evals += nre + nre_ls;
+  out->jacobian_evals += nje;
+  out->error_test_failures += netf;
+  out->nonlinear_failures += nncf;
+  out->recoverable_errors = st->recoverable;
+  out->last_step = hlast;
+  out->last_order = kord;
+}
+
+static f3r_status ida_restart(f3r_stepper* st, N_Vector y, N_Vector yp, double t, f3r_error* err) {
+  ida_stats(st, &st->base);
+  st->base.restarts++;
+  CHECK(IDAReInit(st->mem, t, y, yp));
+  CHECK(IDASetInitStep(st->mem, F3R_INITIAL_STEP));
+  return F3R_OK;
+}
+
+static f3r_status ida_advance(f3r_stepper* st, double tout, N_Vector y, N_Vector yp,
+                              double* t_reached, f3r_error* err) {
+  if (st->settings.stop_at_outputs) CHECK(IDASetStopTime(st->mem, tout));
+  realtype t = *t_reached;
+  const int flag = IDASolve(st->mem, tout, &t, y, yp, IDA_NORMAL);
+  *t_reached = t;
+  if (flag >= 0) return F3R_OK;
+  IDAGetDky(st->mem, t, 0, y); /* the last successful step: still a good state */
+  IDAGetDky(st->mem, t, 1, yp);
+  return f3r_error_set(err,
+                       flag == IDA_RES_FAIL || flag == IDA_REP_RES_ERR ? F3R_ERR_NONFINITE
+                                                                       : F3R_ERR_SOLVER,
+                       "IDASolve stopped at t = %.9g before %.9g: %s (%s)", t, tout,
+                       IDAGetReturnFlagName(flag), st->message);
+}
+
+static void ida_release(f3r_stepper* st) {
+  if (st->mem) IDAFree(&st->mem);
+  if (st->ls) SUNLinSolFree(st->ls);
+  if (st->J) SUNMatDestroy(st->J);
+  if (st->id) N_VDestroy(st->id);
+  if (st->atol) N_VDestroy(st->atol);
+  st->ls = NULL;
+  st->J = NULL;
+  st->id = st->atol = NULL;
+}
+
+const f3r_stepper_ops f3r_ida_stepper = {ida_setup, ida_restart, ida_advance, ida_stats,
+                                         ida_release};
+
+void f3r_stepper_error_handler(int code, const char* module, const char* function, char* msg,
+                               void* user) {
+  f3r_stepper* st = user;
+  (void)code;
+  snprintf(st->message, sizeof st->message, "%s %s: %s", module, function, msg);
+}

@@ -1,0 +1,35 @@
+/* Scratch memory of the residual and Jacobian, sized once per model. Private. */
+#ifndef FLEX3RPR_WORKSPACE_H
+#define FLEX3RPR_WORKSPACE_H
+
+#include "flex3rpr/residual.h"
+#include "flex3rpr/stages.h"
+
+struct f3r_workspace {
+  int nq, nz, ny;
+  double q[F3R_MAX_Q], v[F3R_MAX_Q], a[F3R_MAX_Q], Q[F3R_MAX_Q];
+  double h[F3R_MAX_Q], k[F3R_MAX_Q], tmp[F3R_MAX_Q], R[F3R_MAX_Q];
+  double lambda[F3R_NCON], gamma[F3R_NCON];
+  double* solve_work; /* f3r_solve_accelerations_work_size */
+  double* y_perturbed;/* ny */
+  double* res_base;   /* ny */
+  double* res_perturbed; /* ny */
+  double* B;          /* nq x nz: dq/dz of the minimal formulation */
+  double* MB;         /* nq x nz */
+};
+
+f3r_status f3r_dae_residual(const f3r_model* m, double t, const double* y, const double* yp,
+                            const double* held, double* res, f3r_workspace* ws);
+f3r_status f3r_dae_jacobian(const f3r_model* m, double t, double cj, const double* y,
+                            const double* yp, const double* held, double* J, int ld,
+                            f3r_workspace* ws);
+f3r_status f3r_minimal_residual(const f3r_model* m, double t, const double* y, const double* yp,
+                                const double* held, double* res, f3r_workspace* ws);
+f3r_status f3r_minimal_jacobian(const f3r_model* m, double t, double cj, const double* y,
+                                const double* yp, const double* held, double* J, int ld,
+                                f3r_workspace* ws);
+
+f3r_status f3r_minimal_rhs(const f3r_model* m, double t, const double* y, const double* held,
+                           double* ydot, f3r_workspace* ws);
+
+#endif
