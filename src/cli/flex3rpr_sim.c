@@ -11,6 +11,15 @@
 #include "flex3rpr/modal.h"
 #include "flex3rpr/sim.h"
 
+#define MAX_HOLDS 64
+
+/* A held generalized force from a time on, as a node command would give it. */
+typedef struct {
+  double t;
+  int index;
+  double value;
+} hold_event;
+
 typedef struct {
   const char* scene_path;
   const char* out_path;
@@ -19,13 +28,18 @@ typedef struct {
   int exact_kinematics;
   const char* formulation;
   double rtol, atol, output_step, duration;
+  int stop_at_outputs;
+  int integrator_erk;
+  int n_holds;
+  hold_event holds[MAX_HOLDS];
 } cli_options;
 
 static void usage(FILE* to) {
   fprintf(to,
           "usage: flex3rpr_sim SCENE.yaml [--out FILE.csv] [--formulation dae|minimal]\n"
           "                    [--rtol R] [--atol A] [--output-step DT] [--duration T]\n"
-          "                    [--fd-jacobian] [--exact-kinematics]\n"
+          "                    [--fd-jacobian] [--exact-kinematics] [--erk]\n"
+          "                    [--stop-at-outputs] [--hold T:INDEX:VALUE ...]\n"
           "       flex3rpr_sim --modal SCENE.yaml\n");
 }
 
@@ -49,6 +63,18 @@ static int parse_args(int argc, char** argv, cli_options* o) {
     if (!strcmp(a, "--modal")) o->modal = 1;
     else if (!strcmp(a, "--fd-jacobian")) o->fd_jacobian = 1;
     else if (!strcmp(a, "--exact-kinematics")) o->exact_kinematics = 1;
+    else if (!strcmp(a, "--stop-at-outputs")) o->stop_at_outputs = 1;
+    else if (!strcmp(a, "--erk")) o->integrator_erk = 1;
+    else if (!strcmp(a, "--hold") && next) {
+      hold_event* h = &o->holds[o->n_holds];
+      if (o->n_holds >= MAX_HOLDS || sscanf(next, "%lf:%d:%lf", &h->t, &h->index, &h->value) != 3 ||
+          !(h->t >= 0.0) || h->index < 0 || !isfinite(h->value)) {
+        fprintf(stderr, "flex3rpr_sim: --hold needs T:INDEX:VALUE (T >= 0), got '%s'\n", next);
+        return 0;
+      }
+      ++o->n_holds;
+      ++k;
+    }
     else if (!strcmp(a, "--out") && next) { o->out_path = next; ++k; }
     else if (!strcmp(a, "--formulation") && next) { o->formulation = next; ++k; }
     else if (!strcmp(a, "--rtol")) { if (!parse_number(a, next, &o->rtol)) return 0; ++k; }
@@ -133,6 +159,10 @@ int main(int argc, char** argv) {
   if (o.output_step > 0) scene.output_step = o.output_step;
   if (o.duration > 0) scene.duration = o.duration;
   if (o.exact_kinematics) scene.exact_kinematics = 1;
+  if (o.integrator_erk) {
+    scene.integrator = F3R_INTEGRATOR_ERK;
+    scene.formulation = F3R_FORMULATION_MINIMAL;
+  }
   f3r_model* model = NULL;
   if (f3r_model_create(&scene, &model, &err) != F3R_OK) {
     fprintf(stderr, "flex3rpr_sim: %s: %s\n", o.scene_path, err.message);
@@ -145,6 +175,14 @@ int main(int argc, char** argv) {
   }
   f3r_solver_settings settings = f3r_solver_settings_from_scene(&scene);
   settings.analytic_jacobian = !o.fd_jacobian;
+  settings.stop_at_outputs = o.stop_at_outputs;
+  double held[F3R_MAX_Q] = {0};
+  for (int h = 0; h < o.n_holds; ++h)
+    if (o.holds[h].index >= model->nq) {
+      fprintf(stderr, "flex3rpr_sim: --hold index %d is beyond nq = %d\n", o.holds[h].index, model->nq);
+      f3r_model_destroy(model);
+      return 2;
+    }
   f3r_sim* sim = NULL;
   if (f3r_sim_create(model, &settings, &sim, &err) != F3R_OK) {
     fprintf(stderr, "flex3rpr_sim: %s\n", err.message);
@@ -170,6 +208,20 @@ int main(int argc, char** argv) {
   double cpu_integrating = 0.0;
   for (long k = 1; k <= steps; ++k) {
     const double t = k == steps ? scene.duration : (double)k * scene.output_step;
+    /* Held forces change only at output times, exactly as in the node. */
+    int changed = 0;
+    const double t_now = f3r_sim_time(sim);
+    for (int h = 0; h < o.n_holds; ++h)
+      if (o.holds[h].t <= t_now + 1e-12 && held[o.holds[h].index] != o.holds[h].value &&
+          o.holds[h].t > t_now - 0.5 * scene.output_step) {
+        held[o.holds[h].index] = o.holds[h].value;
+        changed = 1;
+      }
+    if (changed && f3r_sim_set_forces(sim, held, &err) != F3R_OK) {
+      fprintf(stderr, "flex3rpr_sim: %s\n", err.message);
+      rc = 1;
+      break;
+    }
     const clock_t before = clock();
     const f3r_status st = f3r_sim_advance(sim, t, &err);
     cpu_integrating += (double)(clock() - before) / CLOCKS_PER_SEC;

@@ -1,0 +1,97 @@
+#include "command_decoding.hpp"
+
+#include <cmath>
+#include <sstream>
+
+namespace flex3rpr {
+
+namespace {
+
+// "" if value is finite and within limit, else the reason, naming field.
+std::string Check(const std::string& field, double value, double limit) {
+  std::ostringstream os;
+  if (std::isnan(value)) os << field << " is NaN";
+  else if (std::isinf(value)) os << field << " is infinite";
+  else if (std::fabs(value) > limit) os << field << " = " << value << " exceeds the limit " << limit;
+  return os.str();
+}
+
+std::string Indexed(const char* name, size_t i) { return std::string(name) + "[" + std::to_string(i) + "]"; }
+
+}  // namespace
+
+std::string DecodeEffortCommand(const EffortCommand& msg, const f3r_model& model,
+                                const CommandLimits& limits, std::vector<double>* forces) {
+  const size_t n_modal = static_cast<size_t>(model.nq - 9);
+  if (!msg.modal.empty() && msg.modal.size() != n_modal)
+    return "modal has " + std::to_string(msg.modal.size()) + " values, expected 0 or " +
+           std::to_string(n_modal);
+  for (size_t i = 0; i < 3; ++i) {
+    std::string why = Check(Indexed("leg_force", i), msg.leg_force[i], limits.force);
+    if (why.empty()) why = Check(Indexed("cylinder_torque", i), msg.cylinder_torque[i], limits.torque);
+    if (why.empty()) why = Check(Indexed("platform", i), msg.platform[i], i < 2 ? limits.force : limits.torque);
+    if (!why.empty()) return why;
+  }
+  for (size_t k = 0; k < msg.modal.size(); ++k) {
+    const std::string why = Check(Indexed("modal", k), msg.modal[k], limits.modal);
+    if (!why.empty()) return why;
+  }
+  forces->assign(static_cast<size_t>(model.nq), 0.0);
+  for (size_t i = 0; i < 3; ++i) {
+    (*forces)[F3R_FORCE_RHO + i] = msg.leg_force[i];
+    (*forces)[F3R_FORCE_THETA + i] = msg.cylinder_torque[i];
+    (*forces)[F3R_FORCE_PLATFORM + i] = msg.platform[i];
+  }
+  for (size_t k = 0; k < msg.modal.size(); ++k) (*forces)[9 + k] = msg.modal[k];
+  return "";
+}
+
+std::string DecodeEffortGroup(const std_msgs::Float64MultiArray& msg, const f3r_model& model,
+                              const CommandLimits& limits, std::vector<double>* forces) {
+  if (msg.data.size() != 6)
+    return "data has " + std::to_string(msg.data.size()) +
+           " values, expected 6 (leg_force_1..3, cylinder_torque_1..3)";
+  for (size_t k = 0; k < 6; ++k) {
+    const std::string why = Check(Indexed("data", k), msg.data[k], k < 3 ? limits.force : limits.torque);
+    if (!why.empty()) return why;
+  }
+  forces->assign(static_cast<size_t>(model.nq), 0.0);
+  for (size_t k = 0; k < 6; ++k) (*forces)[k] = msg.data[k];
+  return "";
+}
+
+std::string DecodeWrench(const geometry_msgs::WrenchStamped& msg, const std::string& world_frame,
+                         const std::string& platform_frame, double phi_p,
+                         const CommandLimits& limits, const f3r_model& model,
+                         std::vector<double>* forces) {
+  const std::string& frame = msg.header.frame_id;
+  const bool in_world = frame.empty() || frame == world_frame;
+  if (!in_world && frame != platform_frame)
+    return "header.frame_id '" + frame + "' is unknown (use '" + world_frame + "' or '" +
+           platform_frame + "')";
+  const auto& f = msg.wrench.force;
+  const auto& m = msg.wrench.torque;
+  const std::pair<const char*, double> all[] = {{"force.x", f.x},  {"force.y", f.y},
+                                                {"force.z", f.z},  {"torque.x", m.x},
+                                                {"torque.y", m.y}, {"torque.z", m.z}};
+  for (const auto& c : all) {
+    const bool torque = c.first[0] == 't';
+    const std::string why = Check(c.first, c.second, torque ? limits.torque : limits.force);
+    if (!why.empty()) return why;
+  }
+  if (f.z != 0.0 || m.x != 0.0 || m.y != 0.0)
+    return "out-of-plane components (force.z, torque.x, torque.y) must be zero";
+  double fx = f.x, fy = f.y;
+  if (!in_world) {
+    const double c = std::cos(phi_p), s = std::sin(phi_p);
+    fx = c * f.x - s * f.y;
+    fy = s * f.x + c * f.y;
+  }
+  forces->assign(static_cast<size_t>(model.nq), 0.0);
+  (*forces)[F3R_FORCE_PLATFORM] = fx;
+  (*forces)[F3R_FORCE_PLATFORM + 1] = fy;
+  (*forces)[F3R_FORCE_PLATFORM + 2] = m.z;
+  return "";
+}
+
+}  // namespace flex3rpr

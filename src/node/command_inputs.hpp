@@ -1,0 +1,43 @@
+// The three input topics, each holding its last valid command; their sum is the held force.
+#pragma once
+
+#include <ros/ros.h>
+
+#include <array>
+#include <string>
+#include <vector>
+
+#include "command_decoding.hpp"
+
+namespace flex3rpr {
+
+class CommandInputs {
+ public:
+  // phi_p is read when a wrench arrives in the platform frame.
+  CommandInputs(ros::NodeHandle& pnh, const f3r_model& model, const NodeParams& params,
+                const double* phi_p);
+
+  // Sum of the held commands at simulated time t; a command older than the timeout drops out.
+  const std::vector<double>& Total(double t);
+  void Clear();
+  uint64_t rejected() const { return rejected_; }
+
+ private:
+  enum Source { kCommand = 0, kEffortGroup = 1, kWrench = 2, kSources = 3 };
+  void Accept(Source source, const std::string& why, const std::vector<double>& forces,
+              const char* topic);
+
+  const f3r_model& model_;
+  const NodeParams& params_;
+  const double* phi_p_;
+  std::array<std::vector<double>, kSources> held_;
+  std::array<bool, kSources> fresh_{};      // received since the last Total()
+  std::array<double, kSources> since_{};    // simulated time the command took effect
+  std::array<bool, kSources> active_{};
+  std::vector<double> scratch_, total_;
+  uint64_t rejected_ = 0;
+  double now_ = 0.0;
+  ros::Subscriber command_sub_, group_sub_, wrench_sub_;
+};
+
+}  // namespace flex3rpr

@@ -1,0 +1,39 @@
+// Parameters of flex3rpr_node (private namespace ~) and the scene they select.
+#pragma once
+
+#include <ros/ros.h>
+
+#include <string>
+
+#include "flex3rpr/sim.h"
+
+namespace flex3rpr {
+
+struct CommandLimits {
+  double force = 1000.0;   // N, per leg force and per platform force component
+  double torque = 100.0;   // N m, per cylinder torque and platform torque
+  double modal = 1000.0;   // N, per modal force
+};
+
+struct NodeParams {
+  std::string scene_path;             // ~scene, default: the package's paper_sim3_fixed_free.yaml
+  f3r_scene scene;                    // loaded and overridden
+  f3r_solver_settings settings;       // ~formulation, ~integrator, ~rtol, ~atol
+  double publish_rate = 1000.0;       // Hz of simulated time
+  int beam_points = 11;               // stations per link
+  double realtime_factor = 1.0;       // 1 paces to the wall clock, 0 runs as fast as possible
+  std::string world_frame = "world";
+  std::string base_frame = "base";
+  double command_timeout = 0.0;       // s of simulated time; 0 holds commands forever
+  double duration = 0.0;              // s; > 0 stops the node at that simulated time
+  double beam_marker_exaggeration = 1.0;  // visual only: scales the deflection in ~beams
+  CommandLimits limits;
+};
+
+// The default scene shipped with the package.
+std::string DefaultScenePath();
+
+// Reads every parameter; on a missing or invalid one returns false with a message naming it.
+bool LoadParams(const ros::NodeHandle& pnh, NodeParams* params, std::string* error);
+
+}  // namespace flex3rpr

@@ -1,0 +1,55 @@
+// Everything the node publishes: joint_states, TF (tree, platform, beam points), ~status,
+// ~beam_state, ~beams and /clock. Messages are preallocated; Publish only fills them.
+#pragma once
+
+#include <ros/ros.h>
+#include <rosgraph_msgs/Clock.h>
+#include <sensor_msgs/JointState.h>
+#include <tf2_ros/transform_broadcaster.h>
+#include <tf2_ros/static_transform_broadcaster.h>
+#include <visualization_msgs/MarkerArray.h>
+
+#include <vector>
+
+#include "flex3rpr/BeamState.h"
+#include "flex3rpr/SimStatus.h"
+#include "flex3rpr/sim.h"
+#include "params.hpp"
+
+namespace flex3rpr {
+
+struct RunInfo {
+  double wall_time = 0.0;
+  double realtime_factor = 0.0;
+  bool paused = false;
+  uint64_t rejected_commands = 0;
+  std::string last_error;
+};
+
+class StateOutputs {
+ public:
+  StateOutputs(ros::NodeHandle& nh, ros::NodeHandle& pnh, const f3r_model& model,
+               const NodeParams& params);
+  void Publish(const f3r_outputs& out, const RunInfo& info);
+  // Only ~status: while paused the state does not change, but the status (paused, rejected
+  // commands) still does.
+  void PublishStatus(const f3r_outputs& out, const RunInfo& info);
+
+ private:
+  void FillTransforms(const f3r_outputs& out, const ros::Time& stamp);
+
+  const f3r_model& model_;
+  const NodeParams& params_;
+  bool publish_clock_ = false;
+  ros::Publisher joints_pub_, status_pub_, beam_pub_, markers_pub_, clock_pub_;
+  tf2_ros::TransformBroadcaster tf_;
+  tf2_ros::StaticTransformBroadcaster static_tf_;
+  sensor_msgs::JointState joints_;
+  SimStatus status_;
+  BeamState beam_;
+  visualization_msgs::MarkerArray markers_;
+  rosgraph_msgs::Clock clock_;
+  std::vector<geometry_msgs::TransformStamped> transforms_;
+};
+
+}  // namespace flex3rpr

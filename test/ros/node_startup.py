@@ -1,0 +1,68 @@
+#!/usr/bin/env python3
+"""rostest: the node refuses a bad scene and a mismatching URDF with the error named, and runs
+with no arguments at all."""
+import subprocess
+import time
+import unittest
+import xml.etree.ElementTree as ET
+
+import rosgraph
+import rospkg
+import rospy
+import rostest
+
+PKG = rospkg.RosPack().get_path("flex3rpr")
+
+
+def run_node(*args, timeout=60):
+    p = subprocess.run(["rosrun", "flex3rpr", "flex3rpr_node", *args], capture_output=True,
+                       text=True, timeout=timeout)
+    return p.returncode, p.stdout + p.stderr
+
+
+class NodeStartup(unittest.TestCase):
+    def test_bad_scene_exits_with_the_field_named(self):
+        path = PKG + "/test/scenes/bad_modes.yaml"
+        code, out = run_node("__name:=bad_scene", "_scene:=" + path)
+        self.assertNotEqual(code, 0)
+        self.assertIn(path + ":3: links[1].modes: 25 is out of range 1..20", out)
+
+    def test_bad_parameter_exits_with_its_name(self):
+        code, out = run_node("__name:=bad_rate", "_publish_rate:=-5.0")
+        self.assertNotEqual(code, 0)
+        self.assertIn("~publish_rate", out)
+
+    def test_mismatching_urdf_exits_with_the_joint_named(self):
+        tree = ET.parse(PKG + "/urdf/flex3rpr.urdf")
+        for joint in tree.getroot().iter("joint"):
+            if joint.get("name") == "leg_1_revolute":
+                origin = joint.find("origin")
+                x, y, z = (float(v) for v in origin.get("xyz").split())
+                origin.set("xyz", "%.15g %.15g %.15g" % (x + 1e-6, y, z))
+        rospy.set_param("/mismatch/robot_description", ET.tostring(tree.getroot(), encoding="unicode"))
+        code, out = run_node("__ns:=/mismatch")
+        self.assertNotEqual(code, 0)
+        self.assertIn("leg_1_revolute", out)
+        self.assertIn("does not match", out)
+
+    def test_runs_with_no_arguments(self):
+        proc = subprocess.Popen(["stdbuf", "-oL", "rosrun", "flex3rpr", "flex3rpr_node"], stdout=subprocess.PIPE,
+                                stderr=subprocess.STDOUT, text=True)
+        master = rosgraph.Master("/node_startup")
+        try:
+            end = time.time() + 60
+            published = False
+            while time.time() < end and not published:
+                published = any(t == "/flex3rpr_node/status" for t, _ in master.getPublishedTopics(""))
+                time.sleep(0.2)
+            self.assertTrue(published, "the node publishes ~status with no arguments")
+            self.assertIsNone(proc.poll(), "the node keeps running")
+        finally:
+            proc.terminate()
+            out, _ = proc.communicate(timeout=20)
+        self.assertIn("no robot_description parameter", out)
+
+
+if __name__ == "__main__":
+    rospy.init_node("node_startup", anonymous=True)
+    rostest.rosrun("flex3rpr", "node_startup", NodeStartup)
