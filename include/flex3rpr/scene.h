@@ -1,6 +1,6 @@
 /* f3r_scene: everything one run asks for, as a plain struct with documented defaults.
  * f3r_default_scene() gives Table I of the paper with the conventions of ../shared/MODEL.md,
- * rigid links, no inputs; a caller (or the YAML loader) changes only what it needs.
+ * rigid links, no inputs, the minimal formulation on IDA at rtol 1e-8; a caller (or the YAML loader) changes only what it needs.
  * All quantities are SI: m, kg, s, N, rad. */
 #ifndef FLEX3RPR_SCENE_H
 #define FLEX3RPR_SCENE_H
@@ -84,7 +84,7 @@ typedef struct {
   f3r_input inputs[F3R_RIGID_FORCES];
 
   /* solver */
-  f3r_formulation formulation; /* default dae */
+  f3r_formulation formulation; /* default minimal */
   f3r_integrator integrator;   /* default ida */
   double rtol;                 /* default 1e-8 */
   double atol;                 /* default 1e-10 (m, m/s) */
@@ -96,7 +96,7 @@ typedef struct {
   int beam_points;    /* stations per link for beam outputs, default 11 */
 } f3r_scene;
 
-/* Table I, rigid links, home pose (P = O, phi_p = 0), no inputs, dae at rtol 1e-8. */
+/* Table I, rigid links, home pose (P = O, phi_p = 0), no inputs, minimal on IDA at rtol 1e-8. */
 f3r_scene f3r_default_scene(void);
 
 /* Checks every field against its allowed range. The message names the field, the value and the

@@ -8,6 +8,8 @@
 #include <string.h>
 #include <time.h>
 
+#include <sundials/sundials_config.h>
+
 #include "flex3rpr/modal.h"
 #include "flex3rpr/sim.h"
 
@@ -243,6 +245,7 @@ int main(int argc, char** argv) {
   printf("formulation         %s, rtol %g, atol %g, %s Jacobian\n",
          scene.formulation == F3R_FORMULATION_DAE ? "dae" : "minimal", scene.rtol, scene.atol,
          o.fd_jacobian ? "difference-quotient" : "analytic");
+  printf("sundials            %s, %s\n", SUNDIALS_VERSION, F3R_SUNDIALS_BUILD);
   printf("state dimension     %d (nq %d)\n", f3r_state_size(model, scene.formulation), model->nq);
   printf("simulated time      %.6g s\n", out->t);
   printf("steps               %ld\n", out->stats.steps);

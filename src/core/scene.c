@@ -21,7 +21,7 @@ f3r_scene f3r_default_scene(void) {
   s.cylinder_outer_diameter = 0.016;
   s.cylinder_density = 2270.0;
   for (int i = 0; i < 3; ++i) s.links[i].model = F3R_LINK_RIGID;
-  s.formulation = F3R_FORMULATION_DAE;
+  s.formulation = F3R_FORMULATION_MINIMAL; /* measured 2-3x faster than dae at equal accuracy */
   s.rtol = 1e-8;
   s.atol = 1e-10;
   s.duration = 0.5;
