@@ -1,7 +1,8 @@
 #include "state_outputs.hpp"
 
-#include <tf2/LinearMath/Quaternion.h>
+#include <tf2_eigen/tf2_eigen.h>
 
+#include <Eigen/Geometry>
 #include <cmath>
 
 namespace flex3rpr {
@@ -17,14 +18,11 @@ const char* ModelName(f3r_link_model m) {
   return "unknown";
 }
 
+// A planar pose (x, y, yaw about +Z) as a TF transform.
 void SetPlanar(geometry_msgs::TransformStamped* t, double x, double y, double yaw) {
-  t->transform.translation.x = x;
-  t->transform.translation.y = y;
-  t->transform.translation.z = 0.0;
-  t->transform.rotation.x = 0.0;
-  t->transform.rotation.y = 0.0;
-  t->transform.rotation.z = std::sin(0.5 * yaw);
-  t->transform.rotation.w = std::cos(0.5 * yaw);
+  const Eigen::Isometry3d pose =
+      Eigen::Translation3d(x, y, 0.0) * Eigen::AngleAxisd(yaw, Eigen::Vector3d::UnitZ());
+  t->transform = tf2::eigenToTransform(pose).transform;
 }
 
 geometry_msgs::TransformStamped Frame(const std::string& parent, const std::string& child) {
