@@ -132,6 +132,26 @@ void indep_lagrange(const f3r_model* m, const double* q, const double* qd, const
   }
 }
 
+double indep_gravity_potential(const f3r_model* m, const double* q) {
+  make_rule();
+  const double* g = m->gravity;
+  const double zero[F3R_MAX_Q] = {0};
+  double V = -m->platform_mass * (g[0] * q[6] + g[1] * q[7]);
+  for (int i = 0; i < 3; ++i) {
+    const double c = cos(q[3 + i]), s = sin(q[3 + i]);
+    const double half = m->cylinder_length / 2.0;
+    V -= m->cylinder_mass * (g[0] * (m->base_joint[i][0] + half * c) + g[1] * (m->base_joint[i][1] + half * s));
+    double integral = 0.0;
+    for (int k = 0; k < PANELS * POINTS; ++k) {
+      double complex r[2];
+      position_complex(m, i, q, zero, 0.0, nodes[k], r);
+      integral += weights[k] * (g[0] * creal(r[0]) + g[1] * creal(r[1]));
+    }
+    V -= m->link_mass * integral;
+  }
+  return V;
+}
+
 void indep_constraints(const f3r_model* m, const double* q, double* g) {
   for (int i = 0; i < 3; ++i) {
     double complex tip[2];

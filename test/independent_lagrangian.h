@@ -17,6 +17,10 @@ double indep_potential_energy(const f3r_model* m, const double* q);
 /* out = d/dt dT/dqd - dT/dq + dV/dq along (q, qd, qdd); should equal M qdd + h + k. */
 void indep_lagrange(const f3r_model* m, const double* q, const double* qd, const double* qdd,
                     double* out);
+/* Gravitational potential -sum m g.r_com of the cylinders, the beams (by quadrature over the
+ * deflected centre line) and the platform with its payload, from m->gravity. */
+double indep_gravity_potential(const f3r_model* m, const double* q);
+
 /* Loop-closure residual from positions alone: beam tip (x = l) minus platform joint C_i. */
 void indep_constraints(const f3r_model* m, const double* q, double* g);
 

@@ -29,7 +29,22 @@ typedef struct {
   double omega_clamped[F3R_MAX_MODES];/* alpha_j^2 sqrt(EI/(m l^3)) (rad/s) */
 } f3r_link_params;
 
+struct f3r_model;
+
+/* An optional force stage: adds its generalized forces to Q and, where they depend on q or v,
+ * scale times their derivatives into a column-major A. A NULL derivative is zero. */
 typedef struct {
+  const char* name;
+  void (*add)(const struct f3r_model* m, double t, const double* q, const double* v, double* Q);
+  void (*add_dq)(const struct f3r_model* m, const double* q, const double* v, double scale,
+                 double* A, int ld);
+  void (*add_dv)(const struct f3r_model* m, const double* q, const double* v, double scale,
+                 double* A, int ld);
+} f3r_force_effect;
+
+#define F3R_MAX_EFFECTS 8
+
+typedef struct f3r_model {
   f3r_scene scene;       /* the scene the model was built from (validated) */
 
   /* geometry (../shared/MODEL.md) */
@@ -42,11 +57,22 @@ typedef struct {
   double link_mass;          /* m (kg) */
   double bending_stiffness;  /* EI (N m^2) */
   double cylinder_inertia;   /* I_c about A_i (kg m^2) */
-  double platform_mass;      /* m_p (kg) */
-  double platform_inertia;   /* I_p (kg m^2) */
+  double cylinder_mass;      /* m_c (kg) */
+  double cylinder_length;    /* L (m) */
+  double platform_mass;      /* m_p plus the payload's mass (kg) */
+  double platform_inertia;   /* I_p plus the payload's inertia (kg m^2) */
+  double gravity[3];         /* m/s^2, world frame; only X and Y do work */
+
+  /* the enabled force effects, in order (effects.c); disabled ones are absent */
+  int n_effects;
+  const f3r_force_effect* effects[F3R_MAX_EFFECTS];
 
   f3r_link_params link[3];
   int exact_kinematics;
+
+  /* breakpoints of the scripted inputs (s), ascending: integration stops */
+  int n_breakpoints;
+  double breakpoints[F3R_RIGID_FORCES * F3R_MAX_TABLE];
 
   int nq;                    /* number of generalized coordinates */
   int n_independent;         /* 3 + sum r_i: platform pose and modal coordinates */

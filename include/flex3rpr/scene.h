@@ -28,19 +28,32 @@ typedef enum {
   F3R_INTEGRATOR_ERK = 1  /* SUNDIALS ARKODE ERKStep, Verner 8(7), explicit (minimal only) */
 } f3r_integrator;
 
-/* A scripted generalized force f(t). */
+/* A scripted generalized force f(t). Breakpoints (step times, ramp and chirp ends, table
+ * times) are integration stops: the integrator restarts there and never steps across a kink. */
 typedef enum {
   F3R_INPUT_NONE = 0,
   F3R_INPUT_CONSTANT = 1, /* f = offset */
-  F3R_INPUT_HARMONIC = 2  /* f = offset + amplitude cos(omega t + phase) */
+  F3R_INPUT_HARMONIC = 2, /* f = offset + amplitude cos(omega t + phase) */
+  F3R_INPUT_STEP = 3,     /* f = before (t <= t0), after (t > t0) */
+  F3R_INPUT_RAMP = 4,     /* from before t0 to after t1, linear in between */
+  F3R_INPUT_CHIRP = 5,    /* offset + amplitude sin(2 pi (f0 tau + (f1 - f0) tau^2 / (2 T))),
+                             tau = t - t0 in [0, T = t1 - t0]; offset outside */
+  F3R_INPUT_TABLE = 6     /* piecewise linear through (time[k], value[k]); constant outside */
 } f3r_input_kind;
+
+#define F3R_MAX_TABLE 64
 
 typedef struct {
   f3r_input_kind kind;
-  double offset;    /* N or N m */
-  double amplitude; /* N or N m */
-  double omega;     /* rad/s */
-  double phase;     /* rad */
+  double offset;    /* N or N m: constant, harmonic and chirp offset */
+  double amplitude; /* N or N m: harmonic and chirp amplitude */
+  double omega;     /* rad/s: harmonic */
+  double phase;     /* rad: harmonic */
+  double t0, t1;    /* s: step time (t0); ramp and chirp start and end */
+  double before, after; /* step and ramp values before t0 and after (t1) */
+  double f0, f1;    /* Hz: chirp start and end frequency */
+  int table_size;   /* 2..F3R_MAX_TABLE */
+  double table_time[F3R_MAX_TABLE], table_value[F3R_MAX_TABLE];
 } f3r_input;
 
 /* Index of a rigid generalized force in f3r_scene.inputs and in force vectors. */
@@ -54,6 +67,7 @@ enum {
 typedef struct {
   f3r_link_model model;
   int modes;                         /* 1..F3R_MAX_MODES for a flexible link; 0 for rigid */
+  double damping_ratio;              /* modal damping ratio of every mode, default 0 */
   double eta0[F3R_MAX_MODES];        /* initial modal deflections (m) */
   double eta_rate0[F3R_MAX_MODES];   /* initial modal rates (m/s) */
 } f3r_link_scene;
@@ -75,6 +89,11 @@ typedef struct {
 
   f3r_link_scene links[3];
   int exact_kinematics; /* 1: keep the axial velocity -w theta_dot of a beam point (default 0) */
+  double gravity[3];            /* m/s^2, world frame, default (0, 0, -9.81): no work in the plane */
+  double payload_mass;          /* kg at P, default 0 */
+  double payload_inertia;       /* kg m^2 about P, default 0 */
+  double friction_prismatic[3]; /* viscous, N s/m on rho_i, default 0 */
+  double friction_revolute[3];  /* viscous, N m s on theta_i, default 0 */
 
   /* initial state: platform pose (X_p, Y_p, phi_p) and its rate; deflections are in links[] */
   double platform_pose0[3];
@@ -111,6 +130,14 @@ const char* f3r_input_name(int index);
 
 /* Value of a scripted input at time t. */
 double f3r_input_value(const f3r_input* input, double t);
+
+/* Highest frequency (Hz) the input carries: a harmonic's, a chirp's end frequency; 0 for the
+ * others. */
+double f3r_input_max_frequency(const f3r_input* input);
+
+/* Times in (t_from, infinity) where the input has a kink or a jump, ascending; returns their
+ * number (at most max). */
+int f3r_input_breakpoints(const f3r_input* input, double* times, int max);
 
 #ifdef __cplusplus
 }

@@ -41,9 +41,14 @@ void f3r_add_velocity_forces_dv(const f3r_model* m, const double* q, const doubl
 void f3r_elastic_forces(const f3r_model* m, const double* q, double* k);
 void f3r_add_elastic_forces_dq(const f3r_model* m, double scale, double* A, int ld);
 
-/* --- generalized forces Q = held + scripted inputs(t) ------------------------------------------ */
+/* --- generalized forces Q = held + the scene's effects (inputs, gravity, friction, damping) ----- */
 /* held (nq) are the caller's forces (may be NULL for none). */
-void f3r_generalized_forces(const f3r_model* m, double t, const double* held, double* Q);
+void f3r_generalized_forces(const f3r_model* m, double t, const double* held, const double* q,
+                            const double* v, double* Q);
+void f3r_add_generalized_forces_dq(const f3r_model* m, const double* q, const double* v,
+                                   double scale, double* A, int ld);
+void f3r_add_generalized_forces_dv(const f3r_model* m, const double* q, const double* v,
+                                   double scale, double* A, int ld);
 
 /* --- constraints -------------------------------------------------------------------------------- */
 void f3r_constraints(const f3r_model* m, const double* q, double* g);          /* g (6) */

@@ -170,9 +170,22 @@ void f3r_add_elastic_forces_dq(const f3r_model* m, double scale, double* A, int 
   }
 }
 
-void f3r_generalized_forces(const f3r_model* m, double t, const double* held, double* Q) {
+void f3r_generalized_forces(const f3r_model* m, double t, const double* held, const double* q,
+                            const double* v, double* Q) {
   for (int n = 0; n < m->nq; ++n) Q[n] = held ? held[n] : 0.0;
-  for (int n = 0; n < F3R_RIGID_FORCES; ++n) Q[n] += f3r_input_value(&m->scene.inputs[n], t);
+  for (int e = 0; e < m->n_effects; ++e) m->effects[e]->add(m, t, q, v, Q);
+}
+
+void f3r_add_generalized_forces_dq(const f3r_model* m, const double* q, const double* v,
+                                   double scale, double* A, int ld) {
+  for (int e = 0; e < m->n_effects; ++e)
+    if (m->effects[e]->add_dq) m->effects[e]->add_dq(m, q, v, scale, A, ld);
+}
+
+void f3r_add_generalized_forces_dv(const f3r_model* m, const double* q, const double* v,
+                                   double scale, double* A, int ld) {
+  for (int e = 0; e < m->n_effects; ++e)
+    if (m->effects[e]->add_dv) m->effects[e]->add_dv(m, q, v, scale, A, ld);
 }
 
 double f3r_kinetic_energy(const f3r_model* m, const double* q, const double* v) {

@@ -17,7 +17,7 @@ f3r_status f3r_dae_residual(const f3r_model* m, double t, const double* y, const
   f3r_mass_times(m, q, vd, dyn);
   f3r_velocity_forces(m, q, v, ws->h);
   f3r_elastic_forces(m, q, ws->k);
-  f3r_generalized_forces(m, t, held, ws->Q);
+  f3r_generalized_forces(m, t, held, q, v, ws->Q);
   f3r_constraint_transpose_times(m, q, lambda, tmp);
   double power = 0.0;
   for (int n = 0; n < nq; ++n) {
@@ -62,9 +62,27 @@ f3r_status f3r_dae_jacobian(const f3r_model* m, double t, double cj, const doubl
   f3r_add_constraint_times_dq(m, q, v, 1.0, BLOCK(row_gv, 0), ld);
   f3r_add_constraint_jacobian(m, q, 1.0, BLOCK(row_gv, col_v), ld);
 
-  /* W' - Q . v */
-  f3r_generalized_forces(m, t, held, ws->Q);
+  /* -dQ/dq, -dQ/dv of the effects; W' - Q . v: d/dv = -Q - (dQ/dv)^T v, d/dq = -(dQ/dq)^T v */
+  f3r_generalized_forces(m, t, held, q, v, ws->Q);
   for (int n = 0; n < nq; ++n) F3R_AT(J, ld, row_w, col_v + n) -= ws->Q[n];
+  if (m->n_effects) {
+    double* dq = ws->dQ;
+    double* dv = ws->dQ + (size_t)nq * (size_t)nq;
+    for (size_t z = 0; z < 2 * (size_t)nq * (size_t)nq; ++z) ws->dQ[z] = 0.0;
+    f3r_add_generalized_forces_dq(m, q, v, 1.0, dq, nq);
+    f3r_add_generalized_forces_dv(m, q, v, 1.0, dv, nq);
+    for (int j = 0; j < nq; ++j) {
+      double wq = 0.0, wv = 0.0;
+      for (int i = 0; i < nq; ++i) {
+        F3R_AT(J, ld, row_v + i, j) -= F3R_AT(dq, nq, i, j);
+        F3R_AT(J, ld, row_v + i, col_v + j) -= F3R_AT(dv, nq, i, j);
+        wq += F3R_AT(dq, nq, i, j) * v[i];
+        wv += F3R_AT(dv, nq, i, j) * v[i];
+      }
+      F3R_AT(J, ld, row_w, j) -= wq;
+      F3R_AT(J, ld, row_w, col_v + j) -= wv;
+    }
+  }
   F3R_AT(J, ld, row_w, col_w) += cj;
 #undef BLOCK
   return F3R_OK;

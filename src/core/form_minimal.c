@@ -55,7 +55,7 @@ f3r_status f3r_minimal_residual(const f3r_model* m, double t, const double* y, c
   f3r_mass_times(m, q, ws->a, R);
   f3r_velocity_forces(m, q, v, ws->h);
   f3r_elastic_forces(m, q, ws->k);
-  f3r_generalized_forces(m, t, held, ws->Q);
+  f3r_generalized_forces(m, t, held, q, v, ws->Q);
   double power = 0.0;
   for (int n = 0; n < nq; ++n) {
     R[n] += ws->h[n] + ws->k[n] - ws->Q[n];

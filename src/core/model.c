@@ -4,6 +4,7 @@
 #include <string.h>
 
 #include "flex3rpr/model.h"
+#include "effects.h"
 #include "link_state.h"
 
 /* Legs whose beam root comes closer than this fraction of l to A_i are degenerate: there the
@@ -11,6 +12,24 @@
 #define F3R_MIN_LEG_FRACTION 1e-3
 
 static const double kPlatformAngle[3] = {-M_PI / 6.0, M_PI / 2.0, 7.0 * M_PI / 6.0};
+
+static int compare_doubles(const void* a, const void* b) {
+  const double x = *(const double*)a, y = *(const double*)b;
+  return (x > y) - (x < y);
+}
+
+static void collect_breakpoints(f3r_model* m) {
+  int n = 0;
+  const int max = (int)(sizeof m->breakpoints / sizeof m->breakpoints[0]);
+  for (int k = 0; k < F3R_RIGID_FORCES; ++k)
+    n += f3r_input_breakpoints(&m->scene.inputs[k], m->breakpoints + n, max - n);
+  qsort(m->breakpoints, (size_t)n, sizeof(double), compare_doubles);
+  int unique = 0;
+  for (int k = 0; k < n; ++k)
+    if (m->breakpoints[k] > 0.0 && (unique == 0 || m->breakpoints[k] > m->breakpoints[unique - 1]))
+      m->breakpoints[unique++] = m->breakpoints[k];
+  m->n_breakpoints = unique;
+}
 
 f3r_status f3r_model_create(const f3r_scene* scene, f3r_model** out, f3r_error* err) {
   if (!scene || !out) return f3r_error_set(err, F3R_ERR_ARGUMENT, "f3r_model_create: NULL argument");
@@ -36,10 +55,15 @@ f3r_status f3r_model_create(const f3r_scene* scene, f3r_model** out, f3r_error* 
   const double Lc = scene->cylinder_length;
   const double cylinder_mass = scene->cylinder_density * M_PI * (ro * ro - ri * ri) * Lc;
   m->cylinder_inertia = cylinder_mass * (Lc * Lc / 3.0 + (ro * ro + ri * ri) / 4.0);
-  m->platform_mass = scene->platform_mass;
+  m->cylinder_mass = cylinder_mass;
+  m->cylinder_length = Lc;
   m->platform_inertia = scene->platform_inertia > 0.0
                             ? scene->platform_inertia
                             : scene->platform_mass * scene->platform_side * scene->platform_side / 12.0;
+  /* A payload at P adds to the platform: a model constant, nothing in the residual. */
+  m->platform_mass = scene->platform_mass + scene->payload_mass;
+  m->platform_inertia += scene->payload_inertia;
+  for (int k = 0; k < 3; ++k) m->gravity[k] = scene->gravity[k];
   m->exact_kinematics = scene->exact_kinematics;
 
   int next = 9;
@@ -67,6 +91,8 @@ f3r_status f3r_model_create(const f3r_scene* scene, f3r_model** out, f3r_error* 
     }
   }
   m->nq = next;
+  collect_breakpoints(m);
+  f3r_model_compile_effects(m);
   m->n_independent = next - 6;
 
   /* The branch of each leg's direction is fixed by the scene's initial pose. */

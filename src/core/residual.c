@@ -18,8 +18,9 @@ f3r_workspace* f3r_workspace_create(const f3r_model* m) {
   ws->res_perturbed = calloc((size_t)ny_dae, sizeof(double));
   ws->B = calloc((size_t)m->nq * (size_t)ws->nz, sizeof(double));
   ws->MB = calloc((size_t)m->nq * (size_t)ws->nz, sizeof(double));
+  ws->dQ = calloc(2 * (size_t)m->nq * (size_t)m->nq, sizeof(double));
   if (!ws->solve_work || !ws->y_perturbed || !ws->res_base || !ws->res_perturbed || !ws->B ||
-      !ws->MB) {
+      !ws->MB || !ws->dQ) {
     f3r_workspace_destroy(ws);
     return NULL;
   }
@@ -34,6 +35,7 @@ void f3r_workspace_destroy(f3r_workspace* ws) {
   free(ws->res_perturbed);
   free(ws->B);
   free(ws->MB);
+  free(ws->dQ);
   free(ws);
 }
 
@@ -100,7 +102,7 @@ f3r_status f3r_consistent_state(const f3r_model* m, f3r_formulation form, double
                                 double work, double* y, double* yp, double* lambda_out,
                                 f3r_workspace* ws) {
   const int nq = m->nq, nz = m->n_independent;
-  f3r_generalized_forces(m, t, held, ws->Q);
+  f3r_generalized_forces(m, t, held, q, v, ws->Q);
   const f3r_status st = f3r_solve_accelerations(m, q, v, ws->Q, ws->a, ws->lambda, ws->solve_work);
   if (st != F3R_OK) return st;
   double power = 0.0;

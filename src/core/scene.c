@@ -21,6 +21,7 @@ f3r_scene f3r_default_scene(void) {
   s.cylinder_outer_diameter = 0.016;
   s.cylinder_density = 2270.0;
   for (int i = 0; i < 3; ++i) s.links[i].model = F3R_LINK_RIGID;
+  s.gravity[2] = -9.81;
   s.formulation = F3R_FORMULATION_MINIMAL; /* measured 2-3x faster than dae at equal accuracy */
   s.rtol = 1e-8;
   s.atol = 1e-10;
@@ -43,8 +44,54 @@ double f3r_input_value(const f3r_input* in, double t) {
     case F3R_INPUT_NONE: return 0.0;
     case F3R_INPUT_CONSTANT: return in->offset;
     case F3R_INPUT_HARMONIC: return in->offset + in->amplitude * cos(in->omega * t + in->phase);
+    case F3R_INPUT_STEP: return t <= in->t0 ? in->before : in->after;
+    case F3R_INPUT_RAMP:
+      if (t <= in->t0) return in->before;
+      if (t >= in->t1) return in->after;
+      return in->before + (in->after - in->before) * (t - in->t0) / (in->t1 - in->t0);
+    case F3R_INPUT_CHIRP: {
+      if (t < in->t0 || t > in->t1) return in->offset;
+      const double tau = t - in->t0, span = in->t1 - in->t0;
+      const double cycles = in->f0 * tau + 0.5 * (in->f1 - in->f0) * tau * tau / span;
+      return in->offset + in->amplitude * sin(2.0 * M_PI * cycles);
+    }
+    case F3R_INPUT_TABLE: {
+      const int n = in->table_size;
+      if (t <= in->table_time[0]) return in->table_value[0];
+      if (t >= in->table_time[n - 1]) return in->table_value[n - 1];
+      int k = 1;
+      while (in->table_time[k] < t) ++k;
+      const double w = (t - in->table_time[k - 1]) / (in->table_time[k] - in->table_time[k - 1]);
+      return in->table_value[k - 1] + w * (in->table_value[k] - in->table_value[k - 1]);
+    }
   }
   return 0.0;
+}
+
+double f3r_input_max_frequency(const f3r_input* in) {
+  if (in->kind == F3R_INPUT_HARMONIC && in->amplitude != 0.0) return fabs(in->omega) / (2.0 * M_PI);
+  if (in->kind == F3R_INPUT_CHIRP && in->amplitude != 0.0) return fmax(in->f0, in->f1);
+  return 0.0;
+}
+
+int f3r_input_breakpoints(const f3r_input* in, double* times, int max) {
+  int n = 0;
+  switch (in->kind) {
+    case F3R_INPUT_STEP:
+      if (n < max) times[n++] = in->t0;
+      break;
+    case F3R_INPUT_RAMP:
+    case F3R_INPUT_CHIRP:
+      if (n < max) times[n++] = in->t0;
+      if (n < max) times[n++] = in->t1;
+      break;
+    case F3R_INPUT_TABLE:
+      for (int k = 0; k < in->table_size && n < max; ++k) times[n++] = in->table_time[k];
+      break;
+    default:
+      break;
+  }
+  return n;
 }
 
 #define CHECK_RANGE(field, value, lo, hi)                                                   \
@@ -68,6 +115,50 @@ double f3r_input_value(const f3r_input* in, double t) {
     if (!isfinite(value))                                                                   \
       return f3r_error_set(err, F3R_ERR_SCENE, "%s: %g must be finite", field, (value));    \
   } while (0)
+
+static f3r_status validate_input_shape(const f3r_input* in, const char* name, f3r_error* err) {
+  char field[96];
+  switch (in->kind) {
+    case F3R_INPUT_STEP:
+      snprintf(field, sizeof field, "%s.step.time", name);
+      CHECK_RANGE(field, in->t0, 0.0, 1e6);
+      break;
+    case F3R_INPUT_RAMP:
+    case F3R_INPUT_CHIRP: {
+      const char* kind = in->kind == F3R_INPUT_RAMP ? "ramp" : "chirp";
+      snprintf(field, sizeof field, "%s.%s.start", name, kind);
+      CHECK_RANGE(field, in->t0, 0.0, 1e6);
+      if (!(in->t1 > in->t0))
+        return f3r_error_set(err, F3R_ERR_SCENE, "%s.%s.end: %g must be after start %g", name,
+                             kind, in->t1, in->t0);
+      if (in->kind == F3R_INPUT_CHIRP) {
+        snprintf(field, sizeof field, "%s.chirp.start_frequency", name);
+        CHECK_RANGE(field, in->f0, 0.0, 1e6);
+        if (!(in->f1 >= in->f0))
+          return f3r_error_set(err, F3R_ERR_SCENE,
+                               "%s.chirp.end_frequency: %g Hz is below start_frequency %g Hz",
+                               name, in->f1, in->f0);
+      }
+      break;
+    }
+    case F3R_INPUT_TABLE:
+      if (in->table_size < 2 || in->table_size > F3R_MAX_TABLE)
+        return f3r_error_set(err, F3R_ERR_SCENE, "%s.table: %d points, allowed 2..%d", name,
+                             in->table_size, F3R_MAX_TABLE);
+      for (int k = 0; k < in->table_size; ++k) {
+        if (!isfinite(in->table_time[k]) || !isfinite(in->table_value[k]))
+          return f3r_error_set(err, F3R_ERR_SCENE, "%s.table: point %d is not finite", name, k);
+        if (k > 0 && !(in->table_time[k] > in->table_time[k - 1]))
+          return f3r_error_set(err, F3R_ERR_SCENE,
+                               "%s.table.time: %g at point %d must exceed %g before it", name,
+                               in->table_time[k], k, in->table_time[k - 1]);
+      }
+      break;
+    default:
+      break;
+  }
+  return F3R_OK;
+}
 
 f3r_status f3r_scene_validate(const f3r_scene* s, f3r_error* err) {
   char name[64];
@@ -119,6 +210,22 @@ f3r_status f3r_scene_validate(const f3r_scene* s, f3r_error* err) {
     }
   }
   for (int k = 0; k < 3; ++k) {
+    snprintf(name, sizeof name, "effects.gravity[%d]", k);
+    CHECK_RANGE(name, s->gravity[k], -1e3, 1e3);
+    snprintf(name, sizeof name, "effects.joint_friction.prismatic[%d]", k);
+    CHECK_RANGE(name, s->friction_prismatic[k], 0.0, 1e6);
+    snprintf(name, sizeof name, "effects.joint_friction.revolute[%d]", k);
+    CHECK_RANGE(name, s->friction_revolute[k], 0.0, 1e6);
+    snprintf(name, sizeof name, "links[%d].damping_ratio", k);
+    CHECK_RANGE(name, s->links[k].damping_ratio, 0.0, 10.0);
+    if (s->links[k].model == F3R_LINK_RIGID && s->links[k].damping_ratio != 0.0)
+      return f3r_error_set(err, F3R_ERR_SCENE,
+                           "links[%d].damping_ratio: %g given for a rigid link, which has no modes",
+                           k, s->links[k].damping_ratio);
+  }
+  CHECK_RANGE("effects.payload.mass", s->payload_mass, 0.0, 1e3);
+  CHECK_RANGE("effects.payload.inertia", s->payload_inertia, 0.0, 1e3);
+  for (int k = 0; k < 3; ++k) {
     snprintf(name, sizeof name, "initial.platform_pose[%d]", k);
     CHECK_RANGE(name, s->platform_pose0[k], k < 2 ? -1.0 : -1e3, k < 2 ? 1.0 : 1e3);
     snprintf(name, sizeof name, "initial.platform_velocity[%d]", k);
@@ -127,13 +234,14 @@ f3r_status f3r_scene_validate(const f3r_scene* s, f3r_error* err) {
   for (int n = 0; n < F3R_RIGID_FORCES; ++n) {
     const f3r_input* in = &s->inputs[n];
     snprintf(name, sizeof name, "inputs.%s", kInputNames[n]);
-    if ((int)in->kind < F3R_INPUT_NONE || (int)in->kind > F3R_INPUT_HARMONIC)
+    if ((int)in->kind < F3R_INPUT_NONE || (int)in->kind > F3R_INPUT_TABLE)
       return f3r_error_set(err, F3R_ERR_SCENE, "%s.kind: %d is not a known input kind", name,
                            (int)in->kind);
-    CHECK_FINITE(name, in->offset);
-    CHECK_FINITE(name, in->amplitude);
-    CHECK_FINITE(name, in->omega);
-    CHECK_FINITE(name, in->phase);
+    const double values[] = {in->offset, in->amplitude, in->omega, in->phase, in->t0, in->t1,
+                             in->before, in->after, in->f0, in->f1};
+    for (size_t k = 0; k < sizeof values / sizeof values[0]; ++k) CHECK_FINITE(name, values[k]);
+    f3r_status st = validate_input_shape(in, name, err);
+    if (st != F3R_OK) return st;
   }
   if (s->formulation != F3R_FORMULATION_DAE && s->formulation != F3R_FORMULATION_MINIMAL)
     return f3r_error_set(err, F3R_ERR_SCENE, "solver.formulation: %d is not one of dae, minimal",

@@ -155,6 +155,8 @@ static f3r_status read_link(loader* L, const yaml_node_t* map, int i) {
       remember(L, name, value);
     } else if (!strcmp(key, "modes")) {
       if ((st = read_int(L, value, name, &link->modes)) != F3R_OK) return st;
+    } else if (!strcmp(key, "damping_ratio")) {
+      if ((st = read_number(L, value, name, &link->damping_ratio)) != F3R_OK) return st;
     } else if (!strcmp(key, "initial_deflection") || !strcmp(key, "initial_rate")) {
       double* target = key[8] == 'd' ? link->eta0 : link->eta_rate0;
       if (value->type != YAML_SEQUENCE_NODE) return fail(L, value, name, "expected a list");
@@ -164,7 +166,8 @@ static f3r_status read_link(loader* L, const yaml_node_t* map, int i) {
       if ((st = read_vector(L, value, name, target, len)) != F3R_OK) return st;
     } else {
       return fail(L, value, name,
-                  "unknown key (allowed: model, modes, initial_deflection, initial_rate)");
+                  "unknown key (allowed: model, modes, damping_ratio, initial_deflection, "
+                  "initial_rate)");
     }
   }
   return F3R_OK;
@@ -188,13 +191,73 @@ static f3r_status read_links(loader* L, const yaml_node_t* n) {
   return F3R_OK;
 }
 
+/* A mapping {key: number} into the fields named in `fields`; every key must be known. */
+static f3r_status read_shape(loader* L, const yaml_node_t* map, const char* name,
+                             const number_field* fields, int count) {
+  return read_numbers(L, map, name, fields, count);
+}
+
+static f3r_status read_table(loader* L, const yaml_node_t* map, const char* name, f3r_input* in) {
+  f3r_status st = expect_mapping(L, map, name);
+  if (st != F3R_OK) return st;
+  int n_time = -1, n_value = -1;
+  FOR_EACH_PAIR(L, map, key, value) {
+    char field[128];
+    snprintf(field, sizeof field, "%s.%s", name, key);
+    double* target = !strcmp(key, "time") ? in->table_time : !strcmp(key, "value") ? in->table_value : NULL;
+    if (!target) return fail(L, value, field, "unknown key (allowed: time, value)");
+    if (value->type != YAML_SEQUENCE_NODE) return fail(L, value, field, "expected a list of numbers");
+    const int len = (int)(value->data.sequence.items.top - value->data.sequence.items.start);
+    if (len < 2 || len > F3R_MAX_TABLE)
+      return fail(L, value, field, "has %d values, allowed 2..%d", len, F3R_MAX_TABLE);
+    if ((st = read_vector(L, value, field, target, len)) != F3R_OK) return st;
+    *(target == in->table_time ? &n_time : &n_value) = len;
+  }
+  if (n_time < 0 || n_value < 0) return fail(L, map, name, "needs both time and value lists");
+  if (n_time != n_value)
+    return fail(L, map, name, "time has %d values but value has %d", n_time, n_value);
+  in->table_size = n_time;
+  remember(L, name, map);
+  return F3R_OK;
+}
+
 static f3r_status read_input(loader* L, const yaml_node_t* map, const char* name, f3r_input* in) {
   f3r_status st = expect_mapping(L, map, name);
   if (st != F3R_OK) return st;
+  remember(L, name, map);
+  /* A shaped input is a one-key mapping naming its shape. */
+  if (map->data.mapping.pairs.top - map->data.mapping.pairs.start == 1) {
+    const yaml_node_t* key_node = yaml_document_get_node(&L->doc, map->data.mapping.pairs.start->key);
+    const yaml_node_t* value = yaml_document_get_node(&L->doc, map->data.mapping.pairs.start->value);
+    const char* key = scalar(key_node) ? scalar(key_node) : "";
+    char field[128];
+    snprintf(field, sizeof field, "%s.%s", name, key);
+    if (!strcmp(key, "step")) {
+      in->kind = F3R_INPUT_STEP;
+      const number_field f[] = {{"time", &in->t0}, {"before", &in->before}, {"after", &in->after}};
+      return read_shape(L, value, field, f, 3);
+    }
+    if (!strcmp(key, "ramp")) {
+      in->kind = F3R_INPUT_RAMP;
+      const number_field f[] = {{"start", &in->t0}, {"end", &in->t1}, {"from", &in->before}, {"to", &in->after}};
+      return read_shape(L, value, field, f, 4);
+    }
+    if (!strcmp(key, "chirp")) {
+      in->kind = F3R_INPUT_CHIRP;
+      const number_field f[] = {{"offset", &in->offset}, {"amplitude", &in->amplitude},
+                                {"start_frequency", &in->f0}, {"end_frequency", &in->f1},
+                                {"start", &in->t0}, {"end", &in->t1}};
+      return read_shape(L, value, field, f, 6);
+    }
+    if (!strcmp(key, "table")) {
+      in->kind = F3R_INPUT_TABLE;
+      return read_table(L, value, field, in);
+    }
+  }
   double frequency = NAN;
   in->kind = F3R_INPUT_CONSTANT;
   FOR_EACH_PAIR(L, map, key, value) {
-    char field[96];
+    char field[128];
     snprintf(field, sizeof field, "%s.%s", name, key);
     double* target = !strcmp(key, "offset")      ? &in->offset
                      : !strcmp(key, "amplitude") ? &in->amplitude
@@ -203,12 +266,15 @@ static f3r_status read_input(loader* L, const yaml_node_t* map, const char* name
                      : !strcmp(key, "frequency") ? &frequency
                                                  : NULL;
     if (!target)
-      return fail(L, value, field, "unknown key (allowed: offset, amplitude, frequency, omega, phase)");
+      return fail(L, value, field,
+                  "unknown key (allowed: offset, amplitude, frequency, omega, phase; or one of "
+                  "step, ramp, chirp, table)");
     if ((st = read_number(L, value, field, target)) != F3R_OK) return st;
     if (target != &in->offset) in->kind = F3R_INPUT_HARMONIC;
   }
   if (!isnan(frequency)) {
     if (in->omega != 0.0) return fail(L, map, name, "give frequency (Hz) or omega (rad/s), not both");
+    if (frequency < 0.0) return fail(L, map, name, "frequency: %g Hz must not be negative", frequency);
     in->omega = 2.0 * M_PI * frequency;
   }
   return F3R_OK;
@@ -291,9 +357,28 @@ static f3r_status read_root(loader* L, const yaml_node_t* root) {
       FOR_EACH_PAIR(L, value, ekey, evalue) {
         char name[96];
         snprintf(name, sizeof name, "effects.%s", ekey);
-        if (strcmp(ekey, "exact_kinematics"))
-          return fail(L, evalue, name, "unknown effect (allowed: exact_kinematics)");
-        if ((st = read_bool(L, evalue, name, &s->exact_kinematics)) != F3R_OK) return st;
+        if (!strcmp(ekey, "exact_kinematics")) {
+          st = read_bool(L, evalue, name, &s->exact_kinematics);
+        } else if (!strcmp(ekey, "gravity")) {
+          st = read_vector(L, evalue, name, s->gravity, 3);
+        } else if (!strcmp(ekey, "payload")) {
+          const number_field f[] = {{"mass", &s->payload_mass}, {"inertia", &s->payload_inertia}};
+          st = read_numbers(L, evalue, name, f, 2);
+        } else if (!strcmp(ekey, "joint_friction")) {
+          if ((st = expect_mapping(L, evalue, name)) != F3R_OK) return st;
+          FOR_EACH_PAIR(L, evalue, fkey, fvalue) {
+            char field[128];
+            snprintf(field, sizeof field, "%s.%s", name, fkey);
+            double* target = !strcmp(fkey, "prismatic") ? s->friction_prismatic
+                             : !strcmp(fkey, "revolute") ? s->friction_revolute : NULL;
+            if (!target) return fail(L, fvalue, field, "unknown key (allowed: prismatic, revolute)");
+            if ((st = read_vector(L, fvalue, field, target, 3)) != F3R_OK) return st;
+          }
+        } else {
+          return fail(L, evalue, name,
+                      "unknown effect (allowed: exact_kinematics, gravity, payload, joint_friction)");
+        }
+        if (st != F3R_OK) return st;
       }
     } else if (!strcmp(key, "initial")) {
       if ((st = expect_mapping(L, value, "initial")) != F3R_OK) return st;

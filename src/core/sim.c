@@ -54,10 +54,12 @@ static f3r_status initial_coordinates(const f3r_model* m, double* q, double* v) 
   return F3R_OK;
 }
 
-/* y, y' at s->t from full coordinates and work W, consistent by construction. */
+/* y, y' at s->t from full coordinates and work W, consistent by construction. The forces are
+ * their right limit at s->t: a scripted jump at a breakpoint t_b belongs to (t_b, ...). */
 static f3r_status consistent(f3r_sim* s, const double* q, const double* v, double work,
                              f3r_error* err) {
-  const f3r_status st = f3r_consistent_state(s->model, s->settings.formulation, s->t, q, v,
+  const double t_forces = nextafter(s->t, INFINITY);
+  const f3r_status st = f3r_consistent_state(s->model, s->settings.formulation, t_forces, q, v,
                                              s->held, work, N_VGetArrayPointer(s->y),
                                              N_VGetArrayPointer(s->yp), NULL, s->stepper.ws);
   if (st != F3R_OK)
@@ -159,19 +161,41 @@ f3r_status f3r_sim_set_forces(f3r_sim* s, const double* held, f3r_error* err) {
   return st;
 }
 
+/* Integrates to t_out without crossing a breakpoint of the scripted inputs: at each one it stops
+ * exactly and restarts from a consistent state with the forces' right limit. */
 f3r_status f3r_sim_advance(f3r_sim* s, double t_out, f3r_error* err) {
-  if (!(t_out > s->t)) return F3R_OK;
-  double t_reached = s->t;
-  const f3r_status st = s->ops->advance(&s->stepper, t_out, s->y, s->yp, &t_reached, err);
-  if (st != F3R_OK) {
-    s->t = t_reached;
-    return st;
+  const f3r_model* m = s->model;
+  while (t_out > s->t) {
+    double t_stop = t_out;
+    int at_break = 0;
+    for (int k = 0; k < m->n_breakpoints; ++k)
+      if (m->breakpoints[k] > s->t) {
+        if (m->breakpoints[k] < t_out) {
+          t_stop = m->breakpoints[k];
+          at_break = 1;
+        }
+        break;
+      }
+    double t_reached = s->t;
+    f3r_status st = s->ops->advance(&s->stepper, t_stop, at_break || s->settings.stop_at_outputs,
+                                    s->y, s->yp, &t_reached, err);
+    if (st != F3R_OK) {
+      s->t = t_reached;
+      return st;
+    }
+    const double* y = N_VGetArrayPointer(s->y);
+    for (int n = 0; n < s->ny; ++n)
+      if (!isfinite(y[n]))
+        return f3r_error_set(err, F3R_ERR_NONFINITE, "non-finite state at t = %.9g", t_reached);
+    s->t = t_stop;
+    if (at_break) {
+      double q[F3R_MAX_Q], v[F3R_MAX_Q];
+      st = f3r_state_to_full(m, s->settings.formulation, y, q, v);
+      if (st == F3R_OK) st = consistent(s, q, v, y[s->ny - 1], err);
+      if (st == F3R_OK) st = s->ops->restart(&s->stepper, s->y, s->yp, s->t, err);
+      if (st != F3R_OK) return st;
+    }
   }
-  const double* y = N_VGetArrayPointer(s->y);
-  for (int n = 0; n < s->ny; ++n)
-    if (!isfinite(y[n]))
-      return f3r_error_set(err, F3R_ERR_NONFINITE, "non-finite state at t = %.9g", t_reached);
-  s->t = t_out;
   return F3R_OK;
 }
 
@@ -186,7 +210,7 @@ const f3r_outputs* f3r_sim_outputs(f3r_sim* s) {
   const double* y = N_VGetArrayPointer(s->y);
   o->t = s->t;
   if (f3r_state_to_full(m, s->settings.formulation, y, o->q, o->v) != F3R_OK) return o;
-  f3r_generalized_forces(m, s->t, s->held, o->forces);
+  f3r_generalized_forces(m, s->t, s->held, o->q, o->v, o->forces);
   if (s->settings.formulation == F3R_FORMULATION_DAE) {
     memcpy(o->lambda, y + 2 * m->nq, sizeof o->lambda);
   } else {

@@ -31,8 +31,9 @@ typedef struct {
   f3r_status (*setup)(f3r_stepper* st, N_Vector y, N_Vector yp, double t0, f3r_error* err);
   /* Restarts at t from a consistent y, y' (after a jump in the forces). */
   f3r_status (*restart)(f3r_stepper* st, N_Vector y, N_Vector yp, double t, f3r_error* err);
-  /* Integrates to tout; y (and y') receive the state there, or the last good one on failure. */
-  f3r_status (*advance)(f3r_stepper* st, double tout, N_Vector y, N_Vector yp,
+  /* Integrates to tout; y (and y') receive the state there, or the last good one on failure.
+   * exact: never step past tout (a force changes there). */
+  f3r_status (*advance)(f3r_stepper* st, double tout, int exact, N_Vector y, N_Vector yp,
                         double* t_reached, f3r_error* err);
   /* Statistics since creation (base plus the current solver's counters). */
   void (*stats)(const f3r_stepper* st, f3r_sim_stats* out);

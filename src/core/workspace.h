@@ -16,6 +16,7 @@ struct f3r_workspace {
   double* res_perturbed; /* ny */
   double* B;          /* nq x nz: dq/dz of the minimal formulation */
   double* MB;         /* nq x nz */
+  double* dQ;         /* 2 nq x nq: dQ/dq and dQ/dv of the effects */
 };
 
 f3r_status f3r_dae_residual(const f3r_model* m, double t, const double* y, const double* yp,

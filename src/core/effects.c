@@ -1,0 +1,129 @@
+/* The scene's optional force effects, each a stage with its own derivatives. The model keeps a
+ * list of the enabled ones only, so an effect that is off costs nothing in the residual.
+ *
+ * gravity (in-plane part of the gravity vector g; gravity along Z does no work). With e, n the
+ * leg's axes, s = sum b_j eta_j, and the centres of mass A + L_c/2 e (cylinder),
+ * A + (rho + l/2) e + s n (beam), P (platform and payload), Q = -dV_g/dq with V_g = -g . sum m r:
+ *   Q_rho = m g.e,  Q_theta = (m_c L_c/2 + m (rho + l/2)) g.n - m s g.e,  Q_eta_j = m b_j g.n,
+ *   Q_X, Q_Y = (m_p + m_payload) g_x, g_y.
+ * joint friction (viscous): Q_rho_i = -c_p v_rho_i, Q_theta_i = -c_r v_theta_i.
+ * modal damping: Q_eta_j = -2 zeta omega_j m eta_j', omega_j the clamped beam's frequency. */
+#include <math.h>
+
+#include "dense.h"
+#include "effects.h"
+#include "link_state.h"
+
+/* --- gravity --------------------------------------------------------------------------------- */
+static double cylinder_moment(const f3r_model* m) { return m->cylinder_mass * m->cylinder_length / 2.0; }
+
+static void gravity_add(const f3r_model* m, double t, const double* q, const double* v, double* Q) {
+  (void)t, (void)v;
+  const double gx = m->gravity[0], gy = m->gravity[1], mass = m->link_mass;
+  for (int i = 0; i < 3; ++i) {
+    f3r_link_state k;
+    f3r_link_state_fill(m, i, q, 0, &k);
+    const double g_e = gx * k.c + gy * k.s, g_n = -gx * k.s + gy * k.c;
+    Q[i] += mass * g_e;
+    Q[3 + i] += (cylinder_moment(m) + mass * (k.rho + m->link_length / 2.0)) * g_n - mass * k.mean_defl * g_e;
+    const f3r_link_params* lp = &m->link[i];
+    for (int j = 0; j < lp->modes; ++j) Q[lp->eta_index + j] += mass * lp->mean[j] * g_n;
+  }
+  Q[6] += m->platform_mass * gx;
+  Q[7] += m->platform_mass * gy;
+}
+
+static void gravity_add_dq(const f3r_model* m, const double* q, const double* v, double scale,
+                           double* A, int ld) {
+  (void)v;
+  const double gx = m->gravity[0], gy = m->gravity[1], mass = m->link_mass;
+  for (int i = 0; i < 3; ++i) {
+    f3r_link_state k;
+    f3r_link_state_fill(m, i, q, 0, &k);
+    const double g_e = gx * k.c + gy * k.s, g_n = -gx * k.s + gy * k.c;
+    const int r = i, th = 3 + i;
+    /* de/dtheta = n, dn/dtheta = -e */
+    F3R_AT(A, ld, r, th) += scale * mass * g_n;
+    F3R_AT(A, ld, th, r) += scale * mass * g_n;
+    F3R_AT(A, ld, th, th) += scale * (-(cylinder_moment(m) + mass * (k.rho + m->link_length / 2.0)) * g_e -
+                                      mass * k.mean_defl * g_n);
+    const f3r_link_params* lp = &m->link[i];
+    for (int j = 0; j < lp->modes; ++j) {
+      const int col = lp->eta_index + j;
+      F3R_AT(A, ld, th, col) += scale * (-mass * lp->mean[j] * g_e);
+      F3R_AT(A, ld, col, th) += scale * (-mass * lp->mean[j] * g_e);
+    }
+  }
+}
+
+const f3r_force_effect f3r_gravity_effect = {"gravity", gravity_add, gravity_add_dq, 0};
+
+/* --- joint friction ---------------------------------------------------------------------------- */
+static void friction_add(const f3r_model* m, double t, const double* q, const double* v, double* Q) {
+  (void)t, (void)q;
+  for (int i = 0; i < 3; ++i) {
+    Q[i] -= m->scene.friction_prismatic[i] * v[i];
+    Q[3 + i] -= m->scene.friction_revolute[i] * v[3 + i];
+  }
+}
+
+static void friction_add_dv(const f3r_model* m, const double* q, const double* v, double scale,
+                            double* A, int ld) {
+  (void)q, (void)v;
+  for (int i = 0; i < 3; ++i) {
+    F3R_AT(A, ld, i, i) -= scale * m->scene.friction_prismatic[i];
+    F3R_AT(A, ld, 3 + i, 3 + i) -= scale * m->scene.friction_revolute[i];
+  }
+}
+
+const f3r_force_effect f3r_friction_effect = {"joint_friction", friction_add, 0, friction_add_dv};
+
+/* --- modal damping ------------------------------------------------------------------------------ */
+static double damping_coefficient(const f3r_model* m, int i, int j) {
+  return 2.0 * m->scene.links[i].damping_ratio * m->link[i].omega_clamped[j] * m->link_mass;
+}
+
+static void damping_add(const f3r_model* m, double t, const double* q, const double* v, double* Q) {
+  (void)t, (void)q;
+  for (int i = 0; i < 3; ++i)
+    for (int j = 0; j < m->link[i].modes; ++j) {
+      const int n = m->link[i].eta_index + j;
+      Q[n] -= damping_coefficient(m, i, j) * v[n];
+    }
+}
+
+static void damping_add_dv(const f3r_model* m, const double* q, const double* v, double scale,
+                           double* A, int ld) {
+  (void)q, (void)v;
+  for (int i = 0; i < 3; ++i)
+    for (int j = 0; j < m->link[i].modes; ++j) {
+      const int n = m->link[i].eta_index + j;
+      F3R_AT(A, ld, n, n) -= scale * damping_coefficient(m, i, j);
+    }
+}
+
+const f3r_force_effect f3r_damping_effect = {"damping", damping_add, 0, damping_add_dv};
+
+/* --- scripted inputs ------------------------------------------------------------------------------ */
+static void inputs_add(const f3r_model* m, double t, const double* q, const double* v, double* Q) {
+  (void)q, (void)v;
+  for (int n = 0; n < F3R_RIGID_FORCES; ++n) Q[n] += f3r_input_value(&m->scene.inputs[n], t);
+}
+
+const f3r_force_effect f3r_inputs_effect = {"inputs", inputs_add, 0, 0};
+
+void f3r_model_compile_effects(f3r_model* m) {
+  const f3r_scene* s = &m->scene;
+  m->n_effects = 0;
+  int any_input = 0;
+  for (int n = 0; n < F3R_RIGID_FORCES; ++n) any_input |= s->inputs[n].kind != F3R_INPUT_NONE;
+  if (any_input) m->effects[m->n_effects++] = &f3r_inputs_effect;
+  if (m->gravity[0] != 0.0 || m->gravity[1] != 0.0) m->effects[m->n_effects++] = &f3r_gravity_effect;
+  int friction = 0, damping = 0;
+  for (int i = 0; i < 3; ++i) {
+    friction |= s->friction_prismatic[i] != 0.0 || s->friction_revolute[i] != 0.0;
+    damping |= m->link[i].modes > 0 && s->links[i].damping_ratio != 0.0;
+  }
+  if (friction) m->effects[m->n_effects++] = &f3r_friction_effect;
+  if (damping) m->effects[m->n_effects++] = &f3r_damping_effect;
+}

@@ -1,0 +1,252 @@
+// The scene's effects: each against an independent computation, each toggled alone changes
+// exactly the residual rows it should, and energy stays balanced with all of them on.
+#include <gtest/gtest.h>
+
+#include <set>
+
+#include "flex3rpr/stages.h"
+#include "independent_lagrangian.h"
+#include "test_support.h"
+
+namespace {
+
+f3r_scene Flexible() {
+  f3r_scene s = SceneWithLinks(F3R_LINK_FIXED_FREE, 3, F3R_LINK_FIXED_PINNED, 2, F3R_LINK_FIXED_FREE, 1);
+  s.formulation = F3R_FORMULATION_DAE;
+  return s;
+}
+
+TEST(Effects, GravityIsMinusTheGradientOfAnIndependentPotential) {
+  f3r_scene s = Flexible();
+  const double tilt = 0.3;
+  s.gravity[0] = 2.0;
+  s.gravity[1] = -9.81 * std::sin(tilt);
+  s.gravity[2] = -9.81 * std::cos(tilt);
+  s.payload_mass = 0.1;
+  auto m = MakeModel(s);
+  std::mt19937 rng(5);
+  RandomState st = MakeRandomState(m.get(), rng);
+  std::vector<double> Q(F3R_MAX_Q), zero(F3R_MAX_Q, 0.0);
+  f3r_generalized_forces(m.get(), 0.0, nullptr, st.q.data(), zero.data(), Q.data());
+  for (int j = 0; j < m->nq; ++j) {
+    std::vector<double> qp(st.q), qm(st.q);
+    const double h = 1e-6;
+    qp[j] += h;
+    qm[j] -= h;
+    const double dV = (indep_gravity_potential(m.get(), qp.data()) - indep_gravity_potential(m.get(), qm.data())) / (2 * h);
+    EXPECT_NEAR(Q[j], -dV, 1e-7 * (1.0 + std::fabs(dV))) << "coordinate " << j;
+  }
+}
+
+TEST(Effects, DerivativesOfAllEffectsMatchFiniteDifferences) {
+  f3r_scene s = Flexible();
+  s.gravity[0] = 1.0;
+  s.gravity[1] = -3.0;
+  for (int i = 0; i < 3; ++i) {
+    s.friction_prismatic[i] = 0.5 + i;
+    s.friction_revolute[i] = 0.01 * (i + 1);
+    s.links[i].damping_ratio = 0.02;
+  }
+  auto m = MakeModel(s);
+  const int nq = m->nq;
+  std::mt19937 rng(9);
+  RandomState st = MakeRandomState(m.get(), rng);
+  std::vector<double> dq((size_t)nq * nq, 0.0), dv((size_t)nq * nq, 0.0), Qp(F3R_MAX_Q), Qm(F3R_MAX_Q);
+  f3r_add_generalized_forces_dq(m.get(), st.q.data(), st.v.data(), 1.0, dq.data(), nq);
+  f3r_add_generalized_forces_dv(m.get(), st.q.data(), st.v.data(), 1.0, dv.data(), nq);
+  for (int j = 0; j < nq; ++j) {
+    for (int which = 0; which < 2; ++which) {
+      std::vector<double> xp = which ? st.v : st.q, xm = xp;
+      const double h = 1e-6;
+      xp[j] += h;
+      xm[j] -= h;
+      f3r_generalized_forces(m.get(), 0.1, nullptr, which ? st.q.data() : xp.data(), which ? xp.data() : st.v.data(), Qp.data());
+      f3r_generalized_forces(m.get(), 0.1, nullptr, which ? st.q.data() : xm.data(), which ? xm.data() : st.v.data(), Qm.data());
+      const auto& A = which ? dv : dq;
+      for (int i = 0; i < nq; ++i)
+        EXPECT_NEAR(A[(size_t)j * nq + i], (Qp[i] - Qm[i]) / (2 * h), 1e-6 * (1 + std::fabs(A[(size_t)j * nq + i])))
+            << (which ? "dQ/dv" : "dQ/dq") << " row " << i << " column " << j;
+    }
+  }
+}
+
+// Rows of the dae residual that differ between two models at the same state.
+std::set<int> ChangedRows(const f3r_scene& a, const f3r_scene& b) {
+  auto ma = MakeModel(a), mb = MakeModel(b);
+  const int ny = f3r_state_size(ma.get(), F3R_FORMULATION_DAE);
+  std::mt19937 rng(21);
+  RandomState st = MakeRandomState(ma.get(), rng);
+  std::vector<double> y(ny), yp(ny), ra(ny), rb(ny);
+  const int nq = ma->nq;
+  std::uniform_real_distribution<double> u(-1, 1);
+  for (int k = 0; k < nq; ++k) {
+    y[k] = st.q[k];
+    y[nq + k] = st.v[k];
+    yp[k] = st.v[k];
+    yp[nq + k] = st.a[k];
+  }
+  for (int k = 2 * nq; k < ny; ++k) y[k] = u(rng);
+  WorkspacePtr wa(f3r_workspace_create(ma.get())), wb(f3r_workspace_create(mb.get()));
+  f3r_residual(ma.get(), F3R_FORMULATION_DAE, 0.01, y.data(), yp.data(), nullptr, ra.data(), wa.get());
+  f3r_residual(mb.get(), F3R_FORMULATION_DAE, 0.01, y.data(), yp.data(), nullptr, rb.data(), wb.get());
+  std::set<int> rows;
+  for (int k = 0; k < ny; ++k)
+    if (ra[k] != rb[k]) rows.insert(k);
+  return rows;
+}
+
+TEST(Effects, EachEffectAloneChangesExactlyItsTerms) {
+  const f3r_scene base = Flexible();
+  auto m = MakeModel(base);
+  const int nq = m->nq, dyn = nq, w_row = 2 * nq + 12;
+  auto rows = [&](std::initializer_list<int> coords, bool work) {
+    std::set<int> r;
+    for (int c : coords) r.insert(dyn + c);
+    if (work) r.insert(w_row);
+    return r;
+  };
+  std::vector<int> etas;
+  for (int k = 9; k < nq; ++k) etas.push_back(k);
+
+  f3r_scene s = base;
+  s.gravity[0] = 3.0;
+  std::set<int> expect = rows({0, 1, 2, 3, 4, 5, 6}, true);
+  for (int k : etas) expect.insert(dyn + k);
+  EXPECT_EQ(ChangedRows(base, s), expect) << "gravity along X";
+
+  s = base;
+  s.friction_prismatic[1] = 2.0;
+  s.friction_revolute[2] = 0.1;
+  EXPECT_EQ(ChangedRows(base, s), rows({1, 5}, true)) << "joint friction on rho_2 and theta_3";
+
+  s = base;
+  s.links[0].damping_ratio = 0.05;
+  EXPECT_EQ(ChangedRows(base, s), rows({9, 10, 11}, true)) << "damping of link 1's modes";
+
+  s = base;
+  s.payload_mass = 0.5;
+  s.payload_inertia = 1e-3;
+  EXPECT_EQ(ChangedRows(base, s), rows({6, 7, 8}, false)) << "payload on the platform";
+
+  s = base;
+  s.exact_kinematics = 1;
+  expect = rows({0, 1, 2, 3, 4, 5}, false);
+  for (int k : etas) expect.insert(dyn + k);
+  EXPECT_EQ(ChangedRows(base, s), expect) << "exact kinematics";
+
+  // Gravity along Z only does no work in the plane: the effect is not even compiled in.
+  s = base;
+  s.gravity[2] = -20.0;
+  EXPECT_TRUE(ChangedRows(base, s).empty());
+  EXPECT_EQ(MakeModel(s)->n_effects, 0);
+}
+
+TEST(Effects, EverythingOffIsTheRigidModel) {
+  f3r_scene s = f3r_default_scene();
+  auto m = MakeModel(s);
+  EXPECT_EQ(m->nq, 9);
+  EXPECT_EQ(m->n_effects, 0);
+  EXPECT_EQ(f3r_state_size(m.get(), F3R_FORMULATION_MINIMAL), 7);
+}
+
+TEST(Effects, EnergyBalancesWithGravityFrictionDampingAndPayload) {
+  for (auto form : {F3R_FORMULATION_DAE, F3R_FORMULATION_MINIMAL}) {
+    f3r_scene s = SceneWithLinks(F3R_LINK_FIXED_FREE, 2, F3R_LINK_FIXED_FREE, 2, F3R_LINK_FIXED_FREE, 2);
+    s.formulation = form;
+    s.gravity[1] = -9.81 * std::sin(0.2);
+    s.gravity[2] = -9.81 * std::cos(0.2);
+    s.payload_mass = 0.05;
+    for (int i = 0; i < 3; ++i) {
+      s.friction_prismatic[i] = 0.3;
+      s.friction_revolute[i] = 0.002;
+      s.links[i].damping_ratio = 0.01;
+    }
+    s.links[0].eta0[0] = 5e-4;
+    s.inputs[F3R_FORCE_RHO].kind = F3R_INPUT_HARMONIC;
+    s.inputs[F3R_FORCE_RHO].amplitude = 2.0;
+    s.inputs[F3R_FORCE_RHO].omega = 2 * M_PI * 30;
+    s.rtol = 1e-11;
+    s.atol = 1e-13;
+    auto m = MakeModel(s);
+    f3r_sim* raw = nullptr;
+    f3r_error err{};
+    ASSERT_EQ(f3r_sim_create(m.get(), nullptr, &raw, &err), F3R_OK) << err.message;
+    SimPtr sim(raw);
+    double worst = 0.0, scale = 0.0;
+    for (int k = 1; k <= 100; ++k) {
+      ASSERT_EQ(f3r_sim_advance(sim.get(), k * 1e-3, &err), F3R_OK) << err.message;
+      const f3r_outputs* o = f3r_sim_outputs(sim.get());
+      worst = std::max(worst, o->energy_balance_error);
+      scale = std::max({scale, o->kinetic_energy + o->potential_energy, std::fabs(o->external_work)});
+    }
+    EXPECT_LT(worst, 1e-8 * scale) << "formulation " << form << ": T + V - W drifts";
+    std::printf("formulation %d: energy balance %.3e of %.3e J\n", (int)form, worst, scale);
+    EXPECT_LT(f3r_sim_outputs(sim.get())->external_work, 0.5 * scale) << "friction and damping dissipate";
+  }
+}
+
+TEST(Effects, ScriptedInputShapesAndTheirBreakpoints) {
+  f3r_input step{};
+  step.kind = F3R_INPUT_STEP;
+  step.t0 = 0.01;
+  step.before = 1.0;
+  step.after = 3.0;
+  EXPECT_EQ(f3r_input_value(&step, 0.01), 1.0);
+  EXPECT_EQ(f3r_input_value(&step, 0.0100001), 3.0);
+  f3r_input ramp{};
+  ramp.kind = F3R_INPUT_RAMP;
+  ramp.t0 = 1.0;
+  ramp.t1 = 3.0;
+  ramp.before = 0.0;
+  ramp.after = 4.0;
+  EXPECT_DOUBLE_EQ(f3r_input_value(&ramp, 2.5), 3.0);
+  f3r_input chirp{};
+  chirp.kind = F3R_INPUT_CHIRP;
+  chirp.amplitude = 2.0;
+  chirp.f0 = 10.0;
+  chirp.f1 = 30.0;
+  chirp.t0 = 0.0;
+  chirp.t1 = 1.0;
+  // phase 2 pi (f0 t + (f1 - f0) t^2 / 2): at t = 0.5, 2 pi * 7.5
+  EXPECT_NEAR(f3r_input_value(&chirp, 0.5), 2.0 * std::sin(2 * M_PI * 7.5), 1e-12);
+  EXPECT_EQ(f3r_input_max_frequency(&chirp), 30.0);
+  f3r_input table{};
+  table.kind = F3R_INPUT_TABLE;
+  table.table_size = 3;
+  table.table_time[0] = 0.0, table.table_time[1] = 0.1, table.table_time[2] = 0.3;
+  table.table_value[0] = 0.0, table.table_value[1] = 5.0, table.table_value[2] = 1.0;
+  EXPECT_DOUBLE_EQ(f3r_input_value(&table, 0.2), 3.0);
+  EXPECT_DOUBLE_EQ(f3r_input_value(&table, 1.0), 1.0);
+  double times[8];
+  EXPECT_EQ(f3r_input_breakpoints(&table, times, 8), 3);
+}
+
+TEST(Effects, AStepInputEqualsHeldForcesAppliedAtTheSameTime) {
+  f3r_scene scripted = SceneWithLinks(F3R_LINK_FIXED_FREE, 2, F3R_LINK_FIXED_FREE, 2, F3R_LINK_FIXED_FREE, 2);
+  scripted.inputs[0].kind = F3R_INPUT_STEP;
+  scripted.inputs[0].t0 = 0.005;
+  scripted.inputs[0].before = 0.0;
+  scripted.inputs[0].after = 5.0;
+  f3r_scene held = scripted;
+  held.inputs[0] = f3r_input{};
+  auto ms = MakeModel(scripted), mh = MakeModel(held);
+  f3r_error err{};
+  f3r_sim *a = nullptr, *b = nullptr;
+  ASSERT_EQ(f3r_sim_create(ms.get(), nullptr, &a, &err), F3R_OK);
+  ASSERT_EQ(f3r_sim_create(mh.get(), nullptr, &b, &err), F3R_OK);
+  SimPtr sa(a), sb(b);
+  ASSERT_EQ(f3r_sim_advance(sa.get(), 0.02, &err), F3R_OK) << err.message;
+  ASSERT_EQ(f3r_sim_advance(sb.get(), 0.005, &err), F3R_OK);
+  std::vector<double> f(mh->nq, 0.0);
+  f[0] = 5.0;
+  ASSERT_EQ(f3r_sim_set_forces(sb.get(), f.data(), &err), F3R_OK);
+  ASSERT_EQ(f3r_sim_advance(sb.get(), 0.02, &err), F3R_OK);
+  const f3r_outputs* oa = f3r_sim_outputs(sa.get());
+  const double xa = oa->q[6], ya = oa->q[7];
+  const f3r_outputs* ob = f3r_sim_outputs(sb.get());
+  EXPECT_NEAR(xa, ob->q[6], 1e-10);
+  EXPECT_NEAR(ya, ob->q[7], 1e-10);
+  EXPECT_GT(std::fabs(xa), 1e-6);
+}
+
+}  // namespace
