@@ -64,9 +64,13 @@ enum {
   F3R_RIGID_FORCES = 9
 };
 
+#define F3R_MODES_AUTO (-1)
+
 typedef struct {
   f3r_link_model model;
-  int modes;                         /* 1..F3R_MAX_MODES for a flexible link; 0 for rigid */
+  int modes;                         /* 1..F3R_MAX_MODES for a flexible link, 0 for rigid,
+                                        F3R_MODES_AUTO to let the model choose */
+  double auto_tolerance;             /* modes: auto: static truncation target, default 1e-3 */
   double damping_ratio;              /* modal damping ratio of every mode, default 0 */
   double eta0[F3R_MAX_MODES];        /* initial modal deflections (m) */
   double eta_rate0[F3R_MAX_MODES];   /* initial modal rates (m/s) */

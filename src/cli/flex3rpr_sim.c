@@ -170,6 +170,8 @@ int main(int argc, char** argv) {
     fprintf(stderr, "flex3rpr_sim: %s: %s\n", o.scene_path, err.message);
     return 1;
   }
+  for (int i = 0; i < 3; ++i)
+    if (model->link[i].modes_reason[0]) printf("%s\n", model->link[i].modes_reason);
   if (o.modal) {
     const int rc = run_modal(model);
     f3r_model_destroy(model);

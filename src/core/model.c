@@ -1,5 +1,6 @@
 /* Scene to model: geometry, inertia, modal constants and the coordinate layout, computed once. */
 #include <math.h>
+#include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -12,6 +13,47 @@
 #define F3R_MIN_LEG_FRACTION 1e-3
 
 static const double kPlatformAngle[3] = {-M_PI / 6.0, M_PI / 2.0, 7.0 * M_PI / 6.0};
+
+int f3r_auto_modes(const f3r_scene* scene, int link, char* reason, int size) {
+  const f3r_link_scene* L = &scene->links[link];
+  const f3r_beam_end end = (f3r_beam_end)L->model;
+  double alpha[F3R_MAX_MODES], mean[F3R_MAX_MODES];
+  f3r_beam_roots(end, F3R_MAX_MODES, alpha);
+  f3r_beam_modal_integrals(end, F3R_MAX_MODES, mean, NULL, NULL, NULL, NULL);
+  const double l = scene->link_length, d = scene->link_diameter;
+  const double mass = scene->link_density * M_PI * d * d / 4.0 * l;
+  const double EI = scene->link_youngs_modulus * M_PI * d * d * d * d / 64.0;
+  const double hz_per_alpha2 = sqrt(EI / (mass * l * l * l)) / (2.0 * M_PI);
+  double forcing = 0.0;
+  for (int k = 0; k < F3R_RIGID_FORCES; ++k)
+    forcing = fmax(forcing, f3r_input_max_frequency(&scene->inputs[k]));
+  int by_frequency = 1;
+  if (forcing > 0.0) {
+    by_frequency = 0;
+    while (by_frequency < F3R_MAX_MODES &&
+           alpha[by_frequency] * alpha[by_frequency] * hz_per_alpha2 <= 3.0 * forcing)
+      ++by_frequency;
+    if (by_frequency < F3R_MAX_MODES &&
+        alpha[by_frequency > 0 ? by_frequency - 1 : 0] * alpha[by_frequency > 0 ? by_frequency - 1 : 0] *
+                hz_per_alpha2 <= forcing)
+      ++by_frequency;
+    if (by_frequency < 1) by_frequency = 1;
+  }
+  double total = 0.0, tail[F3R_MAX_MODES + 1];
+  for (int j = 0; j < F3R_MAX_MODES; ++j) total += mean[j] * mean[j] / pow(alpha[j], 4);
+  tail[F3R_MAX_MODES] = 0.0;
+  for (int j = F3R_MAX_MODES - 1; j >= 0; --j) tail[j] = tail[j + 1] + mean[j] * mean[j] / pow(alpha[j], 4);
+  int by_accuracy = 1;
+  while (by_accuracy < F3R_MAX_MODES && tail[by_accuracy] > L->auto_tolerance * total) ++by_accuracy;
+  const int r = by_frequency > by_accuracy ? by_frequency : by_accuracy;
+  if (reason)
+    snprintf(reason, (size_t)size,
+             "links[%d]: modes auto -> %d (forcing up to %.4g Hz needs %d, clamped mode %d at "
+             "%.4g Hz; static accuracy %g needs %d)",
+             link, r, forcing, by_frequency, r, alpha[r - 1] * alpha[r - 1] * hz_per_alpha2,
+             L->auto_tolerance, by_accuracy);
+  return r;
+}
 
 static int compare_doubles(const void* a, const void* b) {
   const double x = *(const double*)a, y = *(const double*)b;
@@ -72,6 +114,18 @@ f3r_status f3r_model_create(const f3r_scene* scene, f3r_model** out, f3r_error* 
     f3r_link_params* lp = &m->link[i];
     lp->model = scene->links[i].model;
     lp->modes = lp->model == F3R_LINK_RIGID ? 0 : scene->links[i].modes;
+    if (lp->modes == F3R_MODES_AUTO) {
+      lp->modes = f3r_auto_modes(scene, i, lp->modes_reason, (int)sizeof lp->modes_reason);
+      m->scene.links[i].modes = lp->modes;
+      for (int j = lp->modes; j < F3R_MAX_MODES; ++j)
+        if (scene->links[i].eta0[j] != 0.0 || scene->links[i].eta_rate0[j] != 0.0) {
+          const int chosen = lp->modes;
+          free(m);
+          return f3r_error_set(err, F3R_ERR_SCENE,
+                               "links[%d].initial_deflection: mode %d given but modes auto chose %d",
+                               i, j + 1, chosen);
+        }
+    }
     lp->eta_index = next;
     next += lp->modes;
     if (!lp->modes) continue;

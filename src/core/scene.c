@@ -20,7 +20,10 @@ f3r_scene f3r_default_scene(void) {
   s.cylinder_inner_diameter = 0.014;
   s.cylinder_outer_diameter = 0.016;
   s.cylinder_density = 2270.0;
-  for (int i = 0; i < 3; ++i) s.links[i].model = F3R_LINK_RIGID;
+  for (int i = 0; i < 3; ++i) {
+    s.links[i].model = F3R_LINK_RIGID;
+    s.links[i].auto_tolerance = 1e-3;
+  }
   s.gravity[2] = -9.81;
   s.formulation = F3R_FORMULATION_MINIMAL; /* measured 2-3x faster than dae at equal accuracy */
   s.rtol = 1e-8;
@@ -194,6 +197,9 @@ f3r_status f3r_scene_validate(const f3r_scene* s, f3r_error* err) {
         return f3r_error_set(err, F3R_ERR_SCENE,
                              "links[%d].modes: %d given for a rigid link, which has no modes", i,
                              L->modes);
+    } else if (L->modes == F3R_MODES_AUTO) {
+      snprintf(name, sizeof name, "links[%d].auto_tolerance", i);
+      CHECK_RANGE(name, L->auto_tolerance, 1e-12, 0.5);
     } else if (L->modes < 1 || L->modes > F3R_MAX_MODES) {
       return f3r_error_set(err, F3R_ERR_SCENE, "links[%d].modes: %d is out of range 1..%d", i,
                            L->modes, F3R_MAX_MODES);
@@ -203,7 +209,7 @@ f3r_status f3r_scene_validate(const f3r_scene* s, f3r_error* err) {
       CHECK_RANGE(name, L->eta0[j], -0.1, 0.1);
       snprintf(name, sizeof name, "links[%d].initial_rate[%d]", i, j);
       CHECK_RANGE(name, L->eta_rate0[j], -100.0, 100.0);
-      if (j >= L->modes && (L->eta0[j] != 0.0 || L->eta_rate0[j] != 0.0))
+      if (L->modes != F3R_MODES_AUTO && j >= L->modes && (L->eta0[j] != 0.0 || L->eta_rate0[j] != 0.0))
         return f3r_error_set(err, F3R_ERR_SCENE,
                              "links[%d].initial_deflection: mode %d given but the link has %d "
                              "modes", i, j + 1, L->modes);

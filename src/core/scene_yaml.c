@@ -142,6 +142,7 @@ static f3r_status read_link(loader* L, const yaml_node_t* map, int i) {
   snprintf(section, sizeof section, "links[%d]", i);
   f3r_status st = expect_mapping(L, map, section);
   if (st != F3R_OK) return st;
+  remember(L, section, map);
   f3r_link_scene* link = &L->scene->links[i];
   FOR_EACH_PAIR(L, map, key, value) {
     char name[96];
@@ -154,7 +155,15 @@ static f3r_status read_link(loader* L, const yaml_node_t* map, int i) {
       else return fail(L, value, name, "'%s' is not one of rigid, fixed_pinned, fixed_free", s ? s : "?");
       remember(L, name, value);
     } else if (!strcmp(key, "modes")) {
-      if ((st = read_int(L, value, name, &link->modes)) != F3R_OK) return st;
+      const char* v = scalar(value);
+      if (v && !strcmp(v, "auto")) {
+        link->modes = F3R_MODES_AUTO;
+        remember(L, name, value);
+      } else if ((st = read_int(L, value, name, &link->modes)) != F3R_OK) {
+        return fail(L, value, name, "expected 1..%d or auto", F3R_MAX_MODES);
+      }
+    } else if (!strcmp(key, "auto_tolerance")) {
+      if ((st = read_number(L, value, name, &link->auto_tolerance)) != F3R_OK) return st;
     } else if (!strcmp(key, "damping_ratio")) {
       if ((st = read_number(L, value, name, &link->damping_ratio)) != F3R_OK) return st;
     } else if (!strcmp(key, "initial_deflection") || !strcmp(key, "initial_rate")) {
@@ -166,8 +175,8 @@ static f3r_status read_link(loader* L, const yaml_node_t* map, int i) {
       if ((st = read_vector(L, value, name, target, len)) != F3R_OK) return st;
     } else {
       return fail(L, value, name,
-                  "unknown key (allowed: model, modes, damping_ratio, initial_deflection, "
-                  "initial_rate)");
+                  "unknown key (allowed: model, modes, auto_tolerance, damping_ratio, "
+                  "initial_deflection, initial_rate)");
     }
   }
   return F3R_OK;

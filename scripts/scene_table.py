@@ -1,0 +1,61 @@
+#!/usr/bin/python3
+"""Markdown tables for the README: every shipped scene (state dimension, steps, residual
+evaluations, CPU time per simulated second, real-time factor), and the cost of each effect
+measured alone against paper simulation 3 (fixed-free) without it. Long scenes are shortened.
+
+usage: scene_table.py FLEX3RPR_SIM SCENES_DIR"""
+import os
+import re
+import subprocess
+import sys
+import tempfile
+
+SHORTEN = {"free_vibration_long.yaml": 2.0, "stiff_high_modes.yaml": 0.01}
+
+
+def run(sim, scene, *extra):
+    out = subprocess.run([sim, scene, *extra], capture_output=True, text=True, check=True).stdout
+    get = lambda key: re.search(r"^%s\s+(\S+)" % key, out, re.M).group(1)
+    cpu = float(re.search(r"\(integration ([0-9.e+-]+) s\)", out).group(1))
+    return {"dim": get("state dimension"), "steps": int(get("steps")),
+            "evals": int(get("residual evals")), "t": float(get("simulated time")), "cpu": cpu}
+
+
+def main(sim, scenes):
+    print("| scene | state dimension | simulated (s) | steps | residual evals | CPU s per simulated s | real-time factor |")
+    print("|---|---:|---:|---:|---:|---:|---:|")
+    for name in sorted(os.listdir(scenes)):
+        if not name.endswith(".yaml"):
+            continue
+        extra = ["--duration", str(SHORTEN[name])] if name in SHORTEN else []
+        r = run(sim, os.path.join(scenes, name), *extra)
+        per = r["cpu"] / r["t"]
+        print(f"| {name} | {r['dim']} | {r['t']:g} | {r['steps']} | {r['evals']} | {per:.3g} | {1 / per:.3g} |")
+    base = open(os.path.join(scenes, "paper_sim3_fixed_free.yaml")).read()
+    effects = {
+        "exact_kinematics": "effects: {exact_kinematics: true}\n",
+        "gravity (base tilted 10 degrees)": "effects: {gravity: [0.0, -1.7035, -9.6610]}\n",
+        "payload 0.1 kg": "effects: {payload: {mass: 0.1, inertia: 1.0e-5}}\n",
+        "joint_friction": "effects: {joint_friction: {prismatic: [0.5, 0.5, 0.5], revolute: [0.001, 0.001, 0.001]}}\n",
+        "damping_ratio 0.01": None,
+    }
+    print()
+    print("| effect (alone, on paper_sim3_fixed_free) | steps | residual evals | CPU time ratio to the scene without it |")
+    print("|---|---:|---:|---:|")
+    with tempfile.TemporaryDirectory() as tmp:
+        path = os.path.join(tmp, "base.yaml")
+        open(path, "w").write(base)
+        ref = run(sim, path)
+        for label, text in effects.items():
+            body = base + text if text else base.replace("links: {model: fixed_free, modes: 3}",
+                                                         "links: {model: fixed_free, modes: 3, damping_ratio: 0.01}")
+            p = os.path.join(tmp, "effect.yaml")
+            open(p, "w").write(body)
+            r = run(sim, p)
+            print(f"| {label} | {r['steps']} | {r['evals']} | {r['cpu'] / ref['cpu']:.2f} |")
+
+
+if __name__ == "__main__":
+    if len(sys.argv) != 3:
+        sys.exit(__doc__)
+    main(sys.argv[1], sys.argv[2])
