@@ -250,3 +250,54 @@ TEST(Effects, AStepInputEqualsHeldForcesAppliedAtTheSameTime) {
 }
 
 }  // namespace
+
+namespace {
+
+TEST(Effects, ActuatorLagFollowsTheFirstOrderResponse) {
+  for (auto form : {F3R_FORMULATION_DAE, F3R_FORMULATION_MINIMAL}) {
+    f3r_scene s = SceneWithLinks(F3R_LINK_FIXED_FREE, 1, F3R_LINK_FIXED_FREE, 1, F3R_LINK_FIXED_FREE, 1);
+    s.formulation = form;
+    s.actuator_lag = 0.004;
+    s.inputs[0].kind = F3R_INPUT_STEP;
+    s.inputs[0].t0 = 0.002;
+    s.inputs[0].after = 5.0;
+    s.rtol = 1e-10;
+    s.atol = 1e-12;
+    auto m = MakeModel(s);
+    EXPECT_EQ(f3r_state_size(m.get(), form), form == F3R_FORMULATION_DAE ? 2 * 12 + 12 + 3 + 1 : 2 * 6 + 3 + 1);
+    f3r_sim* raw = nullptr;
+    f3r_error err{};
+    ASSERT_EQ(f3r_sim_create(m.get(), nullptr, &raw, &err), F3R_OK) << err.message;
+    SimPtr sim(raw);
+    for (double t : {0.002, 0.006, 0.014}) {
+      ASSERT_EQ(f3r_sim_advance(sim.get(), t, &err), F3R_OK) << err.message;
+      const double expected = 5.0 * (1.0 - std::exp(-(t - 0.002) / 0.004));
+      EXPECT_NEAR(f3r_sim_outputs(sim.get())->forces[0], expected, 1e-7) << "t = " << t;
+    }
+  }
+}
+
+TEST(Effects, AllEffectsTogetherKeepTheEnergyBalance) {
+  for (auto form : {F3R_FORMULATION_DAE, F3R_FORMULATION_MINIMAL}) {
+    f3r_scene s;
+    f3r_error err{};
+    ASSERT_EQ(f3r_scene_load((std::string(F3R_SOURCE_DIR) + "/test/scenes/all_effects.yaml").c_str(), &s, &err), F3R_OK) << err.message;
+    s.formulation = form;
+    s.rtol = 1e-10;
+    s.atol = 1e-12;
+    auto m = MakeModel(s);
+    f3r_sim* raw = nullptr;
+    ASSERT_EQ(f3r_sim_create(m.get(), nullptr, &raw, &err), F3R_OK) << err.message;
+    SimPtr sim(raw);
+    double worst = 0.0, scale = 0.0;
+    for (int k = 1; k <= 50; ++k) {
+      ASSERT_EQ(f3r_sim_advance(sim.get(), k * 1e-3, &err), F3R_OK) << err.message;
+      const f3r_outputs* o = f3r_sim_outputs(sim.get());
+      worst = std::max(worst, o->energy_balance_error);
+      scale = std::max({scale, o->kinetic_energy + o->potential_energy, std::fabs(o->external_work)});
+    }
+    EXPECT_LT(worst, 1e-8 * scale) << "formulation " << form;
+  }
+}
+
+}  // namespace

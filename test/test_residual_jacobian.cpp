@@ -19,7 +19,10 @@ class ResidualJacobianTest : public ::testing::TestWithParam<Case> {};
 TEST_P(ResidualJacobianTest, MatchesFiniteDifferencesOfTheResidual) {
   const Case c = GetParam();
   f3r_scene scene;
-  auto loaded = LoadModel(ScenePath(c.scene), &scene);
+  const std::string path = std::string(c.scene).find('/') == std::string::npos
+                               ? ScenePath(c.scene)
+                               : std::string(F3R_SOURCE_DIR) + "/" + c.scene;
+  auto loaded = LoadModel(path, &scene);
   scene.formulation = c.form;
   scene.exact_kinematics = c.exact;
   auto m = MakeModel(scene);
@@ -38,7 +41,8 @@ TEST_P(ResidualJacobianTest, MatchesFiniteDifferencesOfTheResidual) {
   ASSERT_EQ(f3r_model_close_loops(m.get(), q.data()), F3R_OK);
   f3r_model_close_loop_rates(m.get(), q.data(), v.data());
   WorkspacePtr ws(f3r_workspace_create(m.get()));
-  ASSERT_EQ(f3r_consistent_state(m.get(), c.form, 0.013, q.data(), v.data(), nullptr, 0.0,
+  const double lag[3] = {1.5, -2.0, 0.7};
+  ASSERT_EQ(f3r_consistent_state(m.get(), c.form, 0.013, q.data(), v.data(), nullptr, lag, 0.0,
                                  y.data(), yp.data(), nullptr, ws.get()),
             F3R_OK);
   std::mt19937 rng(3);
@@ -83,7 +87,9 @@ INSTANTIATE_TEST_SUITE_P(
                       Case{"paper_sim3_fixed_pinned.yaml", F3R_FORMULATION_DAE, false, 1e-6},
                       Case{"paper_sim1.yaml", F3R_FORMULATION_DAE, false, 1e-6},
                       Case{"paper_sim3_fixed_free.yaml", F3R_FORMULATION_MINIMAL, false, 1e-4},
-                      Case{"paper_sim3_fixed_pinned.yaml", F3R_FORMULATION_MINIMAL, true, 1e-4}));
+                      Case{"paper_sim3_fixed_pinned.yaml", F3R_FORMULATION_MINIMAL, true, 1e-4},
+                      Case{"test/scenes/all_effects.yaml", F3R_FORMULATION_DAE, true, 1e-6},
+                      Case{"test/scenes/all_effects.yaml", F3R_FORMULATION_MINIMAL, false, 1e-4}));
 
 TEST(Residual, StateLayoutHoldsOnlyWhatTheLinksCallFor) {
   const f3r_link_model models[3] = {F3R_LINK_RIGID, F3R_LINK_FIXED_PINNED, F3R_LINK_FIXED_FREE};

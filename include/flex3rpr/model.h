@@ -75,6 +75,9 @@ typedef struct f3r_model {
   int n_breakpoints;
   double breakpoints[F3R_RIGID_FORCES * F3R_MAX_TABLE];
 
+  int n_lag;                 /* 3 with actuator lag (applied leg forces are states), else 0 */
+  double lag_time_constant;  /* s */
+
   int nq;                    /* number of generalized coordinates */
   int n_independent;         /* 3 + sum r_i: platform pose and modal coordinates */
   double theta_branch[3];    /* leg directions at the scene's initial pose: branch of atan2 */

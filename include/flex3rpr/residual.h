@@ -16,7 +16,8 @@
  *         W' - Q . v ]
  *   where B = dq/dz and c = dB/dt u. B^T eliminates the multipliers: lambda follows from the
  *   solved accelerations.
- * W is the work done by the generalized forces Q, so T + V - W is conserved. */
+ * W is the work done by the generalized forces Q, so T + V - W is conserved. With actuator lag
+ * the applied leg forces F_a (3) stand before W, with rows tau F_a' - (F_cmd - F_a). */
 #ifndef FLEX3RPR_RESIDUAL_H
 #define FLEX3RPR_RESIDUAL_H
 
@@ -34,6 +35,10 @@ f3r_workspace* f3r_workspace_create(const f3r_model* model);
 void f3r_workspace_destroy(f3r_workspace* ws);
 
 int f3r_state_size(const f3r_model* model, f3r_formulation form);
+/* Index of the actuator lag states in y (valid when model->n_lag == 3). */
+static inline int f3r_lag_index(const f3r_model* model, f3r_formulation form) {
+  return f3r_state_size(model, form) - 1 - model->n_lag;
+}
 /* 1 for differential components of y, 0 for algebraic ones (lambda and mu of dae). */
 void f3r_state_kinds(const f3r_model* model, f3r_formulation form, double* id);
 
@@ -58,12 +63,13 @@ f3r_status f3r_explicit_rhs(const f3r_model* model, double t, const double* y,
 f3r_status f3r_state_to_full(const f3r_model* model, f3r_formulation form, const double* y,
                              double* q, double* v);
 
-/* Consistent y and y' at time t from full q, v that satisfy the constraints, with work W:
+/* Consistent y and y' at time t from full q, v that satisfy the constraints, with work W and
+ * actuator lag states lag (3, or NULL for zero):
  * accelerations and multipliers from f3r_solve_accelerations. lambda may be NULL. */
 f3r_status f3r_consistent_state(const f3r_model* model, f3r_formulation form, double t,
                                 const double* q, const double* v, const double* held,
-                                double work, double* y, double* yp, double* lambda,
-                                f3r_workspace* ws);
+                                const double* lag, double work, double* y, double* yp,
+                                double* lambda, f3r_workspace* ws);
 
 #ifdef __cplusplus
 }

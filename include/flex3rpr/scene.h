@@ -98,6 +98,7 @@ typedef struct {
   double payload_inertia;       /* kg m^2 about P, default 0 */
   double friction_prismatic[3]; /* viscous, N s/m on rho_i, default 0 */
   double friction_revolute[3];  /* viscous, N m s on theta_i, default 0 */
+  double actuator_lag;          /* s: first-order lag of the applied leg forces; 0 is off */
 
   /* initial state: platform pose (X_p, Y_p, phi_p) and its rate; deflections are in links[] */
   double platform_pose0[3];

@@ -45,6 +45,10 @@ void f3r_add_elastic_forces_dq(const f3r_model* m, double scale, double* A, int 
 /* held (nq) are the caller's forces (may be NULL for none). */
 void f3r_generalized_forces(const f3r_model* m, double t, const double* held, const double* q,
                             const double* v, double* Q);
+/* Q with actuator lag: the leg forces applied are the lag states `lag` (3), not the commanded
+ * ones; lag may be NULL when the model has none. commanded (3, may be NULL) receives the command. */
+void f3r_applied_forces(const f3r_model* m, double t, const double* held, const double* q,
+                        const double* v, const double* lag, double* Q, double* commanded);
 void f3r_add_generalized_forces_dq(const f3r_model* m, const double* q, const double* v,
                                    double scale, double* A, int ld);
 void f3r_add_generalized_forces_dv(const f3r_model* m, const double* q, const double* v,

@@ -176,6 +176,17 @@ void f3r_generalized_forces(const f3r_model* m, double t, const double* held, co
   for (int e = 0; e < m->n_effects; ++e) m->effects[e]->add(m, t, q, v, Q);
 }
 
+void f3r_applied_forces(const f3r_model* m, double t, const double* held, const double* q,
+                        const double* v, const double* lag, double* Q, double* commanded) {
+  f3r_generalized_forces(m, t, held, q, v, Q);
+  if (!m->n_lag) return;
+  for (int i = 0; i < 3; ++i) {
+    const double cmd = (held ? held[i] : 0.0) + f3r_input_value(&m->scene.inputs[F3R_FORCE_RHO + i], t);
+    if (commanded) commanded[i] = cmd;
+    Q[i] += (lag ? lag[i] : 0.0) - cmd;
+  }
+}
+
 void f3r_add_generalized_forces_dq(const f3r_model* m, const double* q, const double* v,
                                    double scale, double* A, int ld) {
   for (int e = 0; e < m->n_effects; ++e)

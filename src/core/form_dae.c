@@ -8,7 +8,10 @@ f3r_status f3r_dae_residual(const f3r_model* m, double t, const double* y, const
   const int nq = m->nq;
   const double *q = y, *v = y + nq, *lambda = y + 2 * nq, *mu = lambda + F3R_NCON;
   const double *qd = yp, *vd = yp + nq;
+  const int lag_at = f3r_lag_index(m, F3R_FORMULATION_DAE), w_at = lag_at + m->n_lag;
+  const double* lag = m->n_lag ? y + lag_at : 0;
   double* tmp = ws->tmp;
+  double commanded[3];
 
   f3r_constraint_transpose_times(m, q, mu, tmp);
   for (int n = 0; n < nq; ++n) res[n] = qd[n] - v[n] + tmp[n];
@@ -17,7 +20,7 @@ f3r_status f3r_dae_residual(const f3r_model* m, double t, const double* y, const
   f3r_mass_times(m, q, vd, dyn);
   f3r_velocity_forces(m, q, v, ws->h);
   f3r_elastic_forces(m, q, ws->k);
-  f3r_generalized_forces(m, t, held, q, v, ws->Q);
+  f3r_applied_forces(m, t, held, q, v, lag, ws->Q, commanded);
   f3r_constraint_transpose_times(m, q, lambda, tmp);
   double power = 0.0;
   for (int n = 0; n < nq; ++n) {
@@ -26,7 +29,9 @@ f3r_status f3r_dae_residual(const f3r_model* m, double t, const double* y, const
   }
   f3r_constraints(m, q, res + 2 * nq);
   f3r_constraint_times(m, q, v, res + 2 * nq + F3R_NCON);
-  res[2 * nq + 2 * F3R_NCON] = yp[2 * nq + 2 * F3R_NCON] - power;
+  for (int i = 0; i < m->n_lag; ++i)
+    res[lag_at + i] = m->lag_time_constant * yp[lag_at + i] - (commanded[i] - y[lag_at + i]);
+  res[w_at] = yp[w_at] - power;
   return F3R_OK;
 }
 
@@ -34,7 +39,8 @@ f3r_status f3r_dae_jacobian(const f3r_model* m, double t, double cj, const doubl
                             const double* yp, const double* held, double* J, int ld,
                             f3r_workspace* ws) {
   const int nq = m->nq;
-  const int row_v = nq, row_g = 2 * nq, row_gv = 2 * nq + F3R_NCON, row_w = 2 * nq + 2 * F3R_NCON;
+  const int row_v = nq, row_g = 2 * nq, row_gv = 2 * nq + F3R_NCON;
+  const int row_lag = 2 * nq + 2 * F3R_NCON, row_w = row_lag + m->n_lag;
   const int col_v = nq, col_lambda = 2 * nq, col_mu = 2 * nq + F3R_NCON, col_w = row_w;
   const double *q = y, *v = y + nq, *lambda = y + 2 * nq, *mu = lambda + F3R_NCON;
   const double* vd = yp + nq;
@@ -63,8 +69,14 @@ f3r_status f3r_dae_jacobian(const f3r_model* m, double t, double cj, const doubl
   f3r_add_constraint_jacobian(m, q, 1.0, BLOCK(row_gv, col_v), ld);
 
   /* -dQ/dq, -dQ/dv of the effects; W' - Q . v: d/dv = -Q - (dQ/dv)^T v, d/dq = -(dQ/dq)^T v */
-  f3r_generalized_forces(m, t, held, q, v, ws->Q);
+  f3r_applied_forces(m, t, held, q, v, m->n_lag ? y + row_lag : 0, ws->Q, 0);
   for (int n = 0; n < nq; ++n) F3R_AT(J, ld, row_w, col_v + n) -= ws->Q[n];
+  /* actuator lag: tau F_a' - (F_cmd - F_a); the applied F_a enters Q_rho and Q . v */
+  for (int i = 0; i < m->n_lag; ++i) {
+    F3R_AT(J, ld, row_lag + i, row_lag + i) += 1.0 + cj * m->lag_time_constant;
+    F3R_AT(J, ld, row_v + i, row_lag + i) -= 1.0;
+    F3R_AT(J, ld, row_w, row_lag + i) -= v[i];
+  }
   if (m->n_effects) {
     double* dq = ws->dQ;
     double* dv = ws->dQ + (size_t)nq * (size_t)nq;

@@ -55,7 +55,9 @@ f3r_status f3r_minimal_residual(const f3r_model* m, double t, const double* y, c
   f3r_mass_times(m, q, ws->a, R);
   f3r_velocity_forces(m, q, v, ws->h);
   f3r_elastic_forces(m, q, ws->k);
-  f3r_generalized_forces(m, t, held, q, v, ws->Q);
+  const int lag_at = f3r_lag_index(m, F3R_FORMULATION_MINIMAL), w_at = lag_at + m->n_lag;
+  double commanded[3];
+  f3r_applied_forces(m, t, held, q, v, m->n_lag ? y + lag_at : 0, ws->Q, commanded);
   double power = 0.0;
   for (int n = 0; n < nq; ++n) {
     R[n] += ws->h[n] + ws->k[n] - ws->Q[n];
@@ -73,7 +75,9 @@ f3r_status f3r_minimal_residual(const f3r_model* m, double t, const double* y, c
     res[j] = yp[j] - y[nz + j];
     res[nz + j] = R[6 + j] - ws->tmp[6 + j];
   }
-  res[2 * nz] = yp[2 * nz] - power;
+  for (int i = 0; i < m->n_lag; ++i)
+    res[lag_at + i] = m->lag_time_constant * yp[lag_at + i] - (commanded[i] - y[lag_at + i]);
+  res[w_at] = yp[w_at] - power;
   return F3R_OK;
 }
 
@@ -113,8 +117,8 @@ static double reduced_mass(const f3r_model* m, const f3r_workspace* ws, int i, i
 
 f3r_status f3r_minimal_rhs(const f3r_model* m, double t, const double* y, const double* held,
                            double* ydot, f3r_workspace* ws) {
-  const int nz = m->n_independent, ny = 2 * nz + 1;
-  /* F_u is linear in u': F_u(u') = F_u(0) + B^T M B u'. */
+  const int nz = m->n_independent, ny = f3r_state_size(m, F3R_FORMULATION_MINIMAL);
+  /* F_u is linear in u': F_u(u') = F_u(0) + B^T M B u'; likewise the lag and W rows. */
   double* zero_rate = ws->y_perturbed;
   memset(zero_rate, 0, (size_t)ny * sizeof(double));
   f3r_status st = f3r_minimal_residual(m, t, y, zero_rate, held, ws->res_base, ws);
@@ -129,19 +133,21 @@ f3r_status f3r_minimal_rhs(const f3r_model* m, double t, const double* y, const 
   if (f3r_lu_factor(K, nz, piv)) return F3R_ERR_SINGULAR;
   f3r_lu_solve(K, nz, piv, rate);
   for (int i = 0; i < nz; ++i) ydot[i] = y[nz + i];
-  ydot[2 * nz] = -ws->res_base[2 * nz]; /* F_W(W' = 0) = -Q.v */
+  const int lag_at = 2 * nz;
+  for (int i = 0; i < m->n_lag; ++i) ydot[lag_at + i] = -ws->res_base[lag_at + i] / m->lag_time_constant;
+  ydot[ny - 1] = -ws->res_base[ny - 1]; /* F_W(W' = 0) = -Q.v */
   return F3R_OK;
 }
 
 f3r_status f3r_minimal_jacobian(const f3r_model* m, double t, double cj, const double* y,
                                 const double* yp, const double* held, double* J, int ld,
                                 f3r_workspace* ws) {
-  const int nz = m->n_independent, ny = 2 * nz + 1;
+  const int nz = m->n_independent, ny = f3r_state_size(m, F3R_FORMULATION_MINIMAL);
   f3r_status st = f3r_minimal_residual(m, t, y, yp, held, ws->res_base, ws);
   if (st != F3R_OK) return st;
   memcpy(ws->y_perturbed, y, (size_t)ny * sizeof(double));
-  for (int j = 0; j < 2 * nz; ++j) {
-    const double inc = 1.5e-8 * fmax(fabs(y[j]), typical_size(m, j));
+  for (int j = 0; j < ny - 1; ++j) { /* every column but W's, which nothing depends on */
+    const double inc = 1.5e-8 * fmax(fabs(y[j]), j < 2 * nz ? typical_size(m, j) : 1.0);
     ws->y_perturbed[j] = y[j] + inc;
     st = f3r_minimal_residual(m, t, ws->y_perturbed, yp, held, ws->res_perturbed, ws);
     ws->y_perturbed[j] = y[j];
@@ -149,9 +155,10 @@ f3r_status f3r_minimal_jacobian(const f3r_model* m, double t, double cj, const d
     for (int i = 0; i < ny; ++i)
       F3R_AT(J, ld, i, j) += (ws->res_perturbed[i] - ws->res_base[i]) / inc;
   }
-  /* cj dF/dy': identity for z and W, B^T M B for u. */
+  /* cj dF/dy': identity for z and W, B^T M B for u, tau for the lag states. */
   for (int j = 0; j < nz; ++j) F3R_AT(J, ld, j, j) += cj;
-  F3R_AT(J, ld, 2 * nz, 2 * nz) += cj;
+  for (int i = 0; i < m->n_lag; ++i) F3R_AT(J, ld, 2 * nz + i, 2 * nz + i) += cj * m->lag_time_constant;
+  F3R_AT(J, ld, ny - 1, ny - 1) += cj;
   st = expand(m, y, yp, ws); /* restores q at y */
   if (st != F3R_OK) return st;
   assemble_velocity_map(m, ws);

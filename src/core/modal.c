@@ -63,7 +63,8 @@ static int compare_doubles(const void* a, const void* b) {
 f3r_status f3r_modal_frequencies(const f3r_model* model, double* hz, int* count, f3r_error* err) {
   f3r_model m = *model; /* linearise without the scene's scripted inputs */
   memset(m.scene.inputs, 0, sizeof m.scene.inputs);
-  const int nz = m.n_independent, ny = 2 * nz + 1;
+  m.n_lag = 0; /* linearise without actuator dynamics */
+  const int nz = m.n_independent, ny = f3r_state_size(&m, F3R_FORMULATION_MINIMAL);
   f3r_workspace* ws = f3r_workspace_create(&m);
   double* y = calloc((size_t)ny, sizeof(double));
   double* yp = calloc((size_t)ny, sizeof(double));

@@ -106,6 +106,8 @@ f3r_status f3r_model_create(const f3r_scene* scene, f3r_model** out, f3r_error* 
   m->platform_mass = scene->platform_mass + scene->payload_mass;
   m->platform_inertia += scene->payload_inertia;
   for (int k = 0; k < 3; ++k) m->gravity[k] = scene->gravity[k];
+  m->n_lag = scene->actuator_lag > 0.0 ? 3 : 0;
+  m->lag_time_constant = scene->actuator_lag;
   m->exact_kinematics = scene->exact_kinematics;
 
   int next = 9;

@@ -40,7 +40,8 @@ void f3r_workspace_destroy(f3r_workspace* ws) {
 }
 
 int f3r_state_size(const f3r_model* m, f3r_formulation form) {
-  return form == F3R_FORMULATION_DAE ? 2 * m->nq + 2 * F3R_NCON + 1 : 2 * m->n_independent + 1;
+  return (form == F3R_FORMULATION_DAE ? 2 * m->nq + 2 * F3R_NCON : 2 * m->n_independent) +
+         m->n_lag + 1;
 }
 
 void f3r_state_kinds(const f3r_model* m, f3r_formulation form, double* id) {
@@ -99,17 +100,17 @@ f3r_status f3r_state_to_full(const f3r_model* m, f3r_formulation form, const dou
 
 f3r_status f3r_consistent_state(const f3r_model* m, f3r_formulation form, double t,
                                 const double* q, const double* v, const double* held,
-                                double work, double* y, double* yp, double* lambda_out,
-                                f3r_workspace* ws) {
-  const int nq = m->nq, nz = m->n_independent;
-  f3r_generalized_forces(m, t, held, q, v, ws->Q);
+                                const double* lag, double work, double* y, double* yp,
+                                double* lambda_out, f3r_workspace* ws) {
+  const int nq = m->nq, nz = m->n_independent, ny = f3r_state_size(m, form);
+  double commanded[3] = {0.0, 0.0, 0.0};
+  f3r_applied_forces(m, t, held, q, v, lag, ws->Q, commanded);
   const f3r_status st = f3r_solve_accelerations(m, q, v, ws->Q, ws->a, ws->lambda, ws->solve_work);
   if (st != F3R_OK) return st;
   double power = 0.0;
   for (int n = 0; n < nq; ++n) power += ws->Q[n] * v[n];
   if (lambda_out) memcpy(lambda_out, ws->lambda, sizeof ws->lambda);
   if (form == F3R_FORMULATION_DAE) {
-    const int ny = f3r_state_size(m, form);
     memset(y, 0, (size_t)ny * sizeof(double));
     memset(yp, 0, (size_t)ny * sizeof(double));
     memcpy(y, q, (size_t)nq * sizeof(double));
@@ -117,15 +118,18 @@ f3r_status f3r_consistent_state(const f3r_model* m, f3r_formulation form, double
     memcpy(y + 2 * nq, ws->lambda, sizeof ws->lambda);
     memcpy(yp, v, (size_t)nq * sizeof(double));
     memcpy(yp + nq, ws->a, (size_t)nq * sizeof(double));
-    y[ny - 1] = work;
-    yp[ny - 1] = power;
   } else {
     memcpy(y, q + 6, (size_t)nz * sizeof(double));
     memcpy(y + nz, v + 6, (size_t)nz * sizeof(double));
     memcpy(yp, v + 6, (size_t)nz * sizeof(double));
     memcpy(yp + nz, ws->a + 6, (size_t)nz * sizeof(double));
-    y[2 * nz] = work;
-    yp[2 * nz] = power;
   }
+  for (int i = 0; i < m->n_lag; ++i) {
+    const int k = f3r_lag_index(m, form) + i;
+    y[k] = lag ? lag[i] : 0.0;
+    yp[k] = (commanded[i] - y[k]) / m->lag_time_constant;
+  }
+  y[ny - 1] = work;
+  yp[ny - 1] = power;
   return check_finite(y, f3r_state_size(m, form));
 }

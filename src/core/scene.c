@@ -229,6 +229,7 @@ f3r_status f3r_scene_validate(const f3r_scene* s, f3r_error* err) {
                            "links[%d].damping_ratio: %g given for a rigid link, which has no modes",
                            k, s->links[k].damping_ratio);
   }
+  CHECK_RANGE("effects.actuator_lag.time_constant", s->actuator_lag, 0.0, 10.0);
   CHECK_RANGE("effects.payload.mass", s->payload_mass, 0.0, 1e3);
   CHECK_RANGE("effects.payload.inertia", s->payload_inertia, 0.0, 1e3);
   for (int k = 0; k < 3; ++k) {

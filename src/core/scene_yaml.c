@@ -373,6 +373,9 @@ static f3r_status read_root(loader* L, const yaml_node_t* root) {
         } else if (!strcmp(ekey, "payload")) {
           const number_field f[] = {{"mass", &s->payload_mass}, {"inertia", &s->payload_inertia}};
           st = read_numbers(L, evalue, name, f, 2);
+        } else if (!strcmp(ekey, "actuator_lag")) {
+          const number_field f[] = {{"time_constant", &s->actuator_lag}};
+          st = read_numbers(L, evalue, name, f, 1);
         } else if (!strcmp(ekey, "joint_friction")) {
           if ((st = expect_mapping(L, evalue, name)) != F3R_OK) return st;
           FOR_EACH_PAIR(L, evalue, fkey, fvalue) {
@@ -385,7 +388,8 @@ static f3r_status read_root(loader* L, const yaml_node_t* root) {
           }
         } else {
           return fail(L, evalue, name,
-                      "unknown effect (allowed: exact_kinematics, gravity, payload, joint_friction)");
+                      "unknown effect (allowed: exact_kinematics, gravity, payload, joint_friction, "
+                      "actuator_lag)");
         }
         if (st != F3R_OK) return st;
       }

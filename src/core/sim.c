@@ -54,13 +54,21 @@ static f3r_status initial_coordinates(const f3r_model* m, double* q, double* v) 
   return F3R_OK;
 }
 
+/* The actuator lag states of the current y, copied into lag (NULL when the model has none). */
+static const double* lag_states(const f3r_sim* s, double* lag) {
+  if (!s->model->n_lag) return NULL;
+  const double* y = N_VGetArrayPointer(s->y);
+  for (int i = 0; i < 3; ++i) lag[i] = y[f3r_lag_index(s->model, s->settings.formulation) + i];
+  return lag;
+}
+
 /* y, y' at s->t from full coordinates and work W, consistent by construction. The forces are
  * their right limit at s->t: a scripted jump at a breakpoint t_b belongs to (t_b, ...). */
-static f3r_status consistent(f3r_sim* s, const double* q, const double* v, double work,
-                             f3r_error* err) {
+static f3r_status consistent(f3r_sim* s, const double* q, const double* v, const double* lag,
+                             double work, f3r_error* err) {
   const double t_forces = nextafter(s->t, INFINITY);
   const f3r_status st = f3r_consistent_state(s->model, s->settings.formulation, t_forces, q, v,
-                                             s->held, work, N_VGetArrayPointer(s->y),
+                                             s->held, lag, work, N_VGetArrayPointer(s->y),
                                              N_VGetArrayPointer(s->yp), NULL, s->stepper.ws);
   if (st != F3R_OK)
     return f3r_error_set(err, st, "no consistent state at t = %.9g: %s", s->t,
@@ -107,7 +115,7 @@ f3r_status f3r_sim_create(const f3r_model* model, const f3r_solver_settings* set
     goto fail;
   }
   s->energy0 = f3r_kinetic_energy(model, q, v) + f3r_potential_energy(model, q);
-  if ((st = consistent(s, q, v, 0.0, err)) != F3R_OK) goto fail;
+  if ((st = consistent(s, q, v, NULL, 0.0, err)) != F3R_OK) goto fail;
   if ((st = s->ops->setup(stp, s->y, s->yp, 0.0, err)) != F3R_OK) goto fail;
   *out = s;
   return F3R_OK;
@@ -133,7 +141,7 @@ f3r_status f3r_sim_reset(f3r_sim* s, f3r_error* err) {
   if (st != F3R_OK) return f3r_error_set(err, st, "the initial pose cannot be reached");
   memset(s->held, 0, sizeof s->held);
   s->t = 0.0;
-  if ((st = consistent(s, q, v, 0.0, err)) != F3R_OK) return st;
+  if ((st = consistent(s, q, v, NULL, 0.0, err)) != F3R_OK) return st;
   st = s->ops->restart(&s->stepper, s->y, s->yp, 0.0, err);
   memset(&s->stepper.base, 0, sizeof s->stepper.base); /* a reset starts the count anew */
   s->stepper.recoverable = 0;
@@ -149,13 +157,13 @@ f3r_status f3r_sim_set_forces(f3r_sim* s, const double* held, f3r_error* err) {
     changed |= held[n] != s->held[n];
   }
   if (!changed) return F3R_OK;
-  double q[F3R_MAX_Q], v[F3R_MAX_Q], keep[F3R_MAX_Q];
+  double q[F3R_MAX_Q], v[F3R_MAX_Q], keep[F3R_MAX_Q], lag[3];
   const double* y = N_VGetArrayPointer(s->y);
   f3r_status st = f3r_state_to_full(s->model, s->settings.formulation, y, q, v);
   if (st != F3R_OK) return f3r_error_set(err, st, "the current state cannot be closed");
   memcpy(keep, s->held, sizeof keep);
   memcpy(s->held, held, (size_t)nq * sizeof(double));
-  st = consistent(s, q, v, y[s->ny - 1], err);
+  st = consistent(s, q, v, lag_states(s, lag), y[s->ny - 1], err);
   if (st == F3R_OK) st = s->ops->restart(&s->stepper, s->y, s->yp, s->t, err);
   if (st != F3R_OK) memcpy(s->held, keep, sizeof keep);
   return st;
@@ -170,7 +178,7 @@ f3r_status f3r_sim_advance(f3r_sim* s, double t_out, f3r_error* err) {
     int at_break = 0;
     for (int k = 0; k < m->n_breakpoints; ++k)
       if (m->breakpoints[k] > s->t) {
-        if (m->breakpoints[k] < t_out) {
+        if (m->breakpoints[k] <= t_out) {
           t_stop = m->breakpoints[k];
           at_break = 1;
         }
@@ -191,7 +199,8 @@ f3r_status f3r_sim_advance(f3r_sim* s, double t_out, f3r_error* err) {
     if (at_break) {
       double q[F3R_MAX_Q], v[F3R_MAX_Q];
       st = f3r_state_to_full(m, s->settings.formulation, y, q, v);
-      if (st == F3R_OK) st = consistent(s, q, v, y[s->ny - 1], err);
+      double lag[3];
+      if (st == F3R_OK) st = consistent(s, q, v, lag_states(s, lag), y[s->ny - 1], err);
       if (st == F3R_OK) st = s->ops->restart(&s->stepper, s->y, s->yp, s->t, err);
       if (st != F3R_OK) return st;
     }
@@ -210,7 +219,8 @@ const f3r_outputs* f3r_sim_outputs(f3r_sim* s) {
   const double* y = N_VGetArrayPointer(s->y);
   o->t = s->t;
   if (f3r_state_to_full(m, s->settings.formulation, y, o->q, o->v) != F3R_OK) return o;
-  f3r_generalized_forces(m, s->t, s->held, o->q, o->v, o->forces);
+  double lag[3];
+  f3r_applied_forces(m, s->t, s->held, o->q, o->v, lag_states(s, lag), o->forces, NULL);
   if (s->settings.formulation == F3R_FORMULATION_DAE) {
     memcpy(o->lambda, y + 2 * m->nq, sizeof o->lambda);
   } else {
