@@ -301,3 +301,63 @@ TEST(Effects, AllEffectsTogetherKeepTheEnergyBalance) {
 }
 
 }  // namespace
+
+#include <Eigen/Dense>
+
+namespace {
+
+// 1 / (E^T M~^-1 E) for leg i: the effective mass of rho_i with the loops closed, from an
+// independent dense solve of [M -G^T; G 0].
+double EffectiveMass(const f3r_model* m, const double* q, int leg) {
+  const int nq = m->nq, n = nq + F3R_NCON;
+  std::vector<double> K((size_t)n * n, 0.0);
+  f3r_add_mass_matrix(m, q, 1.0, K.data(), n);
+  f3r_add_constraint_jacobian_transpose(m, q, -1.0, K.data() + (size_t)nq * n, n);
+  f3r_add_constraint_jacobian(m, q, 1.0, K.data() + nq, n);
+  Eigen::Map<Eigen::MatrixXd> A(K.data(), n, n);
+  Eigen::VectorXd b = Eigen::VectorXd::Zero(n);
+  b(leg) = 1.0;
+  const Eigen::VectorXd x = A.fullPivLu().solve(b);
+  return 1.0 / x(leg);
+}
+
+TEST(Effects, EndStopImpactsAreLocatedAndObeyTheRestitutionLaw) {
+  f3r_scene s;
+  f3r_error err{};
+  ASSERT_EQ(f3r_scene_load(ScenePath("end_stop_impact.yaml").c_str(), &s, &err), F3R_OK) << err.message;
+  s.rtol = 1e-10;
+  s.atol = 1e-12;
+  auto m = MakeModel(s);
+  f3r_sim* raw = nullptr;
+  ASSERT_EQ(f3r_sim_create(m.get(), nullptr, &raw, &err), F3R_OK) << err.message;
+  SimPtr sim(raw);
+  const double c = s.restitution;
+  long seen = 0;
+  double lowest = 1.0, highest = -1.0, worst_energy = 0.0, scale = 0.0;
+  for (int k = 1; k <= 4000; ++k) {
+    ASSERT_EQ(f3r_sim_advance(sim.get(), k * 1e-4, &err), F3R_OK) << err.message;
+    const f3r_outputs* o = f3r_sim_outputs(sim.get());
+    lowest = std::min(lowest, o->q[0]);
+    highest = std::max(highest, o->q[0]);
+    worst_energy = std::max(worst_energy, o->energy_balance_error);
+    scale = std::max(scale, o->kinetic_energy + o->potential_energy);
+    if (o->impacts == seen) continue;
+    seen = o->impacts;
+    const f3r_impact_record& r = o->last_impact;
+    const double stop = r.at_max ? s.stroke_max : s.stroke_min;
+    EXPECT_NEAR(r.rho, stop, 1e-9) << "impact at t = " << r.t << " is located on the stop";
+    EXPECT_NEAR(r.rate_after, -c * r.rate_before, 1e-12 * std::fabs(r.rate_before));
+    // Normal kinetic energy 1/2 m_eff rho'^2 falls to c^2 of itself; nothing else changes.
+    // The record's state is the one just before the restart: recompute m_eff at the stop.
+    std::vector<double> q(r.q, r.q + m->nq);
+    const double normal_before = 0.5 * EffectiveMass(m.get(), q.data(), 0) * r.rate_before * r.rate_before;
+    EXPECT_NEAR(r.kinetic_before - r.kinetic_after, (1 - c * c) * normal_before, 1e-3 * normal_before)
+        << "t = " << r.t;
+  }
+  EXPECT_GE(seen, 3) << "the pulses drive piston 1 into its stops repeatedly";
+  EXPECT_GE(lowest, s.stroke_min - 1e-9);
+  EXPECT_LE(highest, s.stroke_max + 1e-9);
+  EXPECT_LT(worst_energy, 1e-6 * scale) << "T + V - W + impact losses";
+}
+
+}  // namespace

@@ -35,6 +35,17 @@ typedef struct {
 } f3r_sim_stats;
 
 typedef struct {
+  double t;                /* s */
+  int leg;                 /* 0..2 */
+  int at_max;              /* 1 at stroke_max, 0 at stroke_min */
+  double rho;              /* m, where it happened */
+  double rate_before, rate_after; /* rho_i' (m/s) */
+  double impulse;          /* N s along rho_i */
+  double kinetic_before, kinetic_after; /* T (J) */
+  double q[F3R_MAX_Q];     /* configuration at the impact */
+} f3r_impact_record;
+
+typedef struct {
   double t;                      /* s */
   double q[F3R_MAX_Q];           /* generalized coordinates (model.h layout) */
   double v[F3R_MAX_Q];           /* their rates */
@@ -45,7 +56,10 @@ typedef struct {
   double kinetic_energy;         /* J */
   double potential_energy;       /* J */
   double external_work;          /* J, work of Q since t = 0 */
-  double energy_balance_error;   /* |T + V - W - (T0 + V0 - W0)|, J */
+  double energy_balance_error;   /* |T + V - W + impact losses - (T0 + V0)|, J */
+  long impacts;                  /* end-stop impacts so far */
+  double impact_loss;            /* J of kinetic energy the impacts took */
+  f3r_impact_record last_impact;
   double constraint_residual;    /* max |g_k(q)|, m */
   double velocity_residual;      /* max |(G v)_k|, m/s */
   f3r_sim_stats stats;

@@ -75,6 +75,16 @@ void f3r_constraint_bias(const f3r_model* m, const double* q, const double* v, d
 double f3r_kinetic_energy(const f3r_model* m, const double* q, const double* v);
 double f3r_potential_energy(const f3r_model* m, const double* q);
 
+/* --- impacts at the end stops ---------------------------------------------------------------------- */
+/* Newton's impact law with restitution c for the legs in contact (legs, count <= 3): the jump dv
+ * solves [M -G^T -E; G 0 0; E^T 0 0] [dv; Lambda; p] = [0; 0; -(1 + c) E^T v], E the unit columns
+ * of rho_legs, so the loops stay closed (G dv = 0) and rho_i' -> -c rho_i'. v_out = v + dv,
+ * impulse[count] the impulses (N s). work holds f3r_impact_work_size doubles. */
+f3r_status f3r_impact(const f3r_model* m, const double* q, const double* v, const int* legs,
+                      int count, double restitution, double* v_out, double* impulse,
+                      double* work);
+size_t f3r_impact_work_size(const f3r_model* m);
+
 /* --- accelerations ------------------------------------------------------------------------------ */
 /* Solves [M -G^T; G 0] [a; lambda] = [Q - h - k; -gamma] for the accelerations a (nq) and the
  * multipliers lambda (6) at (q, v). work holds (nq+6)^2 + 2(nq+6) doubles.

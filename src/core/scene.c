@@ -25,6 +25,9 @@ f3r_scene f3r_default_scene(void) {
     s.links[i].auto_tolerance = 1e-3;
   }
   s.gravity[2] = -9.81;
+  s.stroke_min = 0.0;
+  s.stroke_max = 0.2;
+  s.restitution = 0.5;
   s.formulation = F3R_FORMULATION_MINIMAL; /* measured 2-3x faster than dae at equal accuracy */
   s.rtol = 1e-8;
   s.atol = 1e-10;
@@ -230,6 +233,11 @@ f3r_status f3r_scene_validate(const f3r_scene* s, f3r_error* err) {
                            k, s->links[k].damping_ratio);
   }
   CHECK_RANGE("effects.actuator_lag.time_constant", s->actuator_lag, 0.0, 10.0);
+  CHECK_RANGE("effects.end_stops.restitution", s->restitution, 0.0, 1.0);
+  CHECK_RANGE("effects.end_stops.min", s->stroke_min, -s->link_length + 1e-3, 10.0);
+  if (!(s->stroke_max > s->stroke_min))
+    return f3r_error_set(err, F3R_ERR_SCENE, "effects.end_stops.max: %g must exceed min %g",
+                         s->stroke_max, s->stroke_min);
   CHECK_RANGE("effects.payload.mass", s->payload_mass, 0.0, 1e3);
   CHECK_RANGE("effects.payload.inertia", s->payload_inertia, 0.0, 1e3);
   for (int k = 0; k < 3; ++k) {

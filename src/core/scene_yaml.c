@@ -373,6 +373,11 @@ static f3r_status read_root(loader* L, const yaml_node_t* root) {
         } else if (!strcmp(ekey, "payload")) {
           const number_field f[] = {{"mass", &s->payload_mass}, {"inertia", &s->payload_inertia}};
           st = read_numbers(L, evalue, name, f, 2);
+        } else if (!strcmp(ekey, "end_stops")) {
+          const number_field f[] = {{"min", &s->stroke_min}, {"max", &s->stroke_max},
+                                    {"restitution", &s->restitution}};
+          s->end_stops = 1;
+          st = read_numbers(L, evalue, name, f, 3);
         } else if (!strcmp(ekey, "actuator_lag")) {
           const number_field f[] = {{"time_constant", &s->actuator_lag}};
           st = read_numbers(L, evalue, name, f, 1);
@@ -389,7 +394,7 @@ static f3r_status read_root(loader* L, const yaml_node_t* root) {
         } else {
           return fail(L, evalue, name,
                       "unknown effect (allowed: exact_kinematics, gravity, payload, joint_friction, "
-                      "actuator_lag)");
+                      "actuator_lag, end_stops)");
         }
         if (st != F3R_OK) return st;
       }

@@ -20,6 +20,12 @@ struct f3r_sim {
   double held[F3R_MAX_Q];
   double t;              /* time of the current state */
   double energy0;        /* T + V at t = 0 (W = 0 there) */
+  double* impact_work;   /* f3r_impact_work_size */
+  long impacts;
+  double impact_loss;
+  f3r_impact_record last_impact;
+  double chatter_t0;     /* start of the current window of impacts */
+  long chatter_count;
   f3r_outputs out;
 };
 
@@ -106,7 +112,8 @@ f3r_status f3r_sim_create(const f3r_model* model, const f3r_solver_settings* set
   s->yp = N_VNew_Serial(s->ny, stp->ctx);
   stp->ws = f3r_workspace_create(model);
   s->out_ws = f3r_workspace_create(model);
-  if (!s->y || !s->yp || !stp->ws || !s->out_ws) {
+  s->impact_work = calloc(f3r_impact_work_size(model), sizeof(double));
+  if (!s->y || !s->yp || !stp->ws || !s->out_ws || !s->impact_work) {
     st = f3r_error_set(err, F3R_ERR_MEMORY, "f3r_sim_create: out of memory");
     goto fail;
   }
@@ -131,6 +138,7 @@ void f3r_sim_destroy(f3r_sim* s) {
   if (s->yp) N_VDestroy(s->yp);
   f3r_workspace_destroy(s->stepper.ws);
   f3r_workspace_destroy(s->out_ws);
+  free(s->impact_work);
   if (s->stepper.ctx) SUNContext_Free(&s->stepper.ctx);
   free(s);
 }
@@ -141,6 +149,9 @@ f3r_status f3r_sim_reset(f3r_sim* s, f3r_error* err) {
   if (st != F3R_OK) return f3r_error_set(err, st, "the initial pose cannot be reached");
   memset(s->held, 0, sizeof s->held);
   s->t = 0.0;
+  s->impacts = s->chatter_count = 0;
+  s->impact_loss = s->chatter_t0 = 0.0;
+  memset(&s->last_impact, 0, sizeof s->last_impact);
   if ((st = consistent(s, q, v, NULL, 0.0, err)) != F3R_OK) return st;
   st = s->ops->restart(&s->stepper, s->y, s->yp, 0.0, err);
   memset(&s->stepper.base, 0, sizeof s->stepper.base); /* a reset starts the count anew */
@@ -169,11 +180,63 @@ f3r_status f3r_sim_set_forces(f3r_sim* s, const double* held, f3r_error* err) {
   return st;
 }
 
+/* Impacts would repeat without end when a force holds a piston against its stop: resting contact
+ * is not modelled, so a run stops with an error past this many impacts within 1 ms. */
+#define F3R_MAX_IMPACTS_PER_MS 200
+
+/* At an end-stop event: the impact law on the legs in contact, then a restart. */
+static f3r_status handle_impact(f3r_sim* s, f3r_error* err) {
+  const f3r_model* m = s->model;
+  const double* y = N_VGetArrayPointer(s->y);
+  double q[F3R_MAX_Q], v[F3R_MAX_Q], v_after[F3R_MAX_Q], impulse[3], lag[3];
+  f3r_status st = f3r_state_to_full(m, s->settings.formulation, y, q, v);
+  if (st != F3R_OK) return f3r_error_set(err, st, "end stop at t = %.9g: the loops do not close", s->t);
+  int legs[3], at_max[3], count = 0;
+  for (int i = 0; i < 3; ++i)
+    if (s->stepper.root_info[2 * i] || s->stepper.root_info[2 * i + 1]) {
+      at_max[count] = s->stepper.root_info[2 * i + 1] != 0;
+      legs[count++] = i;
+    }
+  if (!count) return F3R_OK;
+  if (s->t - s->chatter_t0 > 1e-3) {
+    s->chatter_t0 = s->t;
+    s->chatter_count = 0;
+  }
+  if (++s->chatter_count > F3R_MAX_IMPACTS_PER_MS)
+    return f3r_error_set(err, F3R_ERR_SOLVER,
+                         "leg %d rests against its end stop at t = %.9g (more than %d impacts in "
+                         "1 ms): resting contact is not modelled; reduce the force into the stop",
+                         legs[0] + 1, s->t, F3R_MAX_IMPACTS_PER_MS);
+  st = f3r_impact(m, q, v, legs, count, m->scene.restitution, v_after, impulse, s->impact_work);
+  if (st != F3R_OK) return f3r_error_set(err, st, "end stop at t = %.9g: singular impact", s->t);
+  const double before = f3r_kinetic_energy(m, q, v), after = f3r_kinetic_energy(m, q, v_after);
+  f3r_impact_record* r = &s->last_impact;
+  r->t = s->t;
+  r->leg = legs[0];
+  r->at_max = at_max[0];
+  r->rho = q[legs[0]];
+  r->rate_before = v[legs[0]];
+  r->rate_after = v_after[legs[0]];
+  r->impulse = impulse[0];
+  r->kinetic_before = before;
+  r->kinetic_after = after;
+  memcpy(r->q, q, sizeof r->q);
+  s->impacts += count;
+  s->impact_loss += before - after;
+  st = consistent(s, q, v_after, lag_states(s, lag), y[s->ny - 1], err);
+  if (st == F3R_OK) st = s->ops->restart(&s->stepper, s->y, s->yp, s->t, err);
+  return st;
+}
+
 /* Integrates to t_out without crossing a breakpoint of the scripted inputs: at each one it stops
  * exactly and restarts from a consistent state with the forces' right limit. */
 f3r_status f3r_sim_advance(f3r_sim* s, double t_out, f3r_error* err) {
   const f3r_model* m = s->model;
   while (t_out > s->t) {
+    if (t_out - s->t <= 1e-13 * fmax(1.0, fabs(t_out))) { /* closer than IDA can step */
+      s->t = t_out;
+      break;
+    }
     double t_stop = t_out;
     int at_break = 0;
     for (int k = 0; k < m->n_breakpoints; ++k)
@@ -185,11 +248,17 @@ f3r_status f3r_sim_advance(f3r_sim* s, double t_out, f3r_error* err) {
         break;
       }
     double t_reached = s->t;
+    int event = 0;
     f3r_status st = s->ops->advance(&s->stepper, t_stop, at_break || s->settings.stop_at_outputs,
-                                    s->y, s->yp, &t_reached, err);
+                                    s->y, s->yp, &t_reached, &event, err);
     if (st != F3R_OK) {
       s->t = t_reached;
       return st;
+    }
+    if (event) {
+      s->t = t_reached;
+      if ((st = handle_impact(s, err)) != F3R_OK) return st;
+      continue;
     }
     const double* y = N_VGetArrayPointer(s->y);
     for (int n = 0; n < s->ny; ++n)
@@ -236,8 +305,11 @@ const f3r_outputs* f3r_sim_outputs(f3r_sim* s) {
   o->kinetic_energy = f3r_kinetic_energy(m, o->q, o->v);
   o->potential_energy = f3r_potential_energy(m, o->q);
   o->external_work = y[s->ny - 1];
-  o->energy_balance_error =
-      fabs(o->kinetic_energy + o->potential_energy - o->external_work - s->energy0);
+  o->energy_balance_error = fabs(o->kinetic_energy + o->potential_energy - o->external_work +
+                                 s->impact_loss - s->energy0);
+  o->impacts = s->impacts;
+  o->impact_loss = s->impact_loss;
+  o->last_impact = s->last_impact;
   double g[F3R_NCON], gv[F3R_NCON];
   f3r_constraints(m, o->q, g);
   f3r_constraint_times(m, o->q, o->v, gv);

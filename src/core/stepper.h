@@ -22,6 +22,7 @@ typedef struct {
   SUNMatrix J;            /* IDA only */
   SUNLinearSolver ls;     /* IDA only */
   f3r_sim_stats base;     /* statistics accumulated before the last restart */
+  int root_info[F3R_NCON];/* with end stops: -1 where rho_i reached stop k (rows 2i min, 2i+1 max) */
   long recoverable;       /* right-hand side calls that asked for a smaller step */
   char message[256];      /* the solver's last error message: the core never prints */
 } f3r_stepper;
@@ -32,9 +33,10 @@ typedef struct {
   /* Restarts at t from a consistent y, y' (after a jump in the forces). */
   f3r_status (*restart)(f3r_stepper* st, N_Vector y, N_Vector yp, double t, f3r_error* err);
   /* Integrates to tout; y (and y') receive the state there, or the last good one on failure.
-   * exact: never step past tout (a force changes there). */
+   * exact: never step past tout (a force changes there). *event = 1 when it stopped early at an
+   * end stop (root_info says which). */
   f3r_status (*advance)(f3r_stepper* st, double tout, int exact, N_Vector y, N_Vector yp,
-                        double* t_reached, f3r_error* err);
+                        double* t_reached, int* event, f3r_error* err);
   /* Statistics since creation (base plus the current solver's counters). */
   void (*stats)(const f3r_stepper* st, f3r_sim_stats* out);
   void (*release)(f3r_stepper* st);
@@ -44,6 +46,9 @@ extern const f3r_stepper_ops f3r_ida_stepper;
 extern const f3r_stepper_ops f3r_erk_stepper;
 
 /* Stores a SUNDIALS error message in the stepper (user data of the error handler). */
+/* The end-stop functions rho_i - min and max - rho_i (6) of state y, for root finding. */
+int f3r_end_stop_functions(const f3r_stepper* st, const double* y, double* g);
+
 void f3r_stepper_error_handler(int code, const char* module, const char* function, char* msg,
                                void* user);
 

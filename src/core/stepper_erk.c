@@ -15,6 +15,11 @@ static int rhs_fn(realtype t, N_Vector y, N_Vector ydot, void* user) {
   return 1; /* recoverable: ARKODE retries with a smaller step */
 }
 
+static int root_fn(realtype t, N_Vector y, realtype* g, void* user) {
+  (void)t;
+  return f3r_end_stop_functions(user, N_VGetArrayPointer(y), g);
+}
+
 static f3r_status failed(f3r_stepper* st, f3r_error* err, const char* call, int flag) {
   return f3r_error_set(err, F3R_ERR_SOLVER, "%s failed: %s (%s)", call,
                        ERKStepGetReturnFlagName(flag), st->message);
@@ -39,6 +44,12 @@ static f3r_status erk_setup(f3r_stepper* st, N_Vector y, N_Vector yp, double t0,
   CHECK(ERKStepSetUserData(st->mem, st));
   CHECK(ERKStepSetMaxNumSteps(st->mem, 100000000L));
   if (st->settings.max_step > 0.0) CHECK(ERKStepSetMaxStep(st->mem, st->settings.max_step));
+  if (st->model->scene.end_stops) {
+    int directions[F3R_NCON];
+    for (int k = 0; k < F3R_NCON; ++k) directions[k] = -1;
+    CHECK(ERKStepRootInit(st->mem, F3R_NCON, root_fn));
+    CHECK(ERKStepSetRootDirection(st->mem, directions));
+  }
   return F3R_OK;
 }
 
@@ -67,11 +78,13 @@ static f3r_status erk_restart(f3r_stepper* st, N_Vector y, N_Vector yp, double t
 }
 
 static f3r_status erk_advance(f3r_stepper* st, double tout, int exact, N_Vector y, N_Vector yp,
-                              double* t_reached, f3r_error* err) {
+                              double* t_reached, int* event, f3r_error* err) {
   CHECK(ERKStepSetStopTime(st->mem, exact ? tout : 1e300)); /* see stepper_ida.c */
   realtype t = *t_reached;
   const int flag = ERKStepEvolve(st->mem, tout, y, &t, ARK_NORMAL);
   *t_reached = t;
+  *event = flag == ARK_ROOT_RETURN;
+  if (*event) CHECK(ERKStepGetRootInfo(st->mem, st->root_info));
   if (flag >= 0) {
     f3r_explicit_rhs(st->model, t, N_VGetArrayPointer(y), st->held, N_VGetArrayPointer(yp), st->ws);
     return F3R_OK;

@@ -39,6 +39,11 @@ static int jacobian_fn(realtype t, realtype cj, N_Vector y, N_Vector yp, N_Vecto
   return 1;
 }
 
+static int root_fn(realtype t, N_Vector y, N_Vector yp, realtype* g, void* user) {
+  (void)t, (void)yp;
+  return f3r_end_stop_functions(user, N_VGetArrayPointer(y), g);
+}
+
 static f3r_status failed(f3r_stepper* st, f3r_error* err, const char* call, int flag) {
   return f3r_error_set(err, F3R_ERR_SOLVER, "%s failed: %s (%s)", call,
                        IDAGetReturnFlagName(flag), st->message);
@@ -79,6 +84,12 @@ static f3r_status ida_setup(f3r_stepper* st, N_Vector y, N_Vector yp, double t0,
   if (!st->ls) return f3r_error_set(err, F3R_ERR_MEMORY, "SUNLinSol_Dense failed");
   CHECK(IDASetLinearSolver(st->mem, st->ls, st->J));
   if (st->settings.analytic_jacobian) CHECK(IDASetJacFn(st->mem, jacobian_fn));
+  if (m->scene.end_stops) {
+    int directions[F3R_NCON];
+    for (int k = 0; k < F3R_NCON; ++k) directions[k] = -1; /* only moving into a stop */
+    CHECK(IDARootInit(st->mem, F3R_NCON, root_fn));
+    CHECK(IDASetRootDirection(st->mem, directions));
+  }
   return F3R_OK;
 }
 
@@ -114,16 +125,21 @@ static f3r_status ida_restart(f3r_stepper* st, N_Vector y, N_Vector yp, double t
 }
 
 static f3r_status ida_advance(f3r_stepper* st, double tout, int exact, N_Vector y, N_Vector yp,
-                              double* t_reached, f3r_error* err) {
+                              double* t_reached, int* event, f3r_error* err) {
   /* A stop time outlives a restart in SUNDIALS 6.4 (there is no IDAClearStopTime): always set
    * one, far ahead when the step may pass tout. */
   CHECK(IDASetStopTime(st->mem, exact ? tout : 1e300));
   realtype t = *t_reached;
   const int flag = IDASolve(st->mem, tout, &t, y, yp, IDA_NORMAL);
   *t_reached = t;
+  *event = flag == IDA_ROOT_RETURN;
+  if (*event) CHECK(IDAGetRootInfo(st->mem, st->root_info));
   if (flag >= 0) return F3R_OK;
+  char message[sizeof st->message];
+  snprintf(message, sizeof message, "%s", st->message);
   IDAGetDky(st->mem, t, 0, y); /* the last successful step: still a good state */
   IDAGetDky(st->mem, t, 1, yp);
+  snprintf(st->message, sizeof st->message, "%s", message);
   return f3r_error_set(err,
                        flag == IDA_RES_FAIL || flag == IDA_REP_RES_ERR ? F3R_ERR_NONFINITE
                                                                        : F3R_ERR_SOLVER,
@@ -144,6 +160,16 @@ static void ida_release(f3r_stepper* st) {
 
 const f3r_stepper_ops f3r_ida_stepper = {ida_setup, ida_restart, ida_advance, ida_stats,
                                          ida_release};
+
+int f3r_end_stop_functions(const f3r_stepper* st, const double* y, double* g) {
+  double q[F3R_MAX_Q], v[F3R_MAX_Q];
+  if (f3r_state_to_full(st->model, st->settings.formulation, y, q, v) != F3R_OK) return 1;
+  for (int i = 0; i < 3; ++i) {
+    g[2 * i] = q[i] - st->model->scene.stroke_min;
+    g[2 * i + 1] = st->model->scene.stroke_max - q[i];
+  }
+  return 0;
+}
 
 void f3r_stepper_error_handler(int code, const char* module, const char* function, char* msg,
                                void* user) {
