@@ -37,6 +37,8 @@ def main(sim, scenes):
         "gravity (base tilted 10 degrees)": "effects: {gravity: [0.0, -1.7035, -9.6610]}\n",
         "payload 0.1 kg": "effects: {payload: {mass: 0.1, inertia: 1.0e-5}}\n",
         "joint_friction": "effects: {joint_friction: {prismatic: [0.5, 0.5, 0.5], revolute: [0.001, 0.001, 0.001]}}\n",
+        "actuator_lag 5 ms": "effects: {actuator_lag: {time_constant: 0.005}}\n",
+        "end_stops (root functions; no impact in this run)": "effects: {end_stops: {min: -0.1, max: 0.3, restitution: 0.5}}\n",
         "damping_ratio 0.01": None,
     }
     print()
