@@ -1,0 +1,77 @@
+/* Nanoseconds per residual and per Jacobian evaluation of both formulations, for r = 1, 3, 8
+ * and 20 fixed-free modes per link, at a generic moving state. Prints a Markdown table.
+ *   f3r_microbench [repetitions] */
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <time.h>
+
+#include "flex3rpr/residual.h"
+#include "flex3rpr/stages.h"
+
+static double now(void) {
+  struct timespec ts;
+  clock_gettime(CLOCK_MONOTONIC, &ts);
+  return ts.tv_sec + 1e-9 * ts.tv_nsec;
+}
+
+int main(int argc, char** argv) {
+  const long reps = argc > 1 ? atol(argv[1]) : 200000;
+  const int modes[] = {1, 3, 8, 20};
+  printf("| modes per link | formulation | state size | residual (ns) | Jacobian (ns) |\n");
+  printf("|---:|---|---:|---:|---:|\n");
+  for (int k = 0; k < 4; ++k) {
+    f3r_scene s = f3r_default_scene();
+    for (int i = 0; i < 3; ++i) {
+      s.links[i].model = F3R_LINK_FIXED_FREE;
+      s.links[i].modes = modes[k];
+    }
+    s.platform_pose0[0] = 0.01;
+    s.platform_velocity0[0] = 0.3;
+    s.platform_velocity0[2] = 2.0;
+    s.inputs[0].kind = F3R_INPUT_HARMONIC;
+    s.inputs[0].amplitude = 5.0;
+    s.inputs[0].omega = 100.0;
+    f3r_model* m = NULL;
+    f3r_error err;
+    if (f3r_model_create(&s, &m, &err) != F3R_OK) {
+      fprintf(stderr, "%s\n", err.message);
+      return 1;
+    }
+    for (int form = 0; form < 2; ++form) {
+      const int ny = f3r_state_size(m, (f3r_formulation)form);
+      double q[F3R_MAX_Q] = {0}, v[F3R_MAX_Q] = {0};
+      for (int n = 6; n < 9; ++n) { q[n] = s.platform_pose0[n - 6]; v[n] = s.platform_velocity0[n - 6]; }
+      for (int n = 9; n < m->nq; ++n) { q[n] = 1e-4 * sin(n); v[n] = 1e-2 * cos(n); }
+      f3r_model_close_loops(m, q);
+      f3r_model_close_loop_rates(m, q, v);
+      f3r_workspace* ws = f3r_workspace_create(m);
+      double* y = calloc((size_t)ny, sizeof(double));
+      double* yp = calloc((size_t)ny, sizeof(double));
+      double* res = calloc((size_t)ny, sizeof(double));
+      double* J = calloc((size_t)ny * ny, sizeof(double));
+      f3r_consistent_state(m, (f3r_formulation)form, 0.0, q, v, NULL, NULL, 0.0, y, yp, NULL, ws);
+      double sink = 0.0;
+      double t0 = now();
+      for (long r = 0; r < reps; ++r) {
+        f3r_residual(m, (f3r_formulation)form, 1e-9 * r, y, yp, NULL, res, ws);
+        sink += res[0];
+      }
+      const double residual_ns = (now() - t0) / reps * 1e9;
+      const long jreps = reps / (form == 0 ? 20 : 200) + 1;
+      t0 = now();
+      for (long r = 0; r < jreps; ++r) {
+        f3r_residual_jacobian(m, (f3r_formulation)form, 0.0, 1e4, y, yp, NULL, J, ny, ws);
+        sink += J[0];
+      }
+      const double jacobian_ns = (now() - t0) / jreps * 1e9;
+      printf("| %d | %s | %d | %.0f | %.0f |\n", modes[k], form ? "minimal" : "dae", ny,
+             residual_ns, jacobian_ns);
+      if (sink == 12345.678) printf(" ");
+      free(y), free(yp), free(res), free(J);
+      f3r_workspace_destroy(ws);
+    }
+    f3r_model_destroy(m);
+  }
+  return 0;
+}
