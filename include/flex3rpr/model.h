@@ -101,6 +101,9 @@ void f3r_model_destroy(f3r_model* model);
  * Returns F3R_ERR_SINGULAR if a link would need rho_i + l <= 0. */
 f3r_status f3r_model_close_loops(const f3r_model* model, double* q);
 
+/* The scene's initial full coordinates q and rates v (F3R_MAX_Q each, zero beyond nq), closed. */
+f3r_status f3r_model_initial_state(const f3r_model* model, double* q, double* v);
+
 /* Rates of rho and theta in qdot (nq) from the platform and modal rates in qdot and the pose q. */
 void f3r_model_close_loop_rates(const f3r_model* model, const double* q, double* qdot);
 

@@ -233,3 +233,22 @@ void f3r_model_beam_point(const f3r_model* m, const double* q, int link, double 
   if (tangent_angle) *tangent_angle = theta + atan(slope);
   if (deflection) *deflection = w;
 }
+
+f3r_status f3r_model_initial_state(const f3r_model* m, double* q, double* v) {
+  const f3r_scene* sc = &m->scene;
+  memset(q, 0, F3R_MAX_Q * sizeof(double));
+  memset(v, 0, F3R_MAX_Q * sizeof(double));
+  for (int k = 0; k < 3; ++k) {
+    q[6 + k] = sc->platform_pose0[k];
+    v[6 + k] = sc->platform_velocity0[k];
+  }
+  for (int i = 0; i < 3; ++i)
+    for (int j = 0; j < m->link[i].modes; ++j) {
+      q[m->link[i].eta_index + j] = sc->links[i].eta0[j];
+      v[m->link[i].eta_index + j] = sc->links[i].eta_rate0[j];
+    }
+  const f3r_status st = f3r_model_close_loops(m, q);
+  if (st != F3R_OK) return st;
+  f3r_model_close_loop_rates(m, q, v);
+  return F3R_OK;
+}

@@ -41,25 +41,6 @@ f3r_solver_settings f3r_solver_settings_from_scene(const f3r_scene* scene) {
   return st;
 }
 
-static f3r_status initial_coordinates(const f3r_model* m, double* q, double* v) {
-  const f3r_scene* sc = &m->scene;
-  memset(q, 0, F3R_MAX_Q * sizeof(double));
-  memset(v, 0, F3R_MAX_Q * sizeof(double));
-  for (int k = 0; k < 3; ++k) {
-    q[6 + k] = sc->platform_pose0[k];
-    v[6 + k] = sc->platform_velocity0[k];
-  }
-  for (int i = 0; i < 3; ++i)
-    for (int j = 0; j < m->link[i].modes; ++j) {
-      q[m->link[i].eta_index + j] = sc->links[i].eta0[j];
-      v[m->link[i].eta_index + j] = sc->links[i].eta_rate0[j];
-    }
-  const f3r_status st = f3r_model_close_loops(m, q);
-  if (st != F3R_OK) return st;
-  f3r_model_close_loop_rates(m, q, v);
-  return F3R_OK;
-}
-
 /* The actuator lag states of the current y, copied into lag (NULL when the model has none). */
 static const double* lag_states(const f3r_sim* s, double* lag) {
   if (!s->model->n_lag) return NULL;
@@ -117,7 +98,7 @@ f3r_status f3r_sim_create(const f3r_model* model, const f3r_solver_settings* set
     st = f3r_error_set(err, F3R_ERR_MEMORY, "f3r_sim_create: out of memory");
     goto fail;
   }
-  if (initial_coordinates(model, q, v) != F3R_OK) {
+  if (f3r_model_initial_state(model, q, v) != F3R_OK) {
     st = f3r_error_set(err, F3R_ERR_SCENE, "initial.platform_pose: the legs cannot reach it");
     goto fail;
   }
@@ -145,7 +126,7 @@ void f3r_sim_destroy(f3r_sim* s) {
 
 f3r_status f3r_sim_reset(f3r_sim* s, f3r_error* err) {
   double q[F3R_MAX_Q], v[F3R_MAX_Q];
-  f3r_status st = initial_coordinates(s->model, q, v);
+  f3r_status st = f3r_model_initial_state(s->model, q, v);
   if (st != F3R_OK) return f3r_error_set(err, st, "the initial pose cannot be reached");
   memset(s->held, 0, sizeof s->held);
   s->t = 0.0;
