@@ -43,3 +43,32 @@ void f3r_lu_solve(const double* A, int n, const int* piv, double* b) {
     for (int i = 0; i < k; ++i) b[i] -= F3R_AT(A, n, i, k) * b[k];
   }
 }
+
+int f3r_cholesky_factor(double* A, int n) {
+  for (int j = 0; j < n; ++j) {
+    double d = F3R_AT(A, n, j, j);
+    for (int k = 0; k < j; ++k) d -= F3R_AT(A, n, j, k) * F3R_AT(A, n, j, k);
+    if (!(d > 0.0) || !isfinite(d)) return 1;
+    const double ljj = sqrt(d);
+    F3R_AT(A, n, j, j) = ljj;
+    for (int i = j + 1; i < n; ++i) {
+      double s = F3R_AT(A, n, i, j);
+      for (int k = 0; k < j; ++k) s -= F3R_AT(A, n, i, k) * F3R_AT(A, n, j, k);
+      F3R_AT(A, n, i, j) = s / ljj;
+    }
+  }
+  return 0;
+}
+
+void f3r_cholesky_solve(const double* L, int n, double* b) {
+  for (int i = 0; i < n; ++i) {
+    double s = b[i];
+    for (int k = 0; k < i; ++k) s -= F3R_AT(L, n, i, k) * b[k];
+    b[i] = s / F3R_AT(L, n, i, i);
+  }
+  for (int i = n - 1; i >= 0; --i) {
+    double s = b[i];
+    for (int k = i + 1; k < n; ++k) s -= F3R_AT(L, n, k, i) * b[k];
+    b[i] = s / F3R_AT(L, n, i, i);
+  }
+}

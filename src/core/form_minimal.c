@@ -14,15 +14,19 @@
 #include "workspace.h"
 
 /* x (rho and theta entries of each link) from G_d x = V, V holding (x, y) per link. */
-static void solve_dependent(const f3r_model* m, const double* q, const double* V, double* x) {
+static void solve_dependent_at(const f3r_link_state k[3], const double* V, double* x) {
   for (int i = 0; i < 3; ++i) {
-    f3r_link_state k;
-    f3r_link_state_fill(m, i, q, 0, &k);
-    const double vn = -k.s * V[2 * i] + k.c * V[2 * i + 1];
-    const double ve = k.c * V[2 * i] + k.s * V[2 * i + 1];
-    x[3 + i] = vn / k.len;
-    x[i] = ve + k.w * x[3 + i];
+    const double vn = -k[i].s * V[2 * i] + k[i].c * V[2 * i + 1];
+    const double ve = k[i].c * V[2 * i] + k[i].s * V[2 * i + 1];
+    x[3 + i] = vn / k[i].len;
+    x[i] = ve + k[i].w * x[3 + i];
   }
+}
+
+static void solve_dependent(const f3r_model* m, const double* q, const double* V, double* x) {
+  f3r_link_state k[3];
+  for (int i = 0; i < 3; ++i) f3r_link_state_fill(m, i, q, 0, &k[i]);
+  solve_dependent_at(k, V, x);
 }
 
 /* Full q, v, a from the minimal state and its derivative. */
@@ -91,27 +95,41 @@ static double typical_size(const f3r_model* m, int index) {
   return is_rate ? 1e-2 : 1e-5;
 }
 
-/* B (nq x nz) and M B at the configuration in ws->q. */
+/* B (nq x nz) and M B at the configuration in ws->q. B is the identity on z above the
+ * dependent rows G_d^{-1} (-G_z); M and G are assembled once, so the trigonometry of each link
+ * is evaluated once per call rather than once per column. */
 static void assemble_velocity_map(const f3r_model* m, f3r_workspace* ws) {
   const int nq = m->nq, nz = m->n_independent;
-  double* B = ws->B;
+  double *B = ws->B, *M = ws->M, *G = ws->G;
   memset(B, 0, (size_t)nq * (size_t)nz * sizeof(double));
+  memset(M, 0, (size_t)nq * (size_t)nq * sizeof(double));
+  memset(G, 0, (size_t)F3R_NCON * (size_t)nq * sizeof(double));
+  f3r_add_mass_matrix(m, ws->q, 1.0, M, nq);
+  f3r_add_constraint_jacobian(m, ws->q, 1.0, G, F3R_NCON);
+  f3r_link_state k[3];
+  for (int i = 0; i < 3; ++i) f3r_link_state_fill(m, i, ws->q, 0, &k[i]);
   for (int j = 0; j < nz; ++j) {
     double* col = B + (size_t)j * (size_t)nq;
     double V[F3R_NCON];
+    for (int c = 0; c < F3R_NCON; ++c) V[c] = -F3R_AT(G, F3R_NCON, c, 6 + j);
     col[6 + j] = 1.0;
-    f3r_constraint_times(m, ws->q, col, V);
-    for (int c = 0; c < F3R_NCON; ++c) V[c] = -V[c];
-    solve_dependent(m, ws->q, V, col);
-    f3r_mass_times(m, ws->q, col, ws->MB + (size_t)j * (size_t)nq);
+    solve_dependent_at(k, V, col);
+    /* M B: B's column is nonzero only in rows 0..5 and 6 + j */
+    double* out = ws->MB + (size_t)j * (size_t)nq;
+    for (int n = 0; n < nq; ++n) {
+      double sum = F3R_AT(M, nq, n, 6 + j);
+      for (int d = 0; d < 6; ++d) sum += F3R_AT(M, nq, n, d) * col[d];
+      out[n] = sum;
+    }
   }
 }
 
-/* (B^T M B)(i, j) */
+/* (B^T M B)(i, j): column i of B is nonzero only in the dependent rows 0..5 and in row 6 + i. */
 static double reduced_mass(const f3r_model* m, const f3r_workspace* ws, int i, int j) {
   const int nq = m->nq;
-  double s = 0.0;
-  for (int n = 0; n < nq; ++n) s += ws->B[(size_t)i * nq + n] * ws->MB[(size_t)j * nq + n];
+  const double *b = ws->B + (size_t)i * nq, *mb = ws->MB + (size_t)j * nq;
+  double s = mb[6 + i];
+  for (int d = 0; d < 6; ++d) s += b[d] * mb[d];
   return s;
 }
 
@@ -125,13 +143,12 @@ f3r_status f3r_minimal_rhs(const f3r_model* m, double t, const double* y, const 
   if (st != F3R_OK) return st;
   assemble_velocity_map(m, ws);
   double* K = ws->solve_work; /* nz x nz fits in the (nq + 6)^2 of the acceleration solver */
-  int* piv = (int*)(K + (size_t)nz * nz);
   for (int j = 0; j < nz; ++j)
-    for (int i = 0; i < nz; ++i) F3R_AT(K, nz, i, j) = reduced_mass(m, ws, i, j);
+    for (int i = j; i < nz; ++i) F3R_AT(K, nz, i, j) = reduced_mass(m, ws, i, j);
   double* rate = ydot + nz;
   for (int i = 0; i < nz; ++i) rate[i] = -ws->res_base[nz + i];
-  if (f3r_lu_factor(K, nz, piv)) return F3R_ERR_SINGULAR;
-  f3r_lu_solve(K, nz, piv, rate);
+  if (f3r_cholesky_factor(K, nz)) return F3R_ERR_SINGULAR; /* B^T M B is positive definite */
+  f3r_cholesky_solve(K, nz, rate);
   for (int i = 0; i < nz; ++i) ydot[i] = y[nz + i];
   const int lag_at = 2 * nz;
   for (int i = 0; i < m->n_lag; ++i) ydot[lag_at + i] = -ws->res_base[lag_at + i] / m->lag_time_constant;

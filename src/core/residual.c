@@ -19,8 +19,10 @@ f3r_workspace* f3r_workspace_create(const f3r_model* m) {
   ws->B = calloc((size_t)m->nq * (size_t)ws->nz, sizeof(double));
   ws->MB = calloc((size_t)m->nq * (size_t)ws->nz, sizeof(double));
   ws->dQ = calloc(2 * (size_t)m->nq * (size_t)m->nq, sizeof(double));
+  ws->M = calloc((size_t)m->nq * (size_t)m->nq, sizeof(double));
+  ws->G = calloc((size_t)F3R_NCON * (size_t)m->nq, sizeof(double));
   if (!ws->solve_work || !ws->y_perturbed || !ws->res_base || !ws->res_perturbed || !ws->B ||
-      !ws->MB || !ws->dQ) {
+      !ws->MB || !ws->dQ || !ws->M || !ws->G) {
     f3r_workspace_destroy(ws);
     return NULL;
   }
@@ -36,6 +38,8 @@ void f3r_workspace_destroy(f3r_workspace* ws) {
   free(ws->B);
   free(ws->MB);
   free(ws->dQ);
+  free(ws->M);
+  free(ws->G);
   free(ws);
 }
 

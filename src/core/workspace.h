@@ -16,6 +16,8 @@ struct f3r_workspace {
   double* res_perturbed; /* ny */
   double* B;          /* nq x nz: dq/dz of the minimal formulation */
   double* MB;         /* nq x nz */
+  double* M;          /* nq x nq: mass matrix */
+  double* G;          /* 6 x nq: constraint Jacobian */
   double* dQ;         /* 2 nq x nq: dQ/dq and dQ/dv of the effects */
 };
 
