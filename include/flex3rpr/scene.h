@@ -25,7 +25,7 @@ typedef enum {
 
 typedef enum {
   F3R_INTEGRATOR_IDA = 0, /* SUNDIALS IDA: variable-order BDF, implicit (both formulations) */
-  F3R_INTEGRATOR_ERK = 1  /* SUNDIALS ARKODE ERKStep, Verner 8(7), explicit (minimal only) */
+  F3R_INTEGRATOR_ERK = 1  /* SUNDIALS ARKODE ERKStep, Fehlberg 7(8), explicit (minimal only) */
 } f3r_integrator;
 
 /* A scripted generalized force f(t). Breakpoints (step times, ramp and chirp ends, table

@@ -1,6 +1,6 @@
 /* The integrators behind f3r_sim: one interface, two SUNDIALS back ends. Private.
  *   IDA (variable-order BDF, implicit; both formulations)
- *   ARKODE ERKStep (explicit Verner 8(7); minimal formulation only) */
+ *   ARKODE ERKStep (explicit Fehlberg 7(8), eighth order; minimal formulation only) */
 #ifndef FLEX3RPR_STEPPER_H
 #define FLEX3RPR_STEPPER_H
 
