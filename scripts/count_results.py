@@ -1,12 +1,14 @@
-"""Counts test cases in the JUnit XML files under a folder; prints 'N passed, N failed' last.
-Exits non-zero when any case failed, no case ran, or ctest itself failed."""
+"""Counts test cases in the JUnit XML files under one or more folders, each given with the exit
+code of the ctest run that wrote it; prints 'N passed, N failed' last. Exits non-zero when any
+case failed, no case ran, or a ctest run failed.
+usage: count_results.py FOLDER CTEST_RC [FOLDER CTEST_RC ...]"""
 import pathlib
 import sys
 import xml.etree.ElementTree as ET
 
-folder, ctest_rc = pathlib.Path(sys.argv[1]), int(sys.argv[2])
+runs = [(pathlib.Path(f), int(rc)) for f, rc in zip(sys.argv[1::2], sys.argv[2::2])]
 passed = failed = 0
-for xml in sorted(folder.rglob("*.xml")):
+for xml in sorted(x for folder, _ in runs for x in folder.rglob("*.xml")):
     try:
         root = ET.parse(xml).getroot()
     except ET.ParseError:
@@ -16,11 +18,12 @@ for xml in sorted(folder.rglob("*.xml")):
     for case in root.iter("testcase"):
         if case.find("failure") is not None or case.find("error") is not None:
             failed += 1
-            print(f"FAILED {xml.name}: {case.get('classname')}.{case.get('name')}")
+            print(f"FAILED {xml.parent.name}/{xml.name}: {case.get('classname')}.{case.get('name')}")
         elif case.find("skipped") is None:
             passed += 1
-if ctest_rc != 0 and failed == 0:
-    failed = 1
-    print("ctest reported a failure that left no result file (a crash or a timeout)")
+for folder, ctest_rc in runs:
+    if ctest_rc != 0 and failed == 0:
+        failed = 1
+        print(f"ctest in {folder.parent} reported a failure that left no result file (a crash or a timeout)")
 print(f"{passed} passed, {failed} failed")
 sys.exit(1 if failed or passed == 0 else 0)

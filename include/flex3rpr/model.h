@@ -112,6 +112,10 @@ void f3r_model_close_loop_rates(const f3r_model* model, const double* q, double*
 void f3r_model_beam_point(const f3r_model* model, const double* q, int link, double xi,
                           double position[2], double* tangent_angle, double* deflection);
 
+/* Condition number (2-norm) of the actuation map of leg forces: column i is the unit vector
+ * u_i from A_i to C_i and its moment about P, (C_i - P) x u_i / r_PC. Capped at 1e16. */
+double f3r_model_actuation_condition(const f3r_model* model, const double* q);
+
 /* Tip deflection w_i(l) of link i (m), and its rate for given qdot. */
 double f3r_model_tip_deflection(const f3r_model* model, const double* q, int link);
 

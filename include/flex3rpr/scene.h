@@ -41,7 +41,7 @@ typedef enum {
   F3R_INPUT_TABLE = 6     /* piecewise linear through (time[k], value[k]); constant outside */
 } f3r_input_kind;
 
-#define F3R_MAX_TABLE 64
+#define F3R_MAX_TABLE 1024
 
 typedef struct {
   f3r_input_kind kind;
@@ -53,6 +53,8 @@ typedef struct {
   double before, after; /* step and ramp values before t0 and after (t1) */
   double f0, f1;    /* Hz: chirp start and end frequency */
   int table_size;   /* 2..F3R_MAX_TABLE */
+  int table_hold;   /* 1: piecewise constant, value[k] on (time[k], time[k+1]] (a controller's
+                     * held command); 0: piecewise linear */
   double table_time[F3R_MAX_TABLE], table_value[F3R_MAX_TABLE];
 } f3r_input;
 
@@ -116,6 +118,8 @@ typedef struct {
   double rtol;                 /* default 1e-8 */
   double atol;                 /* default 1e-10 (m, m/s) */
   double max_step;             /* s; 0 means no limit */
+  int max_order;               /* IDA's highest BDF order, 1..5 (2: A-stable, steps over undamped
+                                * modes that nothing excites) */
 
   /* run */
   double duration;    /* s, default 0.5 */

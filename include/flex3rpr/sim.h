@@ -18,6 +18,7 @@ typedef struct {
   f3r_integrator integrator;
   double rtol, atol;      /* atol applies to positions (m, rad) and rates; see sim.c for others */
   double max_step;        /* s; 0: no limit */
+  int max_order;          /* IDA: highest BDF order, 1..5 */
   int analytic_jacobian;  /* 1: f3r_residual_jacobian; 0: IDA's difference quotients */
   int stop_at_outputs;    /* 1: never step past the requested output time (for live input) */
 } f3r_solver_settings;
@@ -62,6 +63,9 @@ typedef struct {
   f3r_impact_record last_impact;
   double constraint_residual;    /* max |g_k(q)|, m */
   double velocity_residual;      /* max |(G v)_k|, m/s */
+  double actuation_condition;    /* condition number of the map from the three leg forces to the
+                                  * platform wrench (moment scaled by r_PC), capped at 1e16: it is
+                                  * infinite at a type-II singularity such as the home pose */
   f3r_sim_stats stats;
 } f3r_outputs;
 

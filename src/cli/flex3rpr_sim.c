@@ -29,7 +29,7 @@ typedef struct {
   int fd_jacobian;
   int exact_kinematics;
   const char* formulation;
-  double rtol, atol, output_step, duration;
+  double rtol, atol, max_order, output_step, duration;
   int stop_at_outputs;
   int integrator_erk;
   int n_holds;
@@ -39,7 +39,7 @@ typedef struct {
 static void usage(FILE* to) {
   fprintf(to,
           "usage: flex3rpr_sim SCENE.yaml [--out FILE.csv] [--formulation dae|minimal]\n"
-          "                    [--rtol R] [--atol A] [--output-step DT] [--duration T]\n"
+          "                    [--rtol R] [--atol A] [--max-order K] [--output-step DT] [--duration T]\n"
           "                    [--fd-jacobian] [--exact-kinematics] [--erk]\n"
           "                    [--stop-at-outputs] [--hold T:INDEX:VALUE ...]\n"
           "       flex3rpr_sim --modal SCENE.yaml\n");
@@ -81,6 +81,7 @@ static int parse_args(int argc, char** argv, cli_options* o) {
     else if (!strcmp(a, "--formulation") && next) { o->formulation = next; ++k; }
     else if (!strcmp(a, "--rtol")) { if (!parse_number(a, next, &o->rtol)) return 0; ++k; }
     else if (!strcmp(a, "--atol")) { if (!parse_number(a, next, &o->atol)) return 0; ++k; }
+    else if (!strcmp(a, "--max-order")) { if (!parse_number(a, next, &o->max_order)) return 0; ++k; }
     else if (!strcmp(a, "--output-step")) { if (!parse_number(a, next, &o->output_step)) return 0; ++k; }
     else if (!strcmp(a, "--duration")) { if (!parse_number(a, next, &o->duration)) return 0; ++k; }
     else if (!strcmp(a, "--help") || !strcmp(a, "-h")) { usage(stdout); exit(0); }
@@ -165,6 +166,7 @@ int main(int argc, char** argv) {
   if (o.formulation)
     scene.formulation = strcmp(o.formulation, "dae") ? F3R_FORMULATION_MINIMAL : F3R_FORMULATION_DAE;
   if (o.rtol > 0) scene.rtol = o.rtol;
+  if (o.max_order > 0) scene.max_order = (int)o.max_order;
   if (o.atol > 0) scene.atol = o.atol;
   if (o.output_step > 0) scene.output_step = o.output_step;
   if (o.duration > 0) scene.duration = o.duration;
@@ -252,9 +254,12 @@ int main(int argc, char** argv) {
   const f3r_outputs* out = f3r_sim_outputs(sim);
   if (csv) fclose(csv);
   printf("scene               %s\n", o.scene_path);
-  printf("formulation         %s, rtol %g, atol %g, %s Jacobian\n",
+  printf("formulation         %s, rtol %g, atol %g, %s\n",
          scene.formulation == F3R_FORMULATION_DAE ? "dae" : "minimal", scene.rtol, scene.atol,
-         o.fd_jacobian ? "difference-quotient" : "analytic");
+         scene.integrator == F3R_INTEGRATOR_ERK ? "explicit Fehlberg 7(8)"
+         : o.fd_jacobian                        ? "IDA, difference-quotient Jacobian"
+                                                : "IDA, analytic Jacobian");
+  if (scene.integrator == F3R_INTEGRATOR_IDA) printf("max BDF order       %d\n", scene.max_order);
   printf("sundials            %s, %s\n", SUNDIALS_VERSION, F3R_SUNDIALS_BUILD);
   printf("state dimension     %d (nq %d)\n", f3r_state_size(model, scene.formulation), model->nq);
   printf("simulated time      %.6g s\n", out->t);

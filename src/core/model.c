@@ -252,3 +252,55 @@ f3r_status f3r_model_initial_state(const f3r_model* m, double* q, double* v) {
   f3r_model_close_loop_rates(m, q, v);
   return F3R_OK;
 }
+
+/* Eigenvalues of a symmetric 3 x 3 matrix, by the trigonometric solution of its characteristic
+ * cubic (Smith 1961); ascending in ev. */
+static void symmetric_eigenvalues3(const double a[3][3], double ev[3]) {
+  const double p1 = a[0][1] * a[0][1] + a[0][2] * a[0][2] + a[1][2] * a[1][2];
+  const double tr = (a[0][0] + a[1][1] + a[2][2]) / 3.0;
+  const double p2 = (a[0][0] - tr) * (a[0][0] - tr) + (a[1][1] - tr) * (a[1][1] - tr) +
+                    (a[2][2] - tr) * (a[2][2] - tr) + 2.0 * p1;
+  const double p = sqrt(p2 / 6.0);
+  if (p == 0.0) {
+    ev[0] = ev[1] = ev[2] = tr;
+    return;
+  }
+  double b[3][3];
+  for (int i = 0; i < 3; ++i)
+    for (int j = 0; j < 3; ++j) b[i][j] = (a[i][j] - (i == j ? tr : 0.0)) / p;
+  const double det = b[0][0] * (b[1][1] * b[2][2] - b[1][2] * b[2][1]) -
+                     b[0][1] * (b[1][0] * b[2][2] - b[1][2] * b[2][0]) +
+                     b[0][2] * (b[1][0] * b[2][1] - b[1][1] * b[2][0]);
+  const double r = fmax(-1.0, fmin(1.0, det / 2.0));
+  const double phi = acos(r) / 3.0;
+  ev[2] = tr + 2.0 * p * cos(phi);
+  ev[0] = tr + 2.0 * p * cos(phi + 2.0 * M_PI / 3.0);
+  ev[1] = 3.0 * tr - ev[0] - ev[2];
+}
+
+double f3r_model_actuation_condition(const f3r_model* m, const double* q) {
+  double J[3][3]; /* rows: force x, force y, moment / r_PC; column i: leg i */
+  for (int i = 0; i < 3; ++i) {
+    const double angle = m->platform_angle[i] + q[8];
+    const double cx = m->platform_radius * cos(angle), cy = m->platform_radius * sin(angle);
+    double ux = q[6] + cx - m->base_joint[i][0], uy = q[7] + cy - m->base_joint[i][1];
+    const double len = hypot(ux, uy);
+    ux /= len;
+    uy /= len;
+    J[0][i] = ux;
+    J[1][i] = uy;
+    J[2][i] = (cx * uy - cy * ux) / m->platform_radius;
+  }
+  double JtJ[3][3], ev[3];
+  for (int i = 0; i < 3; ++i)
+    for (int j = 0; j < 3; ++j) JtJ[i][j] = J[0][i] * J[0][j] + J[1][i] * J[1][j] + J[2][i] * J[2][j];
+  symmetric_eigenvalues3(JtJ, ev);
+  /* sigma_min from the determinant, which stays accurate where the smallest eigenvalue of J^T J
+   * drowns in rounding: sigma_1 sigma_2 sigma_3 = |det J|. */
+  const double det = J[0][0] * (J[1][1] * J[2][2] - J[1][2] * J[2][1]) -
+                     J[0][1] * (J[1][0] * J[2][2] - J[1][2] * J[2][0]) +
+                     J[0][2] * (J[1][0] * J[2][1] - J[1][1] * J[2][0]);
+  const double sigma_max = sqrt(fmax(ev[2], 0.0)), sigma_mid = sqrt(fmax(ev[1], 0.0));
+  const double cond = sigma_max * sigma_max * sigma_mid / fabs(det);
+  return isfinite(cond) ? fmin(1e16, cond) : 1e16;
+}

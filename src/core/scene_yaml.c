@@ -213,8 +213,15 @@ static f3r_status read_table(loader* L, const yaml_node_t* map, const char* name
   FOR_EACH_PAIR(L, map, key, value) {
     char field[128];
     snprintf(field, sizeof field, "%s.%s", name, key);
+    if (!strcmp(key, "interpolation")) {
+      const char* v = scalar(value);
+      if (v && !strcmp(v, "linear")) in->table_hold = 0;
+      else if (v && !strcmp(v, "hold")) in->table_hold = 1;
+      else return fail(L, value, field, "'%s' is not allowed (linear or hold)", v ? v : "?");
+      continue;
+    }
     double* target = !strcmp(key, "time") ? in->table_time : !strcmp(key, "value") ? in->table_value : NULL;
-    if (!target) return fail(L, value, field, "unknown key (allowed: time, value)");
+    if (!target) return fail(L, value, field, "unknown key (allowed: time, value, interpolation)");
     if (value->type != YAML_SEQUENCE_NODE) return fail(L, value, field, "expected a list of numbers");
     const int len = (int)(value->data.sequence.items.top - value->data.sequence.items.start);
     if (len < 2 || len > F3R_MAX_TABLE)
@@ -329,8 +336,14 @@ static f3r_status read_solver(loader* L, const yaml_node_t* map) {
     } else if (!strcmp(key, "rtol")) { st = read_number(L, value, name, &s->rtol);
     } else if (!strcmp(key, "atol")) { st = read_number(L, value, name, &s->atol);
     } else if (!strcmp(key, "max_step")) { st = read_number(L, value, name, &s->max_step);
+    } else if (!strcmp(key, "max_order")) {
+      double order = 0.0;
+      st = read_number(L, value, name, &order);
+      if (st == F3R_OK && (order != floor(order) || order < 1 || order > 5))
+        return fail(L, value, name, "%g is out of range 1..5 (an integer)", order);
+      s->max_order = (int)order;
     } else {
-      return fail(L, value, name, "unknown key (allowed: formulation, integrator, rtol, atol, max_step)");
+      return fail(L, value, name, "unknown key (allowed: formulation, integrator, rtol, atol, max_step, max_order)");
     }
     if (st != F3R_OK) return st;
   }

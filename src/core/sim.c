@@ -36,6 +36,7 @@ f3r_solver_settings f3r_solver_settings_from_scene(const f3r_scene* scene) {
   st.rtol = scene->rtol;
   st.atol = scene->atol;
   st.max_step = scene->max_step;
+  st.max_order = scene->max_order;
   st.analytic_jacobian = 1;
   st.stop_at_outputs = 0;
   return st;
@@ -164,6 +165,10 @@ f3r_status f3r_sim_set_forces(f3r_sim* s, const double* held, f3r_error* err) {
 /* Impacts would repeat without end when a force holds a piston against its stop: resting contact
  * is not modelled, so a run stops with an error past this many impacts within 1 ms. */
 #define F3R_MAX_IMPACTS_PER_MS 200
+/* Below this rebound speed (m/s) a leg is taken to come to rest on its stop: the rebounds that
+ * follow shrink geometrically (a Zeno sequence) and grow shorter than one integrator step, so
+ * root finding would miss one and let the piston pass the stop. */
+#define F3R_RESTING_SPEED 0.01
 
 /* At an end-stop event: the impact law on the legs in contact, then a restart. */
 static f3r_status handle_impact(f3r_sim* s, f3r_error* err) {
@@ -190,6 +195,12 @@ static f3r_status handle_impact(f3r_sim* s, f3r_error* err) {
                          legs[0] + 1, s->t, F3R_MAX_IMPACTS_PER_MS);
   st = f3r_impact(m, q, v, legs, count, m->scene.restitution, v_after, impulse, s->impact_work);
   if (st != F3R_OK) return f3r_error_set(err, st, "end stop at t = %.9g: singular impact", s->t);
+  for (int c = 0; c < count; ++c)
+    if (fabs(v_after[legs[c]]) < F3R_RESTING_SPEED)
+      return f3r_error_set(err, F3R_ERR_SOLVER,
+                           "leg %d rests against its end stop at t = %.9g (rebound %.3g m/s, below "
+                           "%g m/s): resting contact is not modelled; reduce the force into the stop",
+                           legs[c] + 1, s->t, fabs(v_after[legs[c]]), F3R_RESTING_SPEED);
   const double before = f3r_kinetic_energy(m, q, v), after = f3r_kinetic_energy(m, q, v_after);
   f3r_impact_record* r = &s->last_impact;
   r->t = s->t;
@@ -238,6 +249,16 @@ f3r_status f3r_sim_advance(f3r_sim* s, double t_out, f3r_error* err) {
     }
     if (event) {
       s->t = t_reached;
+      for (int i = 0; i < 3; ++i)
+        if (s->stepper.root_info[F3R_COLLAPSE_ROOT + i]) {
+          double q[F3R_MAX_Q], v[F3R_MAX_Q];
+          f3r_state_to_full(m, s->settings.formulation, N_VGetArrayPointer(s->y), q, v);
+          return f3r_error_set(err, F3R_ERR_SINGULAR,
+                               "leg %d collapsed at t = %.9g: rho_%d + l = %.4g m reached the guard "
+                               "%.2g l, where the beam's root nears A_%d and the loop closure "
+                               "degenerates; the last good state is kept",
+                               i + 1, s->t, i + 1, q[i] + m->link_length, F3R_MIN_LEG_FRACTION, i + 1);
+        }
       if ((st = handle_impact(s, err)) != F3R_OK) return st;
       continue;
     }
@@ -294,6 +315,7 @@ const f3r_outputs* f3r_sim_outputs(f3r_sim* s) {
   double g[F3R_NCON], gv[F3R_NCON];
   f3r_constraints(m, o->q, g);
   f3r_constraint_times(m, o->q, o->v, gv);
+  o->actuation_condition = f3r_model_actuation_condition(m, o->q);
   o->constraint_residual = o->velocity_residual = 0.0;
   for (int c = 0; c < F3R_NCON; ++c) {
     o->constraint_residual = fmax(o->constraint_residual, fabs(g[c]));

@@ -11,6 +11,13 @@
 
 #include "flex3rpr/sim.h"
 
+/* Root functions of state y, all crossing downwards: the end stops rho_i - min and max - rho_i
+ * (rows 2i, 2i + 1; constant 1 without end stops) and the collapse guard
+ * rho_i + l - F3R_MIN_LEG_FRACTION l (row F3R_COLLAPSE_ROOT + i), which stops a run before the
+ * beam's root reaches A_i, where the loop closure and the constraint Jacobian degenerate. */
+#define F3R_COLLAPSE_ROOT 6
+#define F3R_NROOTS 9
+#define F3R_MIN_LEG_FRACTION 0.1
 typedef struct {
   const f3r_model* model;
   f3r_solver_settings settings;
@@ -22,7 +29,8 @@ typedef struct {
   SUNMatrix J;            /* IDA only */
   SUNLinearSolver ls;     /* IDA only */
   f3r_sim_stats base;     /* statistics accumulated before the last restart */
-  int root_info[F3R_NCON];/* with end stops: -1 where rho_i reached stop k (rows 2i min, 2i+1 max) */
+  int root_info[F3R_NROOTS];/* -1 where a root was found: 2i, 2i+1 end stops of leg i (min, max);
+                            * F3R_COLLAPSE_ROOT + i: leg i reached the collapse guard */
   long recoverable;       /* right-hand side calls that asked for a smaller step */
   char message[256];      /* the solver's last error message: the core never prints */
 } f3r_stepper;
@@ -45,9 +53,9 @@ typedef struct {
 extern const f3r_stepper_ops f3r_ida_stepper;
 extern const f3r_stepper_ops f3r_erk_stepper;
 
+int f3r_root_functions(const f3r_stepper* st, const double* y, double* g);
+
 /* Stores a SUNDIALS error message in the stepper (user data of the error handler). */
-/* The end-stop functions rho_i - min and max - rho_i (6) of state y, for root finding. */
-int f3r_end_stop_functions(const f3r_stepper* st, const double* y, double* g);
 
 void f3r_stepper_error_handler(int code, const char* module, const char* function, char* msg,
                                void* user);

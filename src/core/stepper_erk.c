@@ -18,7 +18,7 @@ static int rhs_fn(realtype t, N_Vector y, N_Vector ydot, void* user) {
 
 static int root_fn(realtype t, N_Vector y, realtype* g, void* user) {
   (void)t;
-  return f3r_end_stop_functions(user, N_VGetArrayPointer(y), g);
+  return f3r_root_functions(user, N_VGetArrayPointer(y), g);
 }
 
 static f3r_status failed(f3r_stepper* st, f3r_error* err, const char* call, int flag) {
@@ -45,12 +45,10 @@ static f3r_status erk_setup(f3r_stepper* st, N_Vector y, N_Vector yp, double t0,
   CHECK(ERKStepSetUserData(st->mem, st));
   CHECK(ERKStepSetMaxNumSteps(st->mem, 100000000L));
   if (st->settings.max_step > 0.0) CHECK(ERKStepSetMaxStep(st->mem, st->settings.max_step));
-  if (st->model->scene.end_stops) {
-    int directions[F3R_NCON];
-    for (int k = 0; k < F3R_NCON; ++k) directions[k] = -1;
-    CHECK(ERKStepRootInit(st->mem, F3R_NCON, root_fn));
-    CHECK(ERKStepSetRootDirection(st->mem, directions));
-  }
+  int directions[F3R_NROOTS];
+  for (int k = 0; k < F3R_NROOTS; ++k) directions[k] = -1;
+  CHECK(ERKStepRootInit(st->mem, F3R_NROOTS, root_fn));
+  CHECK(ERKStepSetRootDirection(st->mem, directions));
   return F3R_OK;
 }
 

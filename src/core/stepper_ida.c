@@ -41,7 +41,7 @@ static int jacobian_fn(realtype t, realtype cj, N_Vector y, N_Vector yp, N_Vecto
 
 static int root_fn(realtype t, N_Vector y, N_Vector yp, realtype* g, void* user) {
   (void)t, (void)yp;
-  return f3r_end_stop_functions(user, N_VGetArrayPointer(y), g);
+  return f3r_root_functions(user, N_VGetArrayPointer(y), g);
 }
 
 static f3r_status failed(f3r_stepper* st, f3r_error* err, const char* call, int flag) {
@@ -76,6 +76,8 @@ static f3r_status ida_setup(f3r_stepper* st, N_Vector y, N_Vector yp, double t0,
   CHECK(IDASetId(st->mem, st->id));
   if (st->settings.formulation == F3R_FORMULATION_DAE) CHECK(IDASetSuppressAlg(st->mem, SUNTRUE));
   CHECK(IDASetMaxNumSteps(st->mem, 100000000L));
+  if (st->settings.max_order >= 1 && st->settings.max_order < 5)
+    CHECK(IDASetMaxOrd(st->mem, st->settings.max_order));
   if (st->settings.max_step > 0.0) CHECK(IDASetMaxStep(st->mem, st->settings.max_step));
   CHECK(IDASetInitStep(st->mem, F3R_INITIAL_STEP));
   st->J = SUNDenseMatrix(ny, ny, st->ctx);
@@ -84,12 +86,10 @@ static f3r_status ida_setup(f3r_stepper* st, N_Vector y, N_Vector yp, double t0,
   if (!st->ls) return f3r_error_set(err, F3R_ERR_MEMORY, "SUNLinSol_Dense failed");
   CHECK(IDASetLinearSolver(st->mem, st->ls, st->J));
   if (st->settings.analytic_jacobian) CHECK(IDASetJacFn(st->mem, jacobian_fn));
-  if (m->scene.end_stops) {
-    int directions[F3R_NCON];
-    for (int k = 0; k < F3R_NCON; ++k) directions[k] = -1; /* only moving into a stop */
-    CHECK(IDARootInit(st->mem, F3R_NCON, root_fn));
-    CHECK(IDASetRootDirection(st->mem, directions));
-  }
+  int directions[F3R_NROOTS];
+  for (int k = 0; k < F3R_NROOTS; ++k) directions[k] = -1; /* only moving into a stop or guard */
+  CHECK(IDARootInit(st->mem, F3R_NROOTS, root_fn));
+  CHECK(IDASetRootDirection(st->mem, directions));
   return F3R_OK;
 }
 
@@ -161,12 +161,14 @@ static void ida_release(f3r_stepper* st) {
 const f3r_stepper_ops f3r_ida_stepper = {ida_setup, ida_restart, ida_advance, ida_stats,
                                          ida_release};
 
-int f3r_end_stop_functions(const f3r_stepper* st, const double* y, double* g) {
+int f3r_root_functions(const f3r_stepper* st, const double* y, double* g) {
+  const f3r_model* m = st->model;
   double q[F3R_MAX_Q], v[F3R_MAX_Q];
-  if (f3r_state_to_full(st->model, st->settings.formulation, y, q, v) != F3R_OK) return 1;
+  if (f3r_state_to_full(m, st->settings.formulation, y, q, v) != F3R_OK) return 1;
   for (int i = 0; i < 3; ++i) {
-    g[2 * i] = q[i] - st->model->scene.stroke_min;
-    g[2 * i + 1] = st->model->scene.stroke_max - q[i];
+    g[2 * i] = m->scene.end_stops ? q[i] - m->scene.stroke_min : 1.0;
+    g[2 * i + 1] = m->scene.end_stops ? m->scene.stroke_max - q[i] : 1.0;
+    g[F3R_COLLAPSE_ROOT + i] = q[i] + (1.0 - F3R_MIN_LEG_FRACTION) * m->link_length;
   }
   return 0;
 }

@@ -181,6 +181,8 @@ void StateOutputs::PublishStatus(const f3r_outputs& out, const RunInfo& info) {
   status_.last_step = out.stats.last_step;
   status_.last_order = out.stats.last_order;
   status_.constraint_residual = out.constraint_residual;
+  status_.actuation_condition = out.actuation_condition;
+  status_.recoverable_errors = static_cast<uint64_t>(out.stats.recoverable_errors);
   status_.kinetic_energy = out.kinetic_energy;
   status_.potential_energy = out.potential_energy;
   status_.external_work = out.external_work;

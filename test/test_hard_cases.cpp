@@ -1,0 +1,511 @@
+// The hard-case suite: where a plant model hurts. Each case asserts numbers; the README's
+// hard-case table lists them with the measured values (printed here as "measured: ...").
+#include <gtest/gtest.h>
+
+#include <complex>
+#include <cstdio>
+#include <fstream>
+#include <random>
+
+#include "flex3rpr/beam_modes.h"
+#include "flex3rpr/modal.h"
+#include "flex3rpr/stages.h"
+#include "test_support.h"
+
+namespace {
+
+f3r_scene LoadScene(const std::string& path) {
+  f3r_scene s;
+  f3r_error err{};
+  if (f3r_scene_load(path.c_str(), &s, &err) != F3R_OK) throw std::runtime_error(err.message);
+  return s;
+}
+
+f3r_scene SceneFromText(const std::string& text) {
+  const std::string path = ::testing::TempDir() + "/hard_case_scene.yaml";
+  std::ofstream(path) << text;
+  return LoadScene(path);
+}
+
+struct Outcome {
+  SimPtr sim;
+  ModelPtr model;
+  f3r_status status = F3R_OK;
+  std::string error;
+  std::vector<f3r_outputs> samples;
+};
+
+// Runs a scene with its own solver settings (or the given ones) to its end, sampling every dt.
+Outcome Simulate(const f3r_scene& scene, double dt, const f3r_solver_settings* settings = nullptr) {
+  Outcome r;
+  r.model = MakeModel(scene);
+  f3r_solver_settings set = settings ? *settings : f3r_solver_settings_from_scene(&scene);
+  f3r_sim* raw = nullptr;
+  f3r_error err{};
+  if (f3r_sim_create(r.model.get(), &set, &raw, &err) != F3R_OK) throw std::runtime_error(err.message);
+  r.sim.reset(raw);
+  r.samples.push_back(*f3r_sim_outputs(raw));
+  const long n = std::lround(scene.duration / dt);
+  for (long k = 1; k <= n; ++k) {
+    r.status = f3r_sim_advance(raw, k == n ? scene.duration : k * dt, &err);
+    r.samples.push_back(*f3r_sim_outputs(raw));
+    if (r.status != F3R_OK) {
+      r.error = err.message;
+      break;
+    }
+  }
+  return r;
+}
+
+double RelativeEnergyError(const Outcome& r) {
+  double worst = 0.0, scale = 0.0;
+  for (const auto& o : r.samples) {
+    worst = std::max(worst, o.energy_balance_error);
+    scale = std::max(scale, o.kinetic_energy + o.potential_energy);
+  }
+  return worst / scale;
+}
+
+bool AllFinite(const f3r_outputs& o, int nq) {
+  for (int n = 0; n < nq; ++n)
+    if (!std::isfinite(o.q[n]) || !std::isfinite(o.v[n]) || !std::isfinite(o.forces[n])) return false;
+  return std::isfinite(o.kinetic_energy) && std::isfinite(o.potential_energy) &&
+         std::isfinite(o.external_work) && std::isfinite(o.actuation_condition);
+}
+
+// A force that starts with zero value and zero slope: 20 (1 - cos 2 pi 10 t) N on leg 1, and a
+// torque on cylinder 2, so the high modes carry almost no energy.
+const char* kSmoothInputs =
+    "inputs:\n"
+    "  rho_1: {offset: 20.0, amplitude: -20.0, frequency: 10.0}\n"
+    "  theta_2: {offset: 0.5, amplitude: -0.5, frequency: 10.0}\n";
+
+// --- 1. many modes ------------------------------------------------------------------------------
+class ManyModes : public ::testing::TestWithParam<const char*> {};
+
+TEST_P(ManyModes, TwentyModesRunWithEnergyBalance) {
+  const std::string model = GetParam();
+  // Mode shapes: orthonormal to 1e-12 (test_beam_modes checks the evaluation itself against an
+  // independent MPFR evaluation of the printed formulas, free of cosh/sinh cancellation).
+  const f3r_beam_end end = model == "fixed_free" ? F3R_BEAM_FIXED_FREE : F3R_BEAM_FIXED_PINNED;
+  std::vector<double> gram(400);
+  ASSERT_EQ(f3r_beam_modal_integrals(end, 20, nullptr, nullptr, gram.data(), nullptr, nullptr), 0);
+  double gram_error = 0.0;
+  for (int i = 0; i < 20; ++i)
+    for (int j = 0; j < 20; ++j) gram_error = std::max(gram_error, std::fabs(gram[i * 20 + j] - (i == j)));
+  EXPECT_LT(gram_error, 1e-12);
+
+  f3r_scene scene = SceneFromText("links: {model: " + model + ", modes: 20}\n" + kSmoothInputs +
+                                  "solver: {rtol: 1.0e-10, atol: 1.0e-12}\nrun: {duration: 0.1}\n");
+  Outcome r = Simulate(scene, 1e-3);
+  ASSERT_EQ(r.status, F3R_OK) << r.error;
+  const double energy = RelativeEnergyError(r);
+  std::printf("measured: %s r = 20: Gram error %.1e, energy balance %.1e, %ld steps\n", model.c_str(),
+              gram_error, energy, r.samples.back().stats.steps);
+  EXPECT_LT(energy, 1e-8);
+}
+
+INSTANTIATE_TEST_SUITE_P(BothEnds, ManyModes, ::testing::Values("fixed_pinned", "fixed_free"));
+
+// --- 2. stiff -----------------------------------------------------------------------------------
+long StepsWithStiffness(double youngs_modulus, const char* inputs, int max_order, double* energy) {
+  char text[1024];
+  std::snprintf(text, sizeof text,
+                "links: {model: fixed_free, modes: 10}\nlink: {youngs_modulus: %.6g}\n%s"
+                "solver: {rtol: 1.0e-6, atol: 1.0e-8, max_order: %d}\nrun: {duration: 0.1}\n",
+                youngs_modulus, inputs, max_order);
+  Outcome r = Simulate(SceneFromText(text), 1e-3);
+  if (r.status != F3R_OK) throw std::runtime_error(r.error);
+  if (energy) *energy = RelativeEnergyError(r);
+  return r.samples.back().stats.steps;
+}
+
+// BDF of order 3 to 5 is not A-stable: an undamped mode whose h omega falls where those orders are
+// unstable makes IDA cut the step until the mode is resolved, excited or not. BDF2 is A-stable.
+TEST(Stiff, UnexcitedHighModesDoNotLimitTheStep) {
+  double energy_stiff = 0.0;
+  const long nominal = StepsWithStiffness(73e9, kSmoothInputs, 2, nullptr);
+  const long stiff = StepsWithStiffness(73e11, kSmoothInputs, 2, &energy_stiff);
+  const long nominal5 = StepsWithStiffness(73e9, kSmoothInputs, 5, nullptr);
+  const long stiff5 = StepsWithStiffness(73e11, kSmoothInputs, 5, nullptr);
+  std::printf("measured: r = 10, smooth forcing, max_order 2: %ld steps at E, %ld at 100 E (ratio "
+              "%.2f); max_order 5: %ld and %ld (ratio %.2f)\n",
+              nominal, stiff, double(stiff) / nominal, nominal5, stiff5, double(stiff5) / nominal5);
+  // Modes 10x higher in frequency that carry no energy must not cost more steps.
+  EXPECT_LT(double(stiff) / nominal, 1.5);
+  EXPECT_LT(energy_stiff, 1e-4);
+}
+
+TEST(Stiff, AStepAtTimeZeroExcitesHighModesThatMustBeResolved) {
+  const char* step = "inputs:\n  rho_1: {offset: 20.0}\n";
+  double energy = 0.0;
+  const long smooth = StepsWithStiffness(73e11, kSmoothInputs, 2, nullptr);
+  const long stepped = StepsWithStiffness(73e11, step, 5, &energy);
+  std::printf("measured: r = 10, 100 E, step force at t = 0: %ld steps (max_order 5) against %ld "
+              "smooth (max_order 2): %.0fx\n", stepped, smooth, double(stepped) / smooth);
+  EXPECT_GT(stepped, 20 * smooth);  // the excited modes are resolved, not stepped over
+  EXPECT_LT(energy, 1e-6);
+}
+
+// --- 3. resonance -------------------------------------------------------------------------------
+// Amplitude of link 1's tip deflection over each forcing period.
+std::vector<double> PeriodAmplitudes(const Outcome& r, double period, double dt) {
+  std::vector<double> amp;
+  const int per = int(std::lround(period / dt));
+  for (size_t start = 0; start + per <= r.samples.size(); start += per) {
+    double lo = 1e300, hi = -1e300;
+    for (int k = 0; k < per; ++k) {
+      const double w = r.samples[start + k].tip_deflection[0];
+      lo = std::min(lo, w);
+      hi = std::max(hi, w);
+    }
+    amp.push_back(0.5 * (hi - lo));
+  }
+  return amp;
+}
+
+TEST(Resonance, UndampedAmplitudeGrowsLinearly) {
+  f3r_scene scene = LoadScene(ScenePath("resonance.yaml"));
+  scene.rtol = 1e-9;
+  scene.atol = 1e-11;
+  const double f = 227.160707, period = 1.0 / f, dt = period / 64.0;
+  scene.duration = 50.0 * period;
+  Outcome r = Simulate(scene, dt);
+  ASSERT_EQ(r.status, F3R_OK) << r.error;
+  const auto amp = PeriodAmplitudes(r, period, dt);
+  ASSERT_GE(amp.size(), 50u);
+  // Secular growth A_k ~ c k: the amplitude per period over the period number is constant.
+  const double c = amp[49] / 50.0;
+  double worst = 0.0;
+  for (int k = 10; k < 50; ++k) worst = std::max(worst, std::fabs(amp[k] / (k + 1) / c - 1.0));
+  std::printf("measured: undamped resonance: A_50 / A_25 = %.3f, max deviation from linear growth "
+              "%.1f %% (periods 10..50)\n", amp[49] / amp[24], 100 * worst);
+  EXPECT_NEAR(amp[49] / amp[24], 2.0, 0.1);
+  EXPECT_LT(worst, 0.1);
+}
+
+// Steady-state amplitude of link 1's tip deflection from the model linearised about the initial
+// state: M z'' + C z' + K z = b cos(w t), with M, C, K, b from differences of the public residual.
+double LinearisedTipAmplitude(const f3r_scene& scene, double hz, double torque) {
+  auto m = MakeModel(scene);
+  WorkspacePtr ws(f3r_workspace_create(m.get()));
+  const int nz = m->n_independent, ny = f3r_state_size(m.get(), F3R_FORMULATION_MINIMAL);
+  std::vector<double> q(F3R_MAX_Q), v(F3R_MAX_Q), y(ny), yp(ny), held(m->nq, 0.0);
+  EXPECT_EQ(f3r_model_initial_state(m.get(), q.data(), v.data()), F3R_OK);
+  EXPECT_EQ(f3r_consistent_state(m.get(), F3R_FORMULATION_MINIMAL, 0.0, q.data(), v.data(), nullptr,
+                                 nullptr, 0.0, y.data(), yp.data(), nullptr, ws.get()), F3R_OK);
+  // At rest with no forces the equilibrium has y' = 0 apart from z' = u = 0.
+  std::fill(yp.begin(), yp.end(), 0.0);
+  std::vector<double> r0(ny), r1(ny);
+  auto rows = [&](std::vector<double>& yy, std::vector<double>& yyp, std::vector<double>& hh,
+                  std::vector<double>& out) {
+    f3r_residual(m.get(), F3R_FORMULATION_MINIMAL, 0.0, yy.data(), yyp.data(), hh.data(), out.data(), ws.get());
+  };
+  rows(y, yp, held, r0);
+  using cd = std::complex<double>;
+  std::vector<cd> A(nz * nz), b(nz);
+  const double w = 2 * M_PI * hz, h = 1e-7;
+  for (int j = 0; j < nz; ++j) {
+    // K column: d F_u / d z_j; C column: d F_u / d u_j; M column: d F_u / d u'_j.
+    std::vector<double> yy = y, yyp = yp;
+    yy[j] += h;
+    rows(yy, yp, held, r1);
+    for (int i = 0; i < nz; ++i) A[i * nz + j] += (r1[nz + i] - r0[nz + i]) / h;
+    yy = y;
+    yy[nz + j] += h;
+    rows(yy, yp, held, r1);
+    for (int i = 0; i < nz; ++i) A[i * nz + j] += cd(0, w) * (r1[nz + i] - r0[nz + i]) / h;
+    yyp[nz + j] += h;
+    rows(y, yyp, held, r1);
+    for (int i = 0; i < nz; ++i) A[i * nz + j] += -w * w * (r1[nz + i] - r0[nz + i]) / h;
+  }
+  std::vector<double> hh = held;
+  hh[3] = 1.0;  // unit cylinder torque on theta_1
+  rows(y, yp, hh, r1);
+  for (int i = 0; i < nz; ++i) b[i] = -torque * (r1[nz + i] - r0[nz + i]);
+  // Gaussian elimination with partial pivoting on the complex system.
+  for (int k = 0; k < nz; ++k) {
+    int p = k;
+    for (int i = k + 1; i < nz; ++i)
+      if (std::abs(A[i * nz + k]) > std::abs(A[p * nz + k])) p = i;
+    for (int j = 0; j < nz; ++j) std::swap(A[k * nz + j], A[p * nz + j]);
+    std::swap(b[k], b[p]);
+    for (int i = k + 1; i < nz; ++i) {
+      const cd f = A[i * nz + k] / A[k * nz + k];
+      for (int j = k; j < nz; ++j) A[i * nz + j] -= f * A[k * nz + j];
+      b[i] -= f * b[k];
+    }
+  }
+  std::vector<cd> z(nz);
+  for (int k = nz - 1; k >= 0; --k) {
+    cd s = b[k];
+    for (int j = k + 1; j < nz; ++j) s -= A[k * nz + j] * z[j];
+    z[k] = s / A[k * nz + k];
+  }
+  cd tip = 0.0;
+  for (int j = 0; j < m->link[0].modes; ++j) tip += m->link[0].tip[j] * z[m->link[0].eta_index - 6 + j];
+  return std::abs(tip);
+}
+
+TEST(Resonance, DampedAmplitudeSettlesAtTheLinearisedSteadyState) {
+  f3r_scene scene = LoadScene(ScenePath("resonance_damped.yaml"));
+  scene.rtol = 1e-9;
+  scene.atol = 1e-11;
+  const double f = 227.160707, period = 1.0 / f, dt = period / 64.0;
+  scene.duration = 60.0 * period;
+  Outcome r = Simulate(scene, dt);
+  ASSERT_EQ(r.status, F3R_OK) << r.error;
+  const auto amp = PeriodAmplitudes(r, period, dt);
+  const double settled = amp[amp.size() - 1];
+  const double predicted = LinearisedTipAmplitude(scene, f, 0.2);
+  std::printf("measured: damped resonance (zeta 0.02): tip amplitude %.4e m, linearised %.4e m (%.2f %%)\n",
+              settled, predicted, 100 * (settled / predicted - 1));
+  EXPECT_NEAR(amp[amp.size() - 1] / amp[amp.size() - 6], 1.0, 0.01);  // settled
+  EXPECT_NEAR(settled / predicted, 1.0, 0.02);
+}
+
+// --- 4. long run --------------------------------------------------------------------------------
+TEST(LongRun, SixtySecondsOfFreeVibration) {
+  f3r_scene scene = LoadScene(ScenePath("free_vibration_long.yaml"));
+  f3r_solver_settings erk = f3r_solver_settings_from_scene(&scene);
+  erk.integrator = F3R_INTEGRATOR_ERK;
+  erk.rtol = 1e-9;
+  erk.atol = 1e-11;
+  Outcome e = Simulate(scene, 0.5, &erk);
+  ASSERT_EQ(e.status, F3R_OK) << e.error;
+  f3r_solver_settings dae = f3r_solver_settings_from_scene(&scene);
+  dae.formulation = F3R_FORMULATION_DAE;
+  dae.rtol = 1e-9;
+  dae.atol = 1e-11;
+  Outcome d = Simulate(scene, 0.5, &dae);
+  ASSERT_EQ(d.status, F3R_OK) << d.error;
+  // Nothing holds the joints: the energy of the initial deflection also sets the whole mechanism
+  // moving, and the platform drifts metres in 60 s. The formulations must agree on that path up
+  // to the integrators' error, which BDF's numerical damping dominates.
+  double constraint = 0.0, apart = 0.0, travelled = 0.0;
+  for (const auto& o : d.samples) constraint = std::max(constraint, o.constraint_residual);
+  for (size_t k = 0; k < d.samples.size(); ++k) {
+    apart = std::max(apart, std::hypot(d.samples[k].q[6] - e.samples[k].q[6], d.samples[k].q[7] - e.samples[k].q[7]));
+    travelled = std::max(travelled, std::hypot(e.samples[k].q[6], e.samples[k].q[7]));
+  }
+  const double drift_erk = RelativeEnergyError(e), drift_dae = RelativeEnergyError(d);
+  std::printf("measured: 60 s free vibration: energy drift %.1e (minimal, ERK 1e-9), %.1e (dae, IDA "
+              "1e-9); dae constraint residual %.1e m; platform travelled %.2f m, formulations apart "
+              "%.1e m\n", drift_erk, drift_dae, constraint, travelled, apart);
+  EXPECT_LT(drift_erk, 1e-6);
+  EXPECT_LT(constraint, 1e-10);
+  EXPECT_GT(travelled, 1.0);
+  EXPECT_LT(apart / travelled, 5e-3);
+}
+
+// --- 5. extreme speed ---------------------------------------------------------------------------
+TEST(ExtremeSpeed, PaperSimulation2FormulationsAgree) {
+  f3r_scene scene = LoadScene(ScenePath("paper_sim2.yaml"));
+  scene.rtol = 1e-10;
+  scene.atol = 1e-12;
+  f3r_solver_settings set = f3r_solver_settings_from_scene(&scene);
+  Outcome minimal = Simulate(scene, 1e-3, &set);
+  set.formulation = F3R_FORMULATION_DAE;
+  Outcome dae = Simulate(scene, 1e-3, &set);
+  ASSERT_EQ(minimal.status, F3R_OK) << minimal.error;
+  ASSERT_EQ(dae.status, F3R_OK) << dae.error;
+  const double turned = minimal.samples.back().q[8], gap = std::fabs(turned - dae.samples.back().q[8]);
+  double piston_speed = 0.0;
+  for (const auto& o : minimal.samples) piston_speed = std::max(piston_speed, std::fabs(o.v[0]));
+  std::printf("measured: paper sim. 2: phi_p turns %.1f rad, pistons up to %.1f m/s; formulations "
+              "apart %.1e rad; energy balance %.1e / %.1e\n",
+              turned, piston_speed, gap, RelativeEnergyError(minimal), RelativeEnergyError(dae));
+  EXPECT_GT(std::fabs(turned), 40.0);
+  EXPECT_LT(gap, 1e-6);
+  EXPECT_LT(RelativeEnergyError(minimal), 1e-7);
+  EXPECT_LT(RelativeEnergyError(dae), 1e-7);
+}
+
+// --- 6. singular pose ---------------------------------------------------------------------------
+TEST(SingularPose, HomeIsTypeTwoSingularAndTheRunGoesThrough) {
+  f3r_scene scene = SceneFromText("links: {model: fixed_free, modes: 2}\n"
+                                  "inputs: {platform_force_x: {amplitude: 5.0, frequency: 20.0}}\n"
+                                  "run: {duration: 0.1}\n");
+  Outcome r = Simulate(scene, 1e-3);
+  ASSERT_EQ(r.status, F3R_OK) << r.error;
+  EXPECT_GE(r.samples.front().actuation_condition, 1e12);  // legs through P: no moment
+  double lowest = 1e300;
+  for (const auto& o : r.samples) lowest = std::min(lowest, o.actuation_condition);
+  EXPECT_LT(lowest, 1e6);  // it moved away from the singularity and kept integrating
+  std::printf("measured: actuation condition %.1e at home, %.1e lowest along the run\n",
+              r.samples.front().actuation_condition, lowest);
+}
+
+class LegCollapse : public ::testing::TestWithParam<std::tuple<f3r_formulation, f3r_integrator>> {};
+
+TEST_P(LegCollapse, StopsWithASpecificErrorAndAGoodState) {
+  f3r_scene scene = SceneFromText("links: {model: fixed_free, modes: 2}\ninputs: {rho_1: {offset: -200.0}}\n"
+                                  "run: {duration: 0.3}\n");
+  f3r_solver_settings set = f3r_solver_settings_from_scene(&scene);
+  set.formulation = std::get<0>(GetParam());
+  set.integrator = std::get<1>(GetParam());
+  Outcome r = Simulate(scene, 1e-3, &set);
+  ASSERT_EQ(r.status, F3R_ERR_SINGULAR);
+  EXPECT_NE(r.error.find("leg 1 collapsed"), std::string::npos) << r.error;
+  const f3r_outputs& last = r.samples.back();
+  EXPECT_TRUE(AllFinite(last, r.model->nq));
+  EXPECT_NEAR(last.q[0] + r.model->link_length, 0.1 * r.model->link_length, 1e-9);
+  EXPECT_LT(last.energy_balance_error, 1e-6);
+}
+
+INSTANTIATE_TEST_SUITE_P(Formulations, LegCollapse,
+                         ::testing::Values(std::make_tuple(F3R_FORMULATION_MINIMAL, F3R_INTEGRATOR_IDA),
+                                           std::make_tuple(F3R_FORMULATION_DAE, F3R_INTEGRATOR_IDA),
+                                           std::make_tuple(F3R_FORMULATION_MINIMAL, F3R_INTEGRATOR_ERK)));
+
+TEST(SingularPose, WithEndStopsTheLegBouncesInstead) {
+  f3r_scene scene = SceneFromText("links: {model: fixed_free, modes: 2}\ninputs: {rho_1: {offset: -20.0}}\n"
+                                  "effects: {end_stops: {min: -0.1, max: 0.3, restitution: 0.5}}\n"
+                                  "run: {duration: 0.3}\n");
+  Outcome r = Simulate(scene, 1e-3);
+  EXPECT_GT(r.samples.back().impacts, 0);
+  for (const auto& o : r.samples) EXPECT_TRUE(AllFinite(o, r.model->nq));
+  double lowest = 1e300;
+  for (const auto& o : r.samples) lowest = std::min(lowest, o.q[0]);
+  EXPECT_GT(lowest, -0.1 - 1e-9);
+}
+
+// --- 7. discontinuous commands ------------------------------------------------------------------
+TEST(DiscontinuousCommands, HeldStepsEveryMillisecondEqualAScriptedProfile) {
+  const int n = 1000;
+  std::mt19937 rng(7);
+  std::uniform_real_distribution<double> u(-20.0, 20.0);
+  std::vector<double> values(n);
+  for (double& v : values) v = u(rng);
+  std::string table = "inputs:\n  rho_2:\n    table:\n      interpolation: hold\n      time: [";
+  std::string vals = "]\n      value: [";
+  for (int k = 0; k < n; ++k) {
+    char buf[64];
+    std::snprintf(buf, sizeof buf, "%s%.17g", k ? ", " : "", k * 1e-3);
+    table += buf;
+    std::snprintf(buf, sizeof buf, "%s%.17g", k ? ", " : "", values[k]);
+    vals += buf;
+  }
+  const std::string common = "links: {model: fixed_free, modes: 2}\nrun: {duration: 1.0}\n";
+  f3r_scene scripted = SceneFromText(common + table + vals + "]\n");
+  f3r_scene held_scene = SceneFromText(common);
+  Outcome a = Simulate(scripted, 1e-3);
+  ASSERT_EQ(a.status, F3R_OK) << a.error;
+
+  auto m = MakeModel(held_scene);
+  f3r_solver_settings set = f3r_solver_settings_from_scene(&held_scene);
+  f3r_sim* raw = nullptr;
+  f3r_error err{};
+  ASSERT_EQ(f3r_sim_create(m.get(), &set, &raw, &err), F3R_OK) << err.message;
+  SimPtr sim(raw);
+  std::vector<double> held(m->nq, 0.0);
+  double apart = 0.0;
+  for (int k = 0; k < n; ++k) {
+    held[1] = values[k];  // from t = k ms on, as a controller's command
+    ASSERT_EQ(f3r_sim_set_forces(raw, held.data(), &err), F3R_OK) << err.message;
+    ASSERT_EQ(f3r_sim_advance(raw, (k + 1) * 1e-3, &err), F3R_OK) << err.message;
+    const f3r_outputs* o = f3r_sim_outputs(raw);
+    apart = std::max(apart, std::hypot(o->q[6] - a.samples[k + 1].q[6], o->q[7] - a.samples[k + 1].q[7]));
+  }
+  const f3r_sim_stats stats = f3r_sim_outputs(raw)->stats;
+  std::printf("measured: 1000 held steps: %ld restarts, %ld nonlinear failures, %ld error test "
+              "failures; apart from the scripted run by %.1e m\n",
+              stats.restarts, stats.nonlinear_failures, stats.error_test_failures, apart);
+  EXPECT_GE(stats.restarts, n - 1);
+  EXPECT_LT(apart, 1e-9);
+}
+
+// --- 8. impacts ---------------------------------------------------------------------------------
+TEST(Impacts, RepeatedImpactsAreLocatedAndLoseRestitutionSquared) {
+  f3r_scene scene = SceneFromText("links: {model: fixed_free, modes: 2}\n"
+                                  "inputs: {rho_1: {offset: 200.0}}\n"
+                                  "effects: {end_stops: {min: -0.1, max: 0.15, restitution: 0.6}}\n"
+                                  "solver: {rtol: 1.0e-10, atol: 1.0e-12}\nrun: {duration: 0.2}\n");
+  auto m = MakeModel(scene);
+  f3r_solver_settings set = f3r_solver_settings_from_scene(&scene);
+  f3r_sim* raw = nullptr;
+  f3r_error err{};
+  ASSERT_EQ(f3r_sim_create(m.get(), &set, &raw, &err), F3R_OK);
+  SimPtr sim(raw);
+  long seen = 0;
+  double worst_location = 0.0, worst_law = 0.0, worst_energy = 0.0, deepest = 0.0;
+  for (int k = 1; k <= 2000; ++k) {
+    const f3r_status st = f3r_sim_advance(raw, k * 1e-4, &err);
+    const f3r_outputs* o = f3r_sim_outputs(raw);
+    deepest = std::max(deepest, o->q[0] - 0.15);
+    if (o->impacts > seen) {
+      const f3r_impact_record& rec = o->last_impact;
+      // The event time is off by the stroke error over the rate: 1e-10 s is ~1e-10 m here.
+      worst_location = std::max(worst_location, std::fabs(rec.rho - 0.15) / std::fabs(rec.rate_before));
+      // Newton's law: the normal component keeps e^2 of its kinetic energy.
+      worst_energy = std::max(worst_energy, std::fabs(rec.rate_after * rec.rate_after / (rec.rate_before * rec.rate_before) - 0.36));
+      // Newton's law on the constrained system: the normal rate reverses with factor e.
+      worst_law = std::max(worst_law, std::fabs(rec.rate_after + 0.6 * rec.rate_before) / std::fabs(rec.rate_before));
+      seen = o->impacts;
+    }
+    if (st != F3R_OK) {
+      // Resting contact is not modelled: the run must say so rather than chatter.
+      EXPECT_NE(std::string(err.message).find("rests against its end stop"), std::string::npos) << err.message;
+      break;
+    }
+  }
+  std::printf("measured: %ld impacts; located within %.1e s; restitution law within %.1e, normal "
+              "energy ratio e^2 within %.1e; deepest penetration %.1e m\n", seen, worst_location,
+              worst_law, worst_energy, deepest);
+  EXPECT_GE(seen, 3);
+  EXPECT_LT(worst_location, 1e-10);
+  EXPECT_LT(worst_energy, 1e-9);
+  EXPECT_LT(worst_law, 1e-9);
+  EXPECT_LT(deepest, 1e-9);
+}
+
+// --- 9. huge inputs -----------------------------------------------------------------------------
+class HugeInputs : public ::testing::TestWithParam<std::string> {};
+
+TEST_P(HugeInputs, CompleteWithEnergyBalanceOrStopClearly) {
+  f3r_scene scene = SceneFromText("links: {model: fixed_free, modes: 3}\ninputs: {" + GetParam() +
+                                  "}\nrun: {duration: 0.05}\n");
+  Outcome r = Simulate(scene, 1e-4);
+  for (const auto& o : r.samples) ASSERT_TRUE(AllFinite(o, r.model->nq)) << "at t = " << o.t;
+  if (r.status == F3R_OK) {
+    EXPECT_LT(RelativeEnergyError(r), 1e-6);
+  } else {
+    EXPECT_FALSE(r.error.empty());
+  }
+  std::printf("measured: %s: %s\n", GetParam().c_str(), r.status == F3R_OK ? "completed" : r.error.c_str());
+}
+
+INSTANTIATE_TEST_SUITE_P(ForceAndTorque, HugeInputs,
+                         ::testing::Values("rho_1: {offset: 1.0e5}", "rho_2: {offset: -1.0e5}",
+                                           "theta_1: {offset: 1.0e3}", "platform_torque: {offset: 1.0e3}"));
+
+}  // namespace
+
+namespace {
+
+// --- recoverable errors -------------------------------------------------------------------------
+// An impossible configuration (a tip deflection longer than the leg can reach) or a NaN makes the
+// residual fail with a status, never with a NaN in its output: IDA's wrapper turns that status into
+// its recoverable error (> 0) so the step is cut, and counts it in f3r_sim_stats.recoverable_errors.
+TEST(RecoverableErrors, ImpossibleConfigurationsAndNaNGiveAStatusNotNaN) {
+  auto m = MakeModel(SceneFromText("links: {model: fixed_free, modes: 2}\n"));
+  WorkspacePtr ws(f3r_workspace_create(m.get()));
+  for (f3r_formulation form : {F3R_FORMULATION_MINIMAL, F3R_FORMULATION_DAE}) {
+    const int ny = f3r_state_size(m.get(), form);
+    std::vector<double> q(F3R_MAX_Q), v(F3R_MAX_Q), y(ny), yp(ny), res(ny, 0.0);
+    ASSERT_EQ(f3r_model_initial_state(m.get(), q.data(), v.data()), F3R_OK);
+    ASSERT_EQ(f3r_consistent_state(m.get(), form, 0.0, q.data(), v.data(), nullptr, nullptr, 0.0,
+                                   y.data(), yp.data(), nullptr, ws.get()), F3R_OK);
+    std::vector<double> bad = y;
+    bad[0] = std::nan("");
+    EXPECT_NE(f3r_residual(m.get(), form, 0.0, bad.data(), yp.data(), nullptr, res.data(), ws.get()), F3R_OK);
+    if (form == F3R_FORMULATION_MINIMAL) {
+      bad = y;
+      bad[3] = 5.0;  // eta_11 = 5 m: a tip deflection no leg can close
+      EXPECT_EQ(f3r_residual(m.get(), form, 0.0, bad.data(), yp.data(), nullptr, res.data(), ws.get()),
+                F3R_ERR_SINGULAR);
+    }
+  }
+}
+
+}  // namespace
