@@ -1,6 +1,7 @@
 #include "command_decoding.hpp"
 
 #include <cmath>
+#include <iomanip>
 #include <sstream>
 
 namespace flex3rpr {
@@ -10,6 +11,7 @@ namespace {
 // "" if value is finite and within limit, else the reason, naming field.
 std::string Check(const std::string& field, double value, double limit) {
   std::ostringstream os;
+  os << std::setprecision(17);
   if (std::isnan(value)) os << field << " is NaN";
   else if (std::isinf(value)) os << field << " is infinite";
   else if (std::fabs(value) > limit) os << field << " = " << value << " exceeds the limit " << limit;
@@ -86,6 +88,11 @@ std::string DecodeWrench(const geometry_msgs::WrenchStamped& msg, const std::str
     const double c = std::cos(phi_p), s = std::sin(phi_p);
     fx = c * f.x - s * f.y;
     fy = s * f.x + c * f.y;
+    // The limit holds for the force applied, in the world frame: turning can raise a component by
+    // up to sqrt(2) (and overflow to Inf near DBL_MAX). Found by test/fuzz/fuzz_commands.
+    std::string why = Check("force.x turned into the world frame", fx, limits.force);
+    if (why.empty()) why = Check("force.y turned into the world frame", fy, limits.force);
+    if (!why.empty()) return why;
   }
   forces->assign(static_cast<size_t>(model.nq), 0.0);
   (*forces)[F3R_FORCE_PLATFORM] = fx;

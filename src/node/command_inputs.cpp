@@ -2,22 +2,26 @@
 
 namespace flex3rpr {
 
+constexpr uint32_t kCommandQueue = 1000;
+
 CommandInputs::CommandInputs(ros::NodeHandle& pnh, const f3r_model& model,
                              const NodeParams& params, const double* phi_p)
     : model_(model), params_(params), phi_p_(phi_p) {
   for (auto& h : held_) h.assign(static_cast<size_t>(model.nq), 0.0);
   scratch_.assign(static_cast<size_t>(model.nq), 0.0);
   total_.assign(static_cast<size_t>(model.nq), 0.0);
-  command_sub_ = pnh.subscribe<EffortCommand>("command", 10, [this](const EffortCommand::ConstPtr& m) {
+  // Deep queues: a controller at 10 kHz must not lose commands (a lost invalid one would also go
+  // uncounted) while the node is descheduled for a few ms.
+  command_sub_ = pnh.subscribe<EffortCommand>("command", kCommandQueue, [this](const EffortCommand::ConstPtr& m) {
     Accept(kCommand, DecodeEffortCommand(*m, model_, params_.limits, &scratch_), scratch_, "~command");
   });
   group_sub_ = pnh.subscribe<std_msgs::Float64MultiArray>(
-      "effort_group/command", 10, [this](const std_msgs::Float64MultiArray::ConstPtr& m) {
+      "effort_group/command", kCommandQueue, [this](const std_msgs::Float64MultiArray::ConstPtr& m) {
         Accept(kEffortGroup, DecodeEffortGroup(*m, model_, params_.limits, &scratch_), scratch_,
                "~effort_group/command");
       });
   wrench_sub_ = pnh.subscribe<geometry_msgs::WrenchStamped>(
-      "platform_wrench", 10, [this](const geometry_msgs::WrenchStamped::ConstPtr& m) {
+      "platform_wrench", kCommandQueue, [this](const geometry_msgs::WrenchStamped::ConstPtr& m) {
         Accept(kWrench,
                DecodeWrench(*m, params_.world_frame, "platform", *phi_p_, params_.limits, model_,
                             &scratch_),

@@ -55,11 +55,12 @@ class NodeStartup(unittest.TestCase):
             while time.time() < end and not published:
                 published = any(t == "/flex3rpr_node/status" for t, _ in master.getPublishedTopics(""))
                 time.sleep(0.2)
-            self.assertTrue(published, "the node publishes ~status with no arguments")
-            self.assertIsNone(proc.poll(), "the node keeps running")
+            alive = proc.poll() is None
         finally:
             proc.terminate()
             out, _ = proc.communicate(timeout=20)
+        self.assertTrue(published, "the node publishes ~status with no arguments; it said:\n" + out[-3000:])
+        self.assertTrue(alive, "the node keeps running; it said:\n" + out[-3000:])
         self.assertIn("no robot_description parameter", out)
 
 
