@@ -74,6 +74,11 @@ bool LoadParams(const ros::NodeHandle& pnh, NodeParams* p, std::string* error) {
   p->base_frame = pnh.param<std::string>("base_frame", "base");
   p->command_timeout = pnh.param("command_timeout", 0.0);
   p->duration = pnh.param("duration", 0.0);
+  if (p->duration < 0.0) p->duration = p->scene.duration;  // the scene's run.duration
+  p->wait_for_subscribers = pnh.param("wait_for_subscribers", 0);
+  p->subscriber_timeout = pnh.param("subscriber_timeout", 30.0);
+  p->subscriber_grace = pnh.param("subscriber_grace", 0.5);
+  p->queue_size = pnh.param("queue_size", 10);
   p->beam_marker_exaggeration = pnh.param("beam_marker_exaggeration", 1.0);
   p->limits.force = pnh.param("max_force", p->limits.force);
   p->limits.torque = pnh.param("max_torque", p->limits.torque);
@@ -83,6 +88,10 @@ bool LoadParams(const ros::NodeHandle& pnh, NodeParams* p, std::string* error) {
       !NonNegative("realtime_factor", p->realtime_factor, error) ||
       !NonNegative("command_timeout", p->command_timeout, error) ||
       !NonNegative("duration", p->duration, error) ||
+      !NonNegative("wait_for_subscribers", p->wait_for_subscribers, error) ||
+      !Positive("subscriber_timeout", p->subscriber_timeout, error) ||
+      !NonNegative("subscriber_grace", p->subscriber_grace, error) ||
+      !Positive("queue_size", p->queue_size, error) ||
       !Positive("beam_marker_exaggeration", p->beam_marker_exaggeration, error) ||
       !Positive("max_force", p->limits.force, error) ||
       !Positive("max_torque", p->limits.torque, error) ||

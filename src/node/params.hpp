@@ -25,7 +25,11 @@ struct NodeParams {
   std::string world_frame = "world";
   std::string base_frame = "base";
   double command_timeout = 0.0;       // s of simulated time; 0 holds commands forever
-  double duration = 0.0;              // s; > 0 stops the node at that simulated time
+  double duration = 0.0;              // s; > 0 stops the node at that simulated time; < 0 the scene's run.duration
+  int wait_for_subscribers = 0;       // before the first output, wait until every output topic has this many
+  double subscriber_timeout = 30.0;   // wall s to wait for them; then the node exits with an error
+  double subscriber_grace = 0.5;      // wall s the node holds after the first period when it waited
+  int queue_size = 10;                // outgoing messages held per subscriber and output topic
   double beam_marker_exaggeration = 1.0;  // visual only: scales the deflection in ~beams
   CommandLimits limits;
 };

@@ -65,6 +65,16 @@ bool SimNode::Init() {
   return true;
 }
 
+// Handles callbacks for `seconds` of wall time; returns the wall time that passed.
+static ros::WallDuration SpinFor(double seconds) {
+  const ros::WallTime from = ros::WallTime::now();
+  while (ros::ok() && (ros::WallTime::now() - from).toSec() < seconds) {
+    ros::spinOnce();
+    ros::WallDuration(0.005).sleep();
+  }
+  return ros::WallTime::now() - from;
+}
+
 bool SimNode::Step(double period) {
   f3r_error err{};
   const double t = f3r_sim_time(sim_.get());
@@ -84,7 +94,27 @@ bool SimNode::Step(double period) {
 
 int SimNode::Run() {
   const double period = 1.0 / params_.publish_rate;
-  const ros::WallTime start = ros::WallTime::now();
+  if (params_.wait_for_subscribers > 0) {  // e.g. a recorder: nothing may be published before it listens
+    const ros::WallTime until = ros::WallTime::now() + ros::WallDuration(params_.subscriber_timeout);
+    while (ros::ok() && !outputs_->SubscribersConnected(params_.wait_for_subscribers)) {
+      if (ros::WallTime::now() > until) {
+        ROS_ERROR("flex3rpr_node: ~wait_for_subscribers: an output topic lacks subscribers (%d, or those the "
+                  "master lists) after %g s",
+                  params_.wait_for_subscribers, params_.subscriber_timeout);
+        return 3;
+      }
+      ros::spinOnce();
+      ros::WallDuration(0.02).sleep();
+    }
+    ROS_INFO("flex3rpr_node: every output topic has its subscribers (at least %d); starting",
+             params_.wait_for_subscribers);
+  }
+  // A subscriber on simulated time, such as rosbag record, takes its first messages only once
+  // /clock is past zero (ros::Time::waitForValid), and its subscription queues hold 100 each:
+  // after the first period, and before it exits, the node holds ~subscriber_grace wall seconds.
+  const bool grace = params_.wait_for_subscribers > 0 && params_.subscriber_grace > 0.0;
+  bool grace_pending = grace;
+  ros::WallTime start = ros::WallTime::now();
   ros::WallTime pace_wall = start;  // pacing restarts after a pause or a reset
   double pace_sim = 0.0;
   bool was_running = true;
@@ -132,7 +162,7 @@ int SimNode::Run() {
     }
     const f3r_outputs& out = *f3r_sim_outputs(sim_.get());
     phi_p_ = out.q[8];
-    const ros::WallTime now = ros::WallTime::now();
+    ros::WallTime now = ros::WallTime::now();
     info_.wall_time = (now - start).toSec();
     const double window = (now - window_wall).toSec();
     if (window >= 0.5) {  // achieved real-time factor over the last half second of wall time
@@ -144,6 +174,15 @@ int SimNode::Run() {
     }
     info_.rejected_commands = inputs_->rejected();
     outputs_->Publish(out, info_);
+    if (grace_pending) {
+      grace_pending = false;
+      const ros::WallDuration held = SpinFor(params_.subscriber_grace);  // not the simulation's time
+      start += held;
+      window_wall += held;
+      pace_wall += held;
+      last_status += held;
+      now += held;
+    }
     if (params_.duration > 0.0 && out.t >= params_.duration - 0.5 * period) {
       ROS_INFO("flex3rpr_node: reached the duration %g s (real-time factor %.3g)", out.t,
                out.t / info_.wall_time);
@@ -155,6 +194,7 @@ int SimNode::Run() {
       if (due > now) (due - now).sleep();
     }
   }
+  if (grace) SpinFor(params_.subscriber_grace);  // the subscribers take the last messages
   return exit_code;
 }
 

@@ -3,7 +3,10 @@
 #include <tf2_eigen/tf2_eigen.h>
 
 #include <Eigen/Geometry>
+#include <algorithm>
 #include <cmath>
+#include <map>
+#include <string>
 
 namespace flex3rpr {
 
@@ -40,12 +43,16 @@ std::string Leg(int i, const char* suffix) { return "leg_" + std::to_string(i + 
 StateOutputs::StateOutputs(ros::NodeHandle& nh, ros::NodeHandle& pnh, const f3r_model& model,
                            const NodeParams& params)
     : model_(model), params_(params) {
-  joints_pub_ = nh.advertise<sensor_msgs::JointState>("joint_states", 10);
-  status_pub_ = pnh.advertise<SimStatus>("status", 10);
-  beam_pub_ = pnh.advertise<BeamState>("beam_state", 10);
-  markers_pub_ = pnh.advertise<visualization_msgs::MarkerArray>("beams", 10);
+  // Each subscriber connection holds up to queue_size messages the node's network thread has not
+  // sent yet; a recorder that must not lose any (record.launch) asks for a deep queue.
+  const uint32_t q = static_cast<uint32_t>(params.queue_size);
+  joints_pub_ = nh.advertise<sensor_msgs::JointState>("joint_states", q);
+  status_pub_ = pnh.advertise<SimStatus>("status", q);
+  beam_pub_ = pnh.advertise<BeamState>("beam_state", q);
+  markers_pub_ = pnh.advertise<visualization_msgs::MarkerArray>("beams", q);
+  tf_pub_ = nh.advertise<tf2_msgs::TFMessage>("/tf", std::max(q, 100u));  // TransformBroadcaster's 100 at least
   nh.param("/use_sim_time", publish_clock_, false);
-  if (publish_clock_) clock_pub_ = nh.advertise<rosgraph_msgs::Clock>("/clock", 10);
+  if (publish_clock_) clock_pub_ = nh.advertise<rosgraph_msgs::Clock>("/clock", q);
 
   for (int i = 0; i < 3; ++i) {
     joints_.name.push_back(Leg(i, "_revolute"));
@@ -98,23 +105,23 @@ StateOutputs::StateOutputs(ros::NodeHandle& nh, ros::NodeHandle& pnh, const f3r_
 
   // Dynamic frames: 2 per leg of the tree, the platform, and the beam stations.
   for (int i = 0; i < 3; ++i) {
-    transforms_.push_back(Frame(params.base_frame, Leg(i, "_cylinder")));
-    transforms_.push_back(Frame(Leg(i, "_cylinder"), Leg(i, "_piston")));
+    tf_.transforms.push_back(Frame(params.base_frame, Leg(i, "_cylinder")));
+    tf_.transforms.push_back(Frame(Leg(i, "_cylinder"), Leg(i, "_piston")));
   }
-  transforms_.push_back(Frame(params.world_frame, "platform"));
+  tf_.transforms.push_back(Frame(params.world_frame, "platform"));
   for (int i = 0; i < 3; ++i)
     for (int k = 0; k < params.beam_points; ++k)
-      transforms_.push_back(Frame(params.world_frame, Leg(i, "_beam_") + std::to_string(k)));
+      tf_.transforms.push_back(Frame(params.world_frame, Leg(i, "_beam_") + std::to_string(k)));
 }
 
 void StateOutputs::FillTransforms(const f3r_outputs& out, const ros::Time& stamp) {
   const double* q = out.q;
   size_t n = 0;
   for (int i = 0; i < 3; ++i) {
-    SetPlanar(&transforms_[n++], model_.base_joint[i][0], model_.base_joint[i][1], q[3 + i]);
-    SetPlanar(&transforms_[n++], q[i], 0.0, 0.0);
+    SetPlanar(&tf_.transforms[n++], model_.base_joint[i][0], model_.base_joint[i][1], q[3 + i]);
+    SetPlanar(&tf_.transforms[n++], q[i], 0.0, 0.0);
   }
-  SetPlanar(&transforms_[n++], q[6], q[7], q[8]);
+  SetPlanar(&tf_.transforms[n++], q[6], q[7], q[8]);
   const int points = params_.beam_points;
   const double exaggeration = params_.beam_marker_exaggeration;
   for (int i = 0; i < 3; ++i) {
@@ -125,7 +132,7 @@ void StateOutputs::FillTransforms(const f3r_outputs& out, const ros::Time& stamp
       const double xi = static_cast<double>(k) / (points - 1);
       double pos[2], angle, w;
       f3r_model_beam_point(&model_, q, i, xi, pos, &angle, &w);
-      SetPlanar(&transforms_[n++], pos[0], pos[1], angle);
+      SetPlanar(&tf_.transforms[n++], pos[0], pos[1], angle);
       // The marker may exaggerate the deflection; the physics and TF never do.
       auto& pt = marker.points[static_cast<size_t>(k)];
       pt.x = pos[0] - (exaggeration - 1.0) * w * s;
@@ -133,7 +140,7 @@ void StateOutputs::FillTransforms(const f3r_outputs& out, const ros::Time& stamp
       pt.z = 0.0;
     }
   }
-  for (auto& t : transforms_) t.header.stamp = stamp;
+  for (auto& t : tf_.transforms) t.header.stamp = stamp;
 }
 
 void StateOutputs::Publish(const f3r_outputs& out, const RunInfo& info) {
@@ -154,7 +161,7 @@ void StateOutputs::Publish(const f3r_outputs& out, const RunInfo& info) {
   joints_pub_.publish(joints_);
 
   FillTransforms(out, stamp);
-  tf_.sendTransform(transforms_);
+  tf_pub_.publish(tf_);
   markers_pub_.publish(markers_);
 
   beam_.header.stamp = stamp;
@@ -168,6 +175,23 @@ void StateOutputs::Publish(const f3r_outputs& out, const RunInfo& info) {
   }
   beam_pub_.publish(beam_);
   PublishStatus(out, info);
+}
+
+bool StateOutputs::SubscribersConnected(int n) const {
+  // Subscribers the master knows of, per topic (getSystemState: [publishers, subscribers, services]).
+  std::map<std::string, int> registered;
+  XmlRpc::XmlRpcValue request, response, payload;
+  request[0] = ros::this_node::getName();
+  if (ros::master::execute("getSystemState", request, response, payload, false) && payload.size() > 1) {
+    for (int i = 0; i < payload[1].size(); ++i)
+      registered[static_cast<std::string>(payload[1][i][0])] = payload[1][i][1].size();
+  }
+  for (const ros::Publisher* p : {&joints_pub_, &status_pub_, &beam_pub_, &markers_pub_, &tf_pub_, &clock_pub_}) {
+    if (!*p) continue;  // no /clock without simulated time
+    const int need = std::max(n, registered[p->getTopic()]);
+    if (static_cast<int>(p->getNumSubscribers()) < need) return false;
+  }
+  return true;
 }
 
 void StateOutputs::PublishStatus(const f3r_outputs& out, const RunInfo& info) {

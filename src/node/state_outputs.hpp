@@ -5,7 +5,7 @@
 #include <ros/ros.h>
 #include <rosgraph_msgs/Clock.h>
 #include <sensor_msgs/JointState.h>
-#include <tf2_ros/transform_broadcaster.h>
+#include <tf2_msgs/TFMessage.h>
 #include <tf2_ros/static_transform_broadcaster.h>
 #include <visualization_msgs/MarkerArray.h>
 
@@ -34,6 +34,11 @@ class StateOutputs {
   // Only ~status: while paused the state does not change, but the status (paused, rejected
   // commands) still does.
   void PublishStatus(const f3r_outputs& out, const RunInfo& info);
+  // True when every output topic (joint_states, /tf, ~status, ~beam_state, ~beams, and /clock
+  // when it is published) has at least n subscribers connected, and each subscriber the master
+  // lists for it: on /clock, rosout and other nodes on simulated time count too, so a count alone
+  // could pass before a recorder's own /clock connection is up.
+  bool SubscribersConnected(int n) const;
 
  private:
   void FillTransforms(const f3r_outputs& out, const ros::Time& stamp);
@@ -41,15 +46,14 @@ class StateOutputs {
   const f3r_model& model_;
   const NodeParams& params_;
   bool publish_clock_ = false;
-  ros::Publisher joints_pub_, status_pub_, beam_pub_, markers_pub_, clock_pub_;
-  tf2_ros::TransformBroadcaster tf_;
+  ros::Publisher joints_pub_, status_pub_, beam_pub_, markers_pub_, clock_pub_, tf_pub_;
   tf2_ros::StaticTransformBroadcaster static_tf_;
   sensor_msgs::JointState joints_;
   SimStatus status_;
   BeamState beam_;
   visualization_msgs::MarkerArray markers_;
   rosgraph_msgs::Clock clock_;
-  std::vector<geometry_msgs::TransformStamped> transforms_;
+  tf2_msgs::TFMessage tf_;  // tf_.transforms: the dynamic frames
 };
 
 }  // namespace flex3rpr
