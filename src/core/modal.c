@@ -8,22 +8,6 @@
 #include "flex3rpr/modal.h"
 #include "flex3rpr/residual.h"
 
-static int cholesky(double* A, int n) { /* lower factor in place, column-major */
-  for (int j = 0; j < n; ++j) {
-    double d = F3R_AT(A, n, j, j);
-    for (int k = 0; k < j; ++k) d -= F3R_AT(A, n, j, k) * F3R_AT(A, n, j, k);
-    if (!(d > 0.0)) return 1;
-    const double ljj = sqrt(d);
-    F3R_AT(A, n, j, j) = ljj;
-    for (int i = j + 1; i < n; ++i) {
-      double s = F3R_AT(A, n, i, j);
-      for (int k = 0; k < j; ++k) s -= F3R_AT(A, n, i, k) * F3R_AT(A, n, j, k);
-      F3R_AT(A, n, i, j) = s / ljj;
-    }
-  }
-  return 0;
-}
-
 static void jacobi_eigenvalues(double* A, int n, double* eig) {
   for (int sweep = 0; sweep < 100; ++sweep) {
     double off = 0.0, diag = 0.0;
@@ -100,7 +84,7 @@ f3r_status f3r_modal_frequencies(const f3r_model* model, double* hz, int* count,
       const double mm = 0.5 * (F3R_AT(M, nz, i, j) + F3R_AT(M, nz, j, i));
       F3R_AT(M, nz, i, j) = F3R_AT(M, nz, j, i) = mm;
     }
-  if (cholesky(M, nz)) {
+  if (f3r_cholesky_factor(M, nz)) {
     st = f3r_error_set(err, F3R_ERR_SINGULAR, "modal analysis: the reduced mass matrix is not positive definite");
     goto done;
   }
