@@ -20,15 +20,30 @@ typedef enum {
 typedef struct {
   f3r_status code;
   char message[512];
+  /* For F3R_ERR_SCENE from f3r_scene_validate: the scene field at fault, as the YAML path
+   * ("solver.rtol", "inputs.rho_3.table.time[2]"), so that a loader can point at its line
+   * without parsing the message; empty otherwise. */
+  char field[128];
 } f3r_error;
 
 /* A short, static name for a status, e.g. "F3R_ERR_SCENE". */
 const char* f3r_status_name(f3r_status status);
 
-/* Fills err (if not NULL) with code and a printf-style message; returns code. */
+/* Fills err (if not NULL) with code and a printf-style message, and clears err->field;
+ * returns code. */
 f3r_status f3r_error_set(f3r_error* err, f3r_status code, const char* format, ...)
 #if defined(__GNUC__)
     __attribute__((format(printf, 3, 4)))
+#endif
+    ;
+
+/* F3R_ERR_SCENE about one scene field: err->field = field, err->message = "field: what".
+ * message_field, when not NULL, replaces field in the message (a list item is located by its
+ * own path, "x[2]", while the message names the list, "x"). Returns F3R_ERR_SCENE. */
+f3r_status f3r_scene_error(f3r_error* err, const char* field, const char* message_field,
+                           const char* format, ...)
+#if defined(__GNUC__)
+    __attribute__((format(printf, 4, 5)))
 #endif
     ;
 

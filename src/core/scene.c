@@ -106,22 +106,21 @@ int f3r_input_breakpoints(const f3r_input* in, double* times, int max) {
   do {                                                                                      \
     const double v_ = (value);                                                              \
     if (!(v_ >= (lo) && v_ <= (hi)))                                                        \
-      return f3r_error_set(err, F3R_ERR_SCENE, "%s: %g is out of range %g..%g", field, v_, \
-                           (double)(lo), (double)(hi));                                     \
+      return f3r_scene_error(err, field, NULL, "%g is out of range %g..%g", v_, (double)(lo), \
+                             (double)(hi));                                                  \
   } while (0)
 
 #define CHECK_POSITIVE(field, value)                                                       \
   do {                                                                                     \
     const double v_ = (value);                                                             \
     if (!(v_ > 0.0 && isfinite(v_)))                                                       \
-      return f3r_error_set(err, F3R_ERR_SCENE, "%s: %g must be positive and finite", field, \
-                           v_);                                                            \
+      return f3r_scene_error(err, field, NULL, "%g must be positive and finite", v_);         \
   } while (0)
 
 #define CHECK_FINITE(field, value)                                                          \
   do {                                                                                      \
     if (!isfinite(value))                                                                   \
-      return f3r_error_set(err, F3R_ERR_SCENE, "%s: %g must be finite", field, (value));    \
+      return f3r_scene_error(err, field, NULL, "%g must be finite", (value));                \
   } while (0)
 
 static f3r_status validate_input_shape(const f3r_input* in, const char* name, f3r_error* err) {
@@ -136,32 +135,43 @@ static f3r_status validate_input_shape(const f3r_input* in, const char* name, f3
       const char* kind = in->kind == F3R_INPUT_RAMP ? "ramp" : "chirp";
       snprintf(field, sizeof field, "%s.%s.start", name, kind);
       CHECK_RANGE(field, in->t0, 0.0, 1e6);
-      if (!(in->t1 > in->t0))
-        return f3r_error_set(err, F3R_ERR_SCENE, "%s.%s.end: %g must be after start %g", name,
-                             kind, in->t1, in->t0);
+      if (!(in->t1 > in->t0)) {
+        snprintf(field, sizeof field, "%s.%s.end", name, kind);
+        return f3r_scene_error(err, field, NULL, "%g must be after start %g", in->t1, in->t0);
+      }
       if (in->kind == F3R_INPUT_CHIRP) {
         snprintf(field, sizeof field, "%s.chirp.start_frequency", name);
         CHECK_RANGE(field, in->f0, 0.0, 1e6);
-        if (!(in->f1 >= in->f0))
-          return f3r_error_set(err, F3R_ERR_SCENE,
-                               "%s.chirp.end_frequency: %g Hz is below start_frequency %g Hz",
-                               name, in->f1, in->f0);
+        if (!(in->f1 >= in->f0)) {
+          snprintf(field, sizeof field, "%s.chirp.end_frequency", name);
+          return f3r_scene_error(err, field, NULL, "%g Hz is below start_frequency %g Hz", in->f1,
+                                 in->f0);
+        }
       }
       break;
     }
-    case F3R_INPUT_TABLE:
+    case F3R_INPUT_TABLE: {
+      char list[96];
+      snprintf(list, sizeof list, "%s.table", name);
       if (in->table_size < 2 || in->table_size > F3R_MAX_TABLE)
-        return f3r_error_set(err, F3R_ERR_SCENE, "%s.table: %d points, allowed 2..%d", name,
-                             in->table_size, F3R_MAX_TABLE);
+        return f3r_scene_error(err, list, NULL, "%d points, allowed 2..%d", in->table_size,
+                               F3R_MAX_TABLE);
       for (int k = 0; k < in->table_size; ++k) {
-        if (!isfinite(in->table_time[k]) || !isfinite(in->table_value[k]))
-          return f3r_error_set(err, F3R_ERR_SCENE, "%s.table: point %d is not finite", name, k);
-        if (k > 0 && !(in->table_time[k] > in->table_time[k - 1]))
-          return f3r_error_set(err, F3R_ERR_SCENE,
-                               "%s.table.time: %g at point %d must exceed %g before it", name,
-                               in->table_time[k], k, in->table_time[k - 1]);
+        const int bad_time = !isfinite(in->table_time[k]);
+        if (bad_time || !isfinite(in->table_value[k])) {
+          snprintf(field, sizeof field, "%s.%s[%d]", list, bad_time ? "time" : "value", k);
+          return f3r_scene_error(err, field, list, "point %d is not finite", k);
+        }
+        if (k > 0 && !(in->table_time[k] > in->table_time[k - 1])) {
+          char times[112];
+          snprintf(times, sizeof times, "%s.time", list);
+          snprintf(field, sizeof field, "%s[%d]", times, k);
+          return f3r_scene_error(err, field, times, "%g at point %d must exceed %g before it",
+                                 in->table_time[k], k, in->table_time[k - 1]);
+        }
       }
       break;
+    }
     default:
       break;
   }
@@ -173,9 +183,8 @@ f3r_status f3r_scene_validate(const f3r_scene* s, f3r_error* err) {
   CHECK_POSITIVE("geometry.base_side", s->base_side);
   CHECK_POSITIVE("geometry.platform_side", s->platform_side);
   if (!(s->platform_side < s->base_side))
-    return f3r_error_set(err, F3R_ERR_SCENE,
-                         "geometry.platform_side: %g must be smaller than base_side %g",
-                         s->platform_side, s->base_side);
+    return f3r_scene_error(err, "geometry.platform_side", NULL, "%g must be smaller than base_side %g",
+                           s->platform_side, s->base_side);
   CHECK_POSITIVE("platform.mass", s->platform_mass);
   CHECK_RANGE("platform.inertia", s->platform_inertia, 0.0, 1e6);
   CHECK_POSITIVE("link.length", s->link_length);
@@ -186,38 +195,40 @@ f3r_status f3r_scene_validate(const f3r_scene* s, f3r_error* err) {
   CHECK_RANGE("cylinder.inner_diameter", s->cylinder_inner_diameter, 0.0, 1e3);
   CHECK_POSITIVE("cylinder.outer_diameter", s->cylinder_outer_diameter);
   if (!(s->cylinder_inner_diameter < s->cylinder_outer_diameter))
-    return f3r_error_set(err, F3R_ERR_SCENE,
-                         "cylinder.inner_diameter: %g must be smaller than outer_diameter %g",
-                         s->cylinder_inner_diameter, s->cylinder_outer_diameter);
+    return f3r_scene_error(err, "cylinder.inner_diameter", NULL,
+                           "%g must be smaller than outer_diameter %g", s->cylinder_inner_diameter,
+                           s->cylinder_outer_diameter);
   CHECK_POSITIVE("cylinder.density", s->cylinder_density);
   for (int i = 0; i < 3; ++i) {
     const f3r_link_scene* L = &s->links[i];
+    snprintf(name, sizeof name, "links[%d].model", i);
     if (L->model != F3R_LINK_RIGID && L->model != F3R_LINK_FIXED_PINNED &&
         L->model != F3R_LINK_FIXED_FREE)
-      return f3r_error_set(err, F3R_ERR_SCENE,
-                           "links[%d].model: %d is not one of rigid, fixed_pinned, fixed_free", i,
-                           (int)L->model);
+      return f3r_scene_error(err, name, NULL, "%d is not one of rigid, fixed_pinned, fixed_free",
+                             (int)L->model);
+    snprintf(name, sizeof name, "links[%d].modes", i);
     if (L->model == F3R_LINK_RIGID) {
       if (L->modes != 0)
-        return f3r_error_set(err, F3R_ERR_SCENE,
-                             "links[%d].modes: %d given for a rigid link, which has no modes", i,
-                             L->modes);
+        return f3r_scene_error(err, name, NULL, "%d given for a rigid link, which has no modes",
+                               L->modes);
     } else if (L->modes == F3R_MODES_AUTO) {
       snprintf(name, sizeof name, "links[%d].auto_tolerance", i);
       CHECK_RANGE(name, L->auto_tolerance, 1e-12, 0.5);
     } else if (L->modes < 1 || L->modes > F3R_MAX_MODES) {
-      return f3r_error_set(err, F3R_ERR_SCENE, "links[%d].modes: %d is out of range 1..%d", i,
-                           L->modes, F3R_MAX_MODES);
+      return f3r_scene_error(err, name, NULL, "%d is out of range 1..%d", L->modes, F3R_MAX_MODES);
     }
     for (int j = 0; j < F3R_MAX_MODES; ++j) {
       snprintf(name, sizeof name, "links[%d].initial_deflection[%d]", i, j);
       CHECK_RANGE(name, L->eta0[j], -0.1, 0.1);
       snprintf(name, sizeof name, "links[%d].initial_rate[%d]", i, j);
       CHECK_RANGE(name, L->eta_rate0[j], -100.0, 100.0);
-      if (L->modes != F3R_MODES_AUTO && j >= L->modes && (L->eta0[j] != 0.0 || L->eta_rate0[j] != 0.0))
-        return f3r_error_set(err, F3R_ERR_SCENE,
-                             "links[%d].initial_deflection: mode %d given but the link has %d "
-                             "modes", i, j + 1, L->modes);
+      if (L->modes != F3R_MODES_AUTO && j >= L->modes && (L->eta0[j] != 0.0 || L->eta_rate0[j] != 0.0)) {
+        char list[64];
+        snprintf(list, sizeof list, "links[%d].initial_deflection", i);
+        snprintf(name, sizeof name, "%s[%d]", list, j);
+        return f3r_scene_error(err, name, list, "mode %d given but the link has %d modes", j + 1,
+                               L->modes);
+      }
     }
   }
   for (int k = 0; k < 3; ++k) {
@@ -230,16 +241,15 @@ f3r_status f3r_scene_validate(const f3r_scene* s, f3r_error* err) {
     snprintf(name, sizeof name, "links[%d].damping_ratio", k);
     CHECK_RANGE(name, s->links[k].damping_ratio, 0.0, 10.0);
     if (s->links[k].model == F3R_LINK_RIGID && s->links[k].damping_ratio != 0.0)
-      return f3r_error_set(err, F3R_ERR_SCENE,
-                           "links[%d].damping_ratio: %g given for a rigid link, which has no modes",
-                           k, s->links[k].damping_ratio);
+      return f3r_scene_error(err, name, NULL, "%g given for a rigid link, which has no modes",
+                             s->links[k].damping_ratio);
   }
   CHECK_RANGE("effects.actuator_lag.time_constant", s->actuator_lag, 0.0, 10.0);
   CHECK_RANGE("effects.end_stops.restitution", s->restitution, 0.0, 1.0);
   CHECK_RANGE("effects.end_stops.min", s->stroke_min, -s->link_length + 1e-3, 10.0);
   if (!(s->stroke_max > s->stroke_min))
-    return f3r_error_set(err, F3R_ERR_SCENE, "effects.end_stops.max: %g must exceed min %g",
-                         s->stroke_max, s->stroke_min);
+    return f3r_scene_error(err, "effects.end_stops.max", NULL, "%g must exceed min %g",
+                           s->stroke_max, s->stroke_min);
   CHECK_RANGE("effects.payload.mass", s->payload_mass, 0.0, 1e3);
   CHECK_RANGE("effects.payload.inertia", s->payload_inertia, 0.0, 1e3);
   for (int k = 0; k < 3; ++k) {
@@ -252,8 +262,7 @@ f3r_status f3r_scene_validate(const f3r_scene* s, f3r_error* err) {
     const f3r_input* in = &s->inputs[n];
     snprintf(name, sizeof name, "inputs.%s", kInputNames[n]);
     if ((int)in->kind < F3R_INPUT_NONE || (int)in->kind > F3R_INPUT_TABLE)
-      return f3r_error_set(err, F3R_ERR_SCENE, "%s.kind: %d is not a known input kind", name,
-                           (int)in->kind);
+      return f3r_scene_error(err, name, NULL, "kind %d is not a known input kind", (int)in->kind);
     const double values[] = {in->offset, in->amplitude, in->omega, in->phase, in->t0, in->t1,
                              in->before, in->after, in->f0, in->f1};
     for (size_t k = 0; k < sizeof values / sizeof values[0]; ++k) CHECK_FINITE(name, values[k]);
@@ -261,23 +270,23 @@ f3r_status f3r_scene_validate(const f3r_scene* s, f3r_error* err) {
     if (st != F3R_OK) return st;
   }
   if (s->formulation != F3R_FORMULATION_DAE && s->formulation != F3R_FORMULATION_MINIMAL)
-    return f3r_error_set(err, F3R_ERR_SCENE, "solver.formulation: %d is not one of dae, minimal",
-                         (int)s->formulation);
+    return f3r_scene_error(err, "solver.formulation", NULL, "%d is not one of dae, minimal",
+                           (int)s->formulation);
   if (s->integrator != F3R_INTEGRATOR_IDA && s->integrator != F3R_INTEGRATOR_ERK)
-    return f3r_error_set(err, F3R_ERR_SCENE, "solver.integrator: %d is not one of ida, erk",
-                         (int)s->integrator);
+    return f3r_scene_error(err, "solver.integrator", NULL, "%d is not one of ida, erk",
+                           (int)s->integrator);
   if (s->integrator == F3R_INTEGRATOR_ERK && s->formulation != F3R_FORMULATION_MINIMAL)
-    return f3r_error_set(err, F3R_ERR_SCENE,
-                         "solver.integrator: erk integrates the minimal formulation only");
+    return f3r_scene_error(err, "solver.integrator", NULL,
+                           "erk integrates the minimal formulation only");
   CHECK_RANGE("solver.rtol", s->rtol, 1e-14, 1e-1);
   CHECK_RANGE("solver.atol", s->atol, 1e-16, 1e-1);
   CHECK_RANGE("solver.max_step", s->max_step, 0.0, 1e3);
   if (s->max_order < 1 || s->max_order > 5)
-    return f3r_error_set(err, F3R_ERR_SCENE, "solver.max_order: %d is out of range 1..5", s->max_order);
+    return f3r_scene_error(err, "solver.max_order", NULL, "%d is out of range 1..5", s->max_order);
   CHECK_RANGE("run.duration", s->duration, 0.0, 1e6);
   CHECK_RANGE("run.output_step", s->output_step, 1e-7, 1e3);
   if ((double)s->beam_points < 2 || s->beam_points > 101)
-    return f3r_error_set(err, F3R_ERR_SCENE, "run.beam_points: %d is out of range 2..101",
-                         s->beam_points);
+    return f3r_scene_error(err, "run.beam_points", NULL, "%d is out of range 2..101",
+                           s->beam_points);
   return F3R_OK;
 }

@@ -1,6 +1,7 @@
 /* Scene YAML (libyaml document API) into f3r_scene. Unknown keys are errors; every error reads
- * "path:line: field: what is wrong". Range checks are f3r_scene_validate's; the loader remembers
- * the line of each field so that those messages carry it too. */
+ * "path:line: field: what is wrong". Range checks are f3r_scene_validate's, which names the field
+ * at fault in err->field; the loader remembers the line of every field it read (no cap: a
+ * 1024-point table is 2048 of them) so that those messages carry it too. */
 #include <errno.h>
 #include <math.h>
 #include <stdarg.h>
@@ -11,16 +12,19 @@
 
 #include "flex3rpr/scene.h"
 
-#define MAX_FIELDS 256
+typedef struct {
+  char name[128]; /* the field's path, as f3r_scene_validate names it: "inputs.rho_1.table.time[3]" */
+  int line;
+} field_location;
 
 typedef struct {
   const char* path;
   yaml_document_t doc;
   f3r_scene* scene;
   f3r_error* err;
-  int n_fields;
-  char field_name[MAX_FIELDS][96];
-  int field_line[MAX_FIELDS];
+  field_location* fields; /* every field read, in reading order; grown by doubling */
+  int n_fields, capacity;
+  int out_of_memory;      /* a location could not be stored: reported after the read */
 } loader;
 
 static int line_of(const yaml_node_t* node) { return (int)node->start_mark.line + 1; }
@@ -36,9 +40,36 @@ static f3r_status fail(loader* L, const yaml_node_t* node, const char* field, co
 }
 
 static void remember(loader* L, const char* field, const yaml_node_t* node) {
-  if (L->n_fields >= MAX_FIELDS) return;
-  snprintf(L->field_name[L->n_fields], sizeof L->field_name[0], "%s", field);
-  L->field_line[L->n_fields++] = line_of(node);
+  if (L->n_fields == L->capacity) {
+    const int capacity = L->capacity ? 2 * L->capacity : 64;
+    field_location* grown = realloc(L->fields, (size_t)capacity * sizeof *grown);
+    if (!grown) {
+      L->out_of_memory = 1;
+      return;
+    }
+    L->fields = grown;
+    L->capacity = capacity;
+  }
+  field_location* f = &L->fields[L->n_fields++];
+  snprintf(f->name, sizeof f->name, "%s", field);
+  f->line = line_of(node);
+}
+
+/* The line of `field`: its own, else that of the nearest enclosing field that was read
+ * ("links[1]" for "links[1].modes" when the modes were left to their default); 0 if none. */
+static int line_of_field(const loader* L, const char* field) {
+  int line = 0;
+  size_t best = 0;
+  for (int k = L->n_fields - 1; k >= 0; --k) {
+    const char* name = L->fields[k].name;
+    const size_t n = strlen(name);
+    if (!strcmp(name, field)) return L->fields[k].line;
+    if (n > best && !strncmp(field, name, n) && (field[n] == '.' || field[n] == '[')) {
+      best = n;
+      line = L->fields[k].line;
+    }
+  }
+  return line;
 }
 
 static const char* scalar(const yaml_node_t* n) {
@@ -447,20 +478,17 @@ static f3r_status read_root(loader* L, const yaml_node_t* root) {
   return F3R_OK;
 }
 
-/* Prefixes a validation message with the file and the line of the field it names. */
+/* Prefixes a validation message with the file and the line of the field it names. A field the
+ * file does not hold (a default that another value puts out of range) gets the line of its
+ * section, or 0 when the file has no part of it. */
 static f3r_status locate_validation_error(loader* L, f3r_error* err) {
-  char field[96] = "";
-  sscanf(err->message, "%95[^:]", field);
-  int line = 0;
-  for (int k = 0; k < L->n_fields; ++k)
-    if (!strcmp(L->field_name[k], field)) line = L->field_line[k];
-  if (!line) { /* a field within a list: try its parent, e.g. links[1].modes for links[1] */
-    for (int k = 0; k < L->n_fields; ++k)
-      if (!strncmp(field, L->field_name[k], strlen(L->field_name[k]))) line = L->field_line[k];
-  }
-  char message[sizeof err->message];
+  const int line = line_of_field(L, err->field);
+  char message[sizeof err->message], field[sizeof err->field];
   snprintf(message, sizeof message, "%s:%d: %s", L->path, line, err->message);
-  return f3r_error_set(err, err->code, "%s", message);
+  snprintf(field, sizeof field, "%s", err->field);
+  f3r_error_set(err, err->code, "%s", message);
+  snprintf(err->field, sizeof err->field, "%s", field);
+  return err->code;
 }
 
 f3r_status f3r_scene_load(const char* path, f3r_scene* scene, f3r_error* err) {
@@ -491,6 +519,8 @@ f3r_status f3r_scene_load(const char* path, f3r_scene* scene, f3r_error* err) {
   const yaml_node_t* root = yaml_document_get_root_node(&L->doc);
   if (!root) st = f3r_error_set(err, F3R_ERR_SCENE, "%s:1: the file holds no scene", path);
   else st = read_root(L, root);
+  if (st == F3R_OK && L->out_of_memory)
+    st = f3r_error_set(err, F3R_ERR_MEMORY, "%s: out of memory", path);
   if (st == F3R_OK) {
     st = f3r_scene_validate(&parsed, err);
     if (st != F3R_OK) st = locate_validation_error(L, err);
@@ -499,6 +529,7 @@ f3r_status f3r_scene_load(const char* path, f3r_scene* scene, f3r_error* err) {
   yaml_document_delete(&L->doc);
   yaml_parser_delete(&parser);
   fclose(file);
+  free(L->fields);
   free(L);
   return st;
 }

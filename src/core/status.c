@@ -23,6 +23,23 @@ f3r_status f3r_error_set(f3r_error* err, f3r_status code, const char* format, ..
     va_start(args, format);
     vsnprintf(err->message, sizeof err->message, format, args);
     va_end(args);
+    err->field[0] = '\0';
   }
   return code;
+}
+
+f3r_status f3r_scene_error(f3r_error* err, const char* field, const char* message_field,
+                           const char* format, ...) {
+  if (err) {
+    char what[sizeof err->message];
+    va_list args;
+    va_start(args, format);
+    vsnprintf(what, sizeof what, format, args);
+    va_end(args);
+    err->code = F3R_ERR_SCENE;
+    snprintf(err->message, sizeof err->message, "%s: %s", message_field ? message_field : field,
+             what);
+    snprintf(err->field, sizeof err->field, "%s", field);
+  }
+  return F3R_ERR_SCENE;
 }

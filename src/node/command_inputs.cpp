@@ -2,16 +2,15 @@
 
 namespace flex3rpr {
 
-constexpr uint32_t kCommandQueue = 1000;
-
 CommandInputs::CommandInputs(ros::NodeHandle& pnh, const f3r_model& model,
                              const NodeParams& params, const double* phi_p)
     : model_(model), params_(params), phi_p_(phi_p) {
   for (auto& h : held_) h.assign(static_cast<size_t>(model.nq), 0.0);
   scratch_.assign(static_cast<size_t>(model.nq), 0.0);
   total_.assign(static_cast<size_t>(model.nq), 0.0);
-  // Deep queues: a controller at 10 kHz must not lose commands (a lost invalid one would also go
-  // uncounted) while the node is descheduled for a few ms.
+  // Deep queues (~command_queue_size, 1000 by default): a controller at 10 kHz must not lose
+  // commands (a lost invalid one would also go uncounted) while the node is descheduled.
+  const uint32_t kCommandQueue = static_cast<uint32_t>(params.command_queue_size);
   command_sub_ = pnh.subscribe<EffortCommand>("command", kCommandQueue, [this](const EffortCommand::ConstPtr& m) {
     Accept(kCommand, DecodeEffortCommand(*m, model_, params_.limits, &scratch_), scratch_, "~command");
   });

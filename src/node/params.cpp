@@ -79,6 +79,7 @@ bool LoadParams(const ros::NodeHandle& pnh, NodeParams* p, std::string* error) {
   p->subscriber_timeout = pnh.param("subscriber_timeout", 30.0);
   p->subscriber_grace = pnh.param("subscriber_grace", 0.5);
   p->queue_size = pnh.param("queue_size", 10);
+  p->command_queue_size = pnh.param("command_queue_size", 1000);
   p->beam_marker_exaggeration = pnh.param("beam_marker_exaggeration", 1.0);
   p->limits.force = pnh.param("max_force", p->limits.force);
   p->limits.torque = pnh.param("max_torque", p->limits.torque);
@@ -92,6 +93,7 @@ bool LoadParams(const ros::NodeHandle& pnh, NodeParams* p, std::string* error) {
       !Positive("subscriber_timeout", p->subscriber_timeout, error) ||
       !NonNegative("subscriber_grace", p->subscriber_grace, error) ||
       !Positive("queue_size", p->queue_size, error) ||
+      !Positive("command_queue_size", p->command_queue_size, error) ||
       !Positive("beam_marker_exaggeration", p->beam_marker_exaggeration, error) ||
       !Positive("max_force", p->limits.force, error) ||
       !Positive("max_torque", p->limits.torque, error) ||

@@ -30,6 +30,7 @@ struct NodeParams {
   double subscriber_timeout = 30.0;   // wall s to wait for them; then the node exits with an error
   double subscriber_grace = 0.5;      // wall s the node holds after the first period when it waited
   int queue_size = 10;                // outgoing messages held per subscriber and output topic
+  int command_queue_size = 1000;      // incoming commands held per input topic while the loop integrates
   double beam_marker_exaggeration = 1.0;  // visual only: scales the deflection in ~beams
   CommandLimits limits;
 };

@@ -134,6 +134,7 @@ int SimNode::Run() {
       was_running = false;
       window_sim = 0.0;
       info_.last_error.clear();
+      outputs_->RestartCount();
       outputs_->Publish(*f3r_sim_outputs(sim_.get()), info_);
     }
     const bool run = !control_.paused || control_.pending_steps > 0;

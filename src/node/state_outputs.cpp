@@ -174,6 +174,7 @@ void StateOutputs::Publish(const f3r_outputs& out, const RunInfo& info) {
     beam_.tip_deflection_rate[i] = out.tip_deflection_rate[i];
   }
   beam_pub_.publish(beam_);
+  ++published_states_;
   PublishStatus(out, info);
 }
 
@@ -212,6 +213,7 @@ void StateOutputs::PublishStatus(const f3r_outputs& out, const RunInfo& info) {
   status_.external_work = out.external_work;
   status_.energy_balance_error = out.energy_balance_error;
   status_.rejected_commands = info.rejected_commands;
+  status_.published_states = published_states_;
   status_.last_error = info.last_error;
   status_pub_.publish(status_);
 }

@@ -34,6 +34,8 @@ class StateOutputs {
   // Only ~status: while paused the state does not change, but the status (paused, rejected
   // commands) still does.
   void PublishStatus(const f3r_outputs& out, const RunInfo& info);
+  // Restarts ~status.published_states (a reset starts the count again at its initial state).
+  void RestartCount() { published_states_ = 0; }
   // True when every output topic (joint_states, /tf, ~status, ~beam_state, ~beams, and /clock
   // when it is published) has at least n subscribers connected, and each subscriber the master
   // lists for it: on /clock, rosout and other nodes on simulated time count too, so a count alone
@@ -46,6 +48,7 @@ class StateOutputs {
   const f3r_model& model_;
   const NodeParams& params_;
   bool publish_clock_ = false;
+  uint64_t published_states_ = 0;  // ~status.published_states
   ros::Publisher joints_pub_, status_pub_, beam_pub_, markers_pub_, clock_pub_, tf_pub_;
   tf2_ros::StaticTransformBroadcaster static_tf_;
   sensor_msgs::JointState joints_;

@@ -33,7 +33,13 @@ PKG = rospkg.RosPack().get_path("flex3rpr")
 
 
 class Recorder:
-    """Collects what the node publishes, keyed by simulation time."""
+    """Collects what the node publishes, keyed by simulation time.
+
+    Nothing is lost: node.test gives the node deep publisher queues (~queue_size) and these
+    subscriptions are unbounded, so every message reaches this process however slowly the
+    machine lets it run. A message stamped t = 0 starts a run (the node's start or a reset): the
+    records of that topic start again there, so that nothing from before a reset that was still
+    on its way is mixed in, and `starts` counts them per topic."""
 
     def __init__(self):
         self.lock = threading.Lock()
@@ -41,10 +47,11 @@ class Recorder:
         self.joints = []     # (t, {name: (position, effort)})
         self.platform = {}   # t -> (x, y, phi)
         self.clock = None
-        rospy.Subscriber(NODE + "/status", SimStatus, self._status, queue_size=100)
-        rospy.Subscriber("/joint_states", JointState, self._joints, queue_size=1000)
-        rospy.Subscriber("/tf", TFMessage, self._tf, queue_size=1000)
-        rospy.Subscriber("/clock", Clock, self._clock, queue_size=100)
+        self.starts = {"joints": 0, "tf": 0}
+        rospy.Subscriber(NODE + "/status", SimStatus, self._status, queue_size=None)
+        rospy.Subscriber("/joint_states", JointState, self._joints, queue_size=None)
+        rospy.Subscriber("/tf", TFMessage, self._tf, queue_size=None)
+        rospy.Subscriber("/clock", Clock, self._clock, queue_size=None)
 
     def _status(self, m):
         with self.lock:
@@ -52,6 +59,9 @@ class Recorder:
 
     def _joints(self, m):
         with self.lock:
+            if m.header.stamp.to_sec() == 0.0:
+                self.joints.clear()
+                self.starts["joints"] += 1
             self.joints.append((m.header.stamp.to_sec(),
                                 {n: (p, e) for n, p, e in zip(m.name, m.position, m.effort)}))
 
@@ -59,6 +69,9 @@ class Recorder:
         with self.lock:
             for t in m.transforms:
                 if t.child_frame_id == "platform":
+                    if t.header.stamp.to_sec() == 0.0:
+                        self.platform.clear()
+                        self.starts["tf"] += 1
                     q = t.transform.rotation
                     self.platform[round(t.header.stamp.to_sec(), 9)] = (
                         t.transform.translation.x, t.transform.translation.y,
@@ -80,10 +93,9 @@ class Recorder:
             time.sleep(0.01)
         raise AssertionError("timed out waiting for " + what)
 
-    def clear(self):
+    def rejected(self):
         with self.lock:
-            self.joints.clear()
-            self.platform.clear()
+            return self.status.rejected_commands
 
 
 class NodeBehaviour(unittest.TestCase):
@@ -103,33 +115,52 @@ class NodeBehaviour(unittest.TestCase):
         for pub in (cls.command, cls.group, cls.wrench):
             cls.rec.wait(lambda p=pub: p.get_num_connections() > 0, what="subscriber of " + pub.name)
         cls.rec.wait(lambda: cls.rec.status is not None, what="status")
+        # An invalid command per topic: sent after a valid one, its rejection shows that the
+        # valid one was taken (one connection keeps its order).
+        cls.probe = {cls.command: EffortCommand(leg_force=[float("nan"), 0.0, 0.0]),
+                     cls.group: Float64MultiArray(data=[float("nan")] * 6),
+                     cls.wrench: WrenchStamped()}
+        cls.probe[cls.wrench].header.frame_id = "moon"
         cls.tf_buffer = tf2_ros.Buffer(cache_time=rospy.Duration(1000.0))
         cls.tf_listener = tf2_ros.TransformListener(cls.tf_buffer)
 
     def restart(self):
-        """Paused at t = 0 with no commands and empty records."""
+        """Paused at t = 0 with no commands, the records holding the state at t = 0 alone."""
+        with self.rec.lock:
+            starts = dict(self.rec.starts)
         self.pause()
         self.reset()
-        self.rec.wait(lambda: self.rec.sim_time() == 0.0, what="reset to t = 0")
-        time.sleep(0.05)
-        self.rec.clear()
+        self.rec.wait(lambda: self.rec.sim_time() == 0.0 and self.rec.status.paused, what="reset to t = 0")
+        self.rec.wait(lambda: all(self.rec.starts[k] > starts[k] for k in starts),
+                      what="joint_states and /tf at t = 0 after the reset")
+
+    def send(self, pub, msg):
+        """Publishes a command and waits until the node has taken it."""
+        before = self.rec.rejected()
+        pub.publish(msg)
+        pub.publish(self.probe[pub])
+        self.rec.wait(lambda: self.rec.rejected() == before + 1, what="the node to take a command")
 
     def run_until(self, t_end):
+        """Runs until simulated time t_end (or a little beyond), then pauses; returns once this
+        process holds every joint_states and /tf the node published up to the pause."""
         self.resume()
         self.rec.wait(lambda: self.rec.sim_time() >= t_end, what="simulated time %g" % t_end)
         self.pause()
-        time.sleep(0.1)
+        self.rec.wait(lambda: self.rec.status.paused, what="the pause")
+        t_paused = round(self.rec.sim_time(), 9)
+        self.rec.wait(lambda: (self.rec.joints and round(self.rec.joints[-1][0], 9) >= t_paused
+                               and t_paused in self.rec.platform), what="outputs up to the pause")
 
     def test_a_tf_beam_points_close_the_loops(self):
         # The first test: the node has run from t = 0 without a reset, so TF holds one history.
-        self.group.publish(Float64MultiArray(data=[2.0, -1.0, 0.5, 0.3, -0.2, 0.1]))
-        time.sleep(0.1)
+        self.send(self.group, Float64MultiArray(data=[2.0, -1.0, 0.5, 0.3, -0.2, 0.1]))
         self.run_until(self.rec.sim_time() + 0.03)
         buf = self.tf_buffer
         with self.rec.lock:
             t, joints = self.rec.joints[-1]
         stamp = rospy.Time.from_sec(t)
-        self.rec.wait(lambda: buf.can_transform("world", "leg_3_beam_10", stamp), timeout=10,
+        self.rec.wait(lambda: buf.can_transform("world", "leg_3_beam_10", stamp), timeout=60,
                       what="beam frames in TF")
         p = buf.lookup_transform("world", "platform", stamp).transform
         phi = 2.0 * math.atan2(p.rotation.z, p.rotation.w)
@@ -162,8 +193,7 @@ class NodeBehaviour(unittest.TestCase):
         self.restart()
         msg = EffortCommand()
         msg.leg_force = [5.0, 0.0, 0.0]
-        self.command.publish(msg)
-        time.sleep(0.1)
+        self.send(self.command, msg)
         self.run_until(0.06)
         self.assert_moves_along_150_degrees()
         with self.rec.lock:
@@ -192,8 +222,7 @@ class NodeBehaviour(unittest.TestCase):
 
     def test_c_effort_group_topic(self):
         self.restart()
-        self.group.publish(Float64MultiArray(data=[5.0, 0, 0, 0, 0, 0]))
-        time.sleep(0.1)
+        self.send(self.group, Float64MultiArray(data=[5.0, 0, 0, 0, 0, 0]))
         self.run_until(0.04)
         self.assert_moves_along_150_degrees()
 
@@ -202,8 +231,7 @@ class NodeBehaviour(unittest.TestCase):
         w = WrenchStamped()
         w.header.frame_id = "world"
         w.wrench.force.x, w.wrench.force.y = 5.0 * math.cos(DIR), 5.0 * math.sin(DIR)
-        self.wrench.publish(w)
-        time.sleep(0.1)
+        self.send(self.wrench, w)
         self.run_until(0.04)
         self.assert_moves_along_150_degrees()
 
@@ -216,19 +244,21 @@ class NodeBehaviour(unittest.TestCase):
         self.assertTrue(self.step().success)
         self.rec.wait(lambda: self.rec.sim_time() > t0, what="one step")
         self.assertAlmostEqual(self.rec.sim_time() - t0, 0.001, delta=1e-12)
+        # /clock travels on its own connection: it reaches the stepped time, and stays there.
+        self.rec.wait(lambda: abs(self.rec.clock - self.rec.sim_time()) < 1e-9, what="/clock at the step")
+        time.sleep(0.3)
         self.assertAlmostEqual(self.rec.clock, self.rec.sim_time(), delta=1e-9)
         c0 = self.rec.clock
         self.resume()
         self.rec.wait(lambda: self.rec.sim_time() > t0 + 0.05, what="resume")
-        self.assertGreater(self.rec.clock, c0, "/clock advances")
+        self.rec.wait(lambda: self.rec.clock > c0, what="/clock to advance")
         self.pause()
         self.assertTrue(self.reset().success)
         self.rec.wait(lambda: self.rec.sim_time() == 0.0, what="reset")
 
     def test_f_bad_commands_are_rejected_and_change_nothing(self):
         self.restart()
-        self.group.publish(Float64MultiArray(data=[1.0, 2.0, 3.0, 0.1, 0.2, 0.3]))
-        time.sleep(0.1)
+        self.send(self.group, Float64MultiArray(data=[1.0, 2.0, 3.0, 0.1, 0.2, 0.3]))
         self.run_until(0.005)
         with self.rec.lock:
             efforts = {n: e for n, (_, e) in self.rec.joints[-1][1].items()}
@@ -245,7 +275,7 @@ class NodeBehaviour(unittest.TestCase):
         for k, (pub, msg) in enumerate(bad):
             before = self.rec.status.rejected_commands
             pub.publish(msg)
-            self.rec.wait(lambda: self.rec.status.rejected_commands == before + 1, timeout=10,
+            self.rec.wait(lambda: self.rec.status.rejected_commands == before + 1,
                           what="rejection of bad command %d" % k)
         self.run_until(0.01)
         with self.rec.lock:

@@ -14,7 +14,7 @@ import rostest
 PKG = rospkg.RosPack().get_path("flex3rpr")
 
 
-def run_node(*args, timeout=60):
+def run_node(*args, timeout=300):
     p = subprocess.run(["rosrun", "flex3rpr", "flex3rpr_node", *args], capture_output=True,
                        text=True, timeout=timeout)
     return p.returncode, p.stdout + p.stderr
@@ -50,7 +50,7 @@ class NodeStartup(unittest.TestCase):
                                 stderr=subprocess.STDOUT, text=True)
         master = rosgraph.Master("/node_startup")
         try:
-            end = time.time() + 60
+            end = time.time() + 300
             published = False
             while time.time() < end and not published:
                 published = any(t == "/flex3rpr_node/status" for t, _ in master.getPublishedTopics(""))
@@ -58,7 +58,7 @@ class NodeStartup(unittest.TestCase):
             alive = proc.poll() is None
         finally:
             proc.terminate()
-            out, _ = proc.communicate(timeout=20)
+            out, _ = proc.communicate(timeout=120)
         self.assertTrue(published, "the node publishes ~status with no arguments; it said:\n" + out[-3000:])
         self.assertTrue(alive, "the node keeps running; it said:\n" + out[-3000:])
         self.assertIn("no robot_description parameter", out)
