@@ -229,6 +229,39 @@ TEST(Effects, ScriptedInputShapesAndTheirBreakpoints) {
   EXPECT_EQ(f3r_input_breakpoints(&table, times, 8), 3);
 }
 
+// A full table, uneven knots, both interpolations: every value at, between, before and after the
+// knots equals the definition, evaluated here by scanning the knots from the start.
+TEST(Effects, LongTablesGiveTheValueOfTheirInterval) {
+  f3r_input table{};
+  table.kind = F3R_INPUT_TABLE;
+  table.table_size = F3R_MAX_TABLE;
+  double t = 0.0;
+  for (int k = 0; k < F3R_MAX_TABLE; ++k) {
+    t += 1e-3 * (1.0 + (k * 7919 % 13));  // uneven steps
+    table.table_time[k] = t;
+    table.table_value[k] = std::sin(0.37 * k) * 10.0;
+  }
+  auto reference = [&](double at) {
+    const int n = table.table_size;
+    if (at <= table.table_time[0]) return table.table_value[0];
+    if (at >= table.table_time[n - 1]) return table.table_value[n - 1];
+    int k = 1;
+    while (table.table_time[k] < at) ++k;
+    if (table.table_hold) return table.table_value[k - 1];
+    const double w = (at - table.table_time[k - 1]) / (table.table_time[k] - table.table_time[k - 1]);
+    return table.table_value[k - 1] + w * (table.table_value[k] - table.table_value[k - 1]);
+  };
+  for (int hold = 0; hold < 2; ++hold) {
+    table.table_hold = hold;
+    std::vector<double> probes = {-1.0, table.table_time[0], t, t + 1.0};
+    for (int k = 0; k + 1 < F3R_MAX_TABLE; ++k) {
+      const double a = table.table_time[k], b = table.table_time[k + 1];
+      probes.insert(probes.end(), {a, std::nextafter(a, b), 0.5 * (a + b), std::nextafter(b, a)});
+    }
+    for (double at : probes) ASSERT_EQ(f3r_input_value(&table, at), reference(at)) << "t = " << at << ", hold " << hold;
+  }
+}
+
 TEST(Effects, AStepInputEqualsHeldForcesAppliedAtTheSameTime) {
   f3r_scene scripted = SceneWithLinks(F3R_LINK_FIXED_FREE, 2, F3R_LINK_FIXED_FREE, 2, F3R_LINK_FIXED_FREE, 2);
   scripted.inputs[0].kind = F3R_INPUT_STEP;

@@ -78,6 +78,11 @@ typedef struct f3r_model {
   int n_lag;                 /* 3 with actuator lag (applied leg forces are states), else 0 */
   double lag_time_constant;  /* s */
 
+  /* end stops of the pistons (events.c): active only when end_stops is 1 */
+  int end_stops;
+  double stroke_min, stroke_max; /* limits of rho_i (m) */
+  double restitution;            /* Newton's coefficient c: rho_i' -> -c rho_i' at a stop */
+
   int nq;                    /* number of generalized coordinates */
   int n_independent;         /* 3 + sum r_i: platform pose and modal coordinates */
   double theta_branch[3];    /* leg directions at the scene's initial pose: branch of atan2 */

@@ -9,8 +9,10 @@
 #include "link_state.h"
 
 /* Legs whose beam root comes closer than this fraction of l to A_i are degenerate: there the
- * constraint Jacobian loses rank (det of the leg's 2x2 block is rho + l). */
-#define F3R_MIN_LEG_FRACTION 1e-3
+ * constraint Jacobian loses rank (det of the leg's 2x2 block is rho + l), and the loop closure
+ * refuses them. A run stops long before, at the collapse guard (stepper.h,
+ * F3R_COLLAPSE_LEG_FRACTION = 0.1); this bound only keeps the closure itself finite. */
+#define F3R_CLOSURE_MIN_LEG_FRACTION 1e-3
 
 static const double kPlatformAngle[3] = {-M_PI / 6.0, M_PI / 2.0, 7.0 * M_PI / 6.0};
 
@@ -108,6 +110,10 @@ f3r_status f3r_model_create(const f3r_scene* scene, f3r_model** out, f3r_error* 
   for (int k = 0; k < 3; ++k) m->gravity[k] = scene->gravity[k];
   m->n_lag = scene->actuator_lag > 0.0 ? 3 : 0;
   m->lag_time_constant = scene->actuator_lag;
+  m->end_stops = scene->end_stops;
+  m->stroke_min = scene->stroke_min;
+  m->stroke_max = scene->stroke_max;
+  m->restitution = scene->restitution;
   m->exact_kinematics = scene->exact_kinematics;
 
   int next = 9;
@@ -191,7 +197,7 @@ f3r_status f3r_model_close_loops(const f3r_model* m, double* q) {
     const double dy = q[7] + m->platform_radius * pj.sc - m->base_joint[i][1];
     const double w = f3r_model_tip_deflection(m, q, i);
     const double len_sq = dx * dx + dy * dy - w * w;
-    const double min_len = F3R_MIN_LEG_FRACTION * m->link_length;
+    const double min_len = F3R_CLOSURE_MIN_LEG_FRACTION * m->link_length;
     if (!(len_sq > min_len * min_len)) return F3R_ERR_SINGULAR;
     const double len = sqrt(len_sq);
     const double raw = atan2(dy, dx) - atan2(w, len);

@@ -24,8 +24,7 @@ struct f3r_sim {
   long impacts;
   double impact_loss;
   f3r_impact_record last_impact;
-  double chatter_t0;     /* start of the current window of impacts */
-  long chatter_count;
+  f3r_impact_window impact_window; /* impacts in the last ms (events.h) */
   f3r_outputs out;
 };
 
@@ -131,8 +130,9 @@ f3r_status f3r_sim_reset(f3r_sim* s, f3r_error* err) {
   if (st != F3R_OK) return f3r_error_set(err, st, "the initial pose cannot be reached");
   memset(s->held, 0, sizeof s->held);
   s->t = 0.0;
-  s->impacts = s->chatter_count = 0;
-  s->impact_loss = s->chatter_t0 = 0.0;
+  s->impacts = 0;
+  s->impact_loss = 0.0;
+  memset(&s->impact_window, 0, sizeof s->impact_window);
   memset(&s->last_impact, 0, sizeof s->last_impact);
   if ((st = consistent(s, q, v, NULL, 0.0, err)) != F3R_OK) return st;
   st = s->ops->restart(&s->stepper, s->y, s->yp, 0.0, err);
@@ -162,59 +162,19 @@ f3r_status f3r_sim_set_forces(f3r_sim* s, const double* held, f3r_error* err) {
   return st;
 }
 
-/* Impacts would repeat without end when a force holds a piston against its stop: resting contact
- * is not modelled, so a run stops with an error past this many impacts within 1 ms. */
-#define F3R_MAX_IMPACTS_PER_MS 200
-/* Below this rebound speed (m/s) a leg is taken to come to rest on its stop: the rebounds that
- * follow shrink geometrically (a Zeno sequence) and grow shorter than one integrator step, so
- * root finding would miss one and let the piston pass the stop. */
-#define F3R_RESTING_SPEED 0.01
-
-/* At an end-stop event: the impact law on the legs in contact, then a restart. */
+/* At an end-stop event: the impact law on the legs in contact (events.c), then a restart. */
 static f3r_status handle_impact(f3r_sim* s, f3r_error* err) {
   const f3r_model* m = s->model;
   const double* y = N_VGetArrayPointer(s->y);
-  double q[F3R_MAX_Q], v[F3R_MAX_Q], v_after[F3R_MAX_Q], impulse[3], lag[3];
+  double q[F3R_MAX_Q], v[F3R_MAX_Q], v_after[F3R_MAX_Q], lag[3];
   f3r_status st = f3r_state_to_full(m, s->settings.formulation, y, q, v);
   if (st != F3R_OK) return f3r_error_set(err, st, "end stop at t = %.9g: the loops do not close", s->t);
-  int legs[3], at_max[3], count = 0;
-  for (int i = 0; i < 3; ++i)
-    if (s->stepper.root_info[2 * i] || s->stepper.root_info[2 * i + 1]) {
-      at_max[count] = s->stepper.root_info[2 * i + 1] != 0;
-      legs[count++] = i;
-    }
-  if (!count) return F3R_OK;
-  if (s->t - s->chatter_t0 > 1e-3) {
-    s->chatter_t0 = s->t;
-    s->chatter_count = 0;
-  }
-  if (++s->chatter_count > F3R_MAX_IMPACTS_PER_MS)
-    return f3r_error_set(err, F3R_ERR_SOLVER,
-                         "leg %d rests against its end stop at t = %.9g (more than %d impacts in "
-                         "1 ms): resting contact is not modelled; reduce the force into the stop",
-                         legs[0] + 1, s->t, F3R_MAX_IMPACTS_PER_MS);
-  st = f3r_impact(m, q, v, legs, count, m->scene.restitution, v_after, impulse, s->impact_work);
-  if (st != F3R_OK) return f3r_error_set(err, st, "end stop at t = %.9g: singular impact", s->t);
-  for (int c = 0; c < count; ++c)
-    if (fabs(v_after[legs[c]]) < F3R_RESTING_SPEED)
-      return f3r_error_set(err, F3R_ERR_SOLVER,
-                           "leg %d rests against its end stop at t = %.9g (rebound %.3g m/s, below "
-                           "%g m/s): resting contact is not modelled; reduce the force into the stop",
-                           legs[c] + 1, s->t, fabs(v_after[legs[c]]), F3R_RESTING_SPEED);
-  const double before = f3r_kinetic_energy(m, q, v), after = f3r_kinetic_energy(m, q, v_after);
-  f3r_impact_record* r = &s->last_impact;
-  r->t = s->t;
-  r->leg = legs[0];
-  r->at_max = at_max[0];
-  r->rho = q[legs[0]];
-  r->rate_before = v[legs[0]];
-  r->rate_after = v_after[legs[0]];
-  r->impulse = impulse[0];
-  r->kinetic_before = before;
-  r->kinetic_after = after;
-  memcpy(r->q, q, sizeof r->q);
-  s->impacts += count;
-  s->impact_loss += before - after;
+  int legs_hit = 0;
+  st = f3r_event_impact(m, s->t, s->stepper.root_info, q, v, &s->impact_window, v_after,
+                        &s->last_impact, &legs_hit, s->impact_work, err);
+  if (st != F3R_OK || !legs_hit) return st;
+  s->impacts += legs_hit;
+  s->impact_loss += s->last_impact.kinetic_before - s->last_impact.kinetic_after;
   st = consistent(s, q, v_after, lag_states(s, lag), y[s->ny - 1], err);
   if (st == F3R_OK) st = s->ops->restart(&s->stepper, s->y, s->yp, s->t, err);
   return st;
@@ -230,15 +190,7 @@ f3r_status f3r_sim_advance(f3r_sim* s, double t_out, f3r_error* err) {
       break;
     }
     double t_stop = t_out;
-    int at_break = 0;
-    for (int k = 0; k < m->n_breakpoints; ++k)
-      if (m->breakpoints[k] > s->t) {
-        if (m->breakpoints[k] <= t_out) {
-          t_stop = m->breakpoints[k];
-          at_break = 1;
-        }
-        break;
-      }
+    const int at_break = f3r_event_next_breakpoint(m, s->t, t_out, &t_stop);
     double t_reached = s->t;
     int event = 0;
     f3r_status st = s->ops->advance(&s->stepper, t_stop, at_break || s->settings.stop_at_outputs,
@@ -249,16 +201,10 @@ f3r_status f3r_sim_advance(f3r_sim* s, double t_out, f3r_error* err) {
     }
     if (event) {
       s->t = t_reached;
-      for (int i = 0; i < 3; ++i)
-        if (s->stepper.root_info[F3R_COLLAPSE_ROOT + i]) {
-          double q[F3R_MAX_Q], v[F3R_MAX_Q];
-          f3r_state_to_full(m, s->settings.formulation, N_VGetArrayPointer(s->y), q, v);
-          return f3r_error_set(err, F3R_ERR_SINGULAR,
-                               "leg %d collapsed at t = %.9g: rho_%d + l = %.4g m reached the guard "
-                               "%.2g l, where the beam's root nears A_%d and the loop closure "
-                               "degenerates; the last good state is kept",
-                               i + 1, s->t, i + 1, q[i] + m->link_length, F3R_MIN_LEG_FRACTION, i + 1);
-        }
+      const int collapsed = f3r_event_collapsed_leg(s->stepper.root_info);
+      if (collapsed >= 0)
+        return f3r_event_collapse_error(m, s->settings.formulation, N_VGetArrayPointer(s->y),
+                                        collapsed, s->t, err);
       if ((st = handle_impact(s, err)) != F3R_OK) return st;
       continue;
     }

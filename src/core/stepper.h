@@ -11,13 +11,8 @@
 
 #include "flex3rpr/sim.h"
 
-/* Root functions of state y, all crossing downwards: the end stops rho_i - min and max - rho_i
- * (rows 2i, 2i + 1; constant 1 without end stops) and the collapse guard
- * rho_i + l - F3R_MIN_LEG_FRACTION l (row F3R_COLLAPSE_ROOT + i), which stops a run before the
- * beam's root reaches A_i, where the loop closure and the constraint Jacobian degenerate. */
-#define F3R_COLLAPSE_ROOT 6
-#define F3R_NROOTS 9
-#define F3R_MIN_LEG_FRACTION 0.1
+#include "events.h"
+
 typedef struct {
   const f3r_model* model;
   f3r_solver_settings settings;
@@ -53,11 +48,10 @@ typedef struct {
 extern const f3r_stepper_ops f3r_ida_stepper;
 extern const f3r_stepper_ops f3r_erk_stepper;
 
-int f3r_root_functions(const f3r_stepper* st, const double* y, double* g);
-
-/* Stores a SUNDIALS error message in the stepper (user data of the error handler). */
-
+/* Both back ends (stepper.c): the SUNDIALS error handler, which stores the message in the
+ * stepper (its user data) since the core never prints, and the root functions (events.c) at y. */
 void f3r_stepper_error_handler(int code, const char* module, const char* function, char* msg,
                                void* user);
+int f3r_stepper_roots(const f3r_stepper* st, const double* y, double* g);
 
 #endif

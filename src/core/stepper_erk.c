@@ -18,7 +18,7 @@ static int rhs_fn(realtype t, N_Vector y, N_Vector ydot, void* user) {
 
 static int root_fn(realtype t, N_Vector y, realtype* g, void* user) {
   (void)t;
-  return f3r_root_functions(user, N_VGetArrayPointer(y), g);
+  return f3r_stepper_roots(user, N_VGetArrayPointer(y), g);
 }
 
 static f3r_status failed(f3r_stepper* st, f3r_error* err, const char* call, int flag) {
@@ -55,10 +55,12 @@ static f3r_status erk_setup(f3r_stepper* st, N_Vector y, N_Vector yp, double t0,
 static void erk_stats(const f3r_stepper* st, f3r_sim_stats* out) {
   long nst = 0, nfe = 0, netf = 0;
   realtype hlast = 0.0;
-  ERKStepGetNumSteps(st->mem, &nst);
-  ERKStepGetNumRhsEvals(st->mem, &nfe);
-  ERKStepGetNumErrTestFails(st->mem, &netf);
-  ERKStepGetLastStep(st->mem, &hlast);
+  /* The getters fail only without ERKStep memory, which a set-up stepper has; a failed one
+   * leaves its counter at 0 rather than garbage. */
+  if (ERKStepGetNumSteps(st->mem, &nst) < 0) nst = 0;
+  if (ERKStepGetNumRhsEvals(st->mem, &nfe) < 0) nfe = 0;
+  if (ERKStepGetNumErrTestFails(st->mem, &netf) < 0) netf = 0;
+  if (ERKStepGetLastStep(st->mem, &hlast) < 0) hlast = 0.0;
   *out = st->base;
   out->steps += nst;
   out->residual_evals += nfe;
@@ -84,11 +86,17 @@ static f3r_status erk_advance(f3r_stepper* st, double tout, int exact, N_Vector 
   *t_reached = t;
   *event = flag == ARK_ROOT_RETURN;
   if (*event) CHECK(ERKStepGetRootInfo(st->mem, st->root_info));
-  if (flag >= 0) {
-    f3r_explicit_rhs(st->model, t, N_VGetArrayPointer(y), st->held, N_VGetArrayPointer(yp), st->ws);
+  if (flag >= 0) { /* y' at the state reached, for the outputs and a restart */
+    const f3r_status s = f3r_explicit_rhs(st->model, t, N_VGetArrayPointer(y), st->held,
+                                          N_VGetArrayPointer(yp), st->ws);
+    if (s != F3R_OK)
+      return f3r_error_set(err, s, "no accelerations at t = %.9g, the state ERKStep reached: %s",
+                           t, f3r_status_name(s));
     return F3R_OK;
   }
-  ERKStepGetDky(st->mem, t, 0, y);
+  /* the last successful step is still a good state; ERKStepEvolve left y there already when
+   * this interpolation cannot be had */
+  (void)ERKStepGetDky(st->mem, t, 0, y);
   return f3r_error_set(err, flag == ARK_RHSFUNC_FAIL ? F3R_ERR_NONFINITE : F3R_ERR_SOLVER,
                        "ERKStepEvolve stopped at t = %.9g before %.9g: %s (%s)", t, tout,
                        ERKStepGetReturnFlagName(flag), st->message);

@@ -3,6 +3,7 @@
 #include <ida/ida.h>
 #include <math.h>
 #include <stdio.h>
+#include <string.h>
 
 #include "stepper.h"
 
@@ -41,7 +42,7 @@ static int jacobian_fn(realtype t, realtype cj, N_Vector y, N_Vector yp, N_Vecto
 
 static int root_fn(realtype t, N_Vector y, N_Vector yp, realtype* g, void* user) {
   (void)t, (void)yp;
-  return f3r_root_functions(user, N_VGetArrayPointer(y), g);
+  return f3r_stepper_roots(user, N_VGetArrayPointer(y), g);
 }
 
 static f3r_status failed(f3r_stepper* st, f3r_error* err, const char* call, int flag) {
@@ -97,14 +98,16 @@ static void ida_stats(const f3r_stepper* st, f3r_sim_stats* out) {
   long nst = 0, nre = 0, nje = 0, netf = 0, nncf = 0, nre_ls = 0;
   realtype hlast = 0.0;
   int kord = 0;
-  IDAGetNumSteps(st->mem, &nst);
-  IDAGetNumResEvals(st->mem, &nre);
-  IDAGetNumJacEvals(st->mem, &nje);
-  IDAGetNumLinResEvals(st->mem, &nre_ls);
-  IDAGetNumErrTestFails(st->mem, &netf);
-  IDAGetNumNonlinSolvConvFails(st->mem, &nncf);
-  IDAGetLastStep(st->mem, &hlast);
-  IDAGetLastOrder(st->mem, &kord);
+  /* The getters fail only without IDA memory or a linear solver, which a set-up stepper has; a
+   * failed one leaves its counter at 0 rather than garbage. */
+  if (IDAGetNumSteps(st->mem, &nst) < 0) nst = 0;
+  if (IDAGetNumResEvals(st->mem, &nre) < 0) nre = 0;
+  if (IDAGetNumJacEvals(st->mem, &nje) < 0) nje = 0;
+  if (IDAGetNumLinResEvals(st->mem, &nre_ls) < 0) nre_ls = 0;
+  if (IDAGetNumErrTestFails(st->mem, &netf) < 0) netf = 0;
+  if (IDAGetNumNonlinSolvConvFails(st->mem, &nncf) < 0) nncf = 0;
+  if (IDAGetLastStep(st->mem, &hlast) < 0) hlast = 0.0;
+  if (IDAGetLastOrder(st->mem, &kord) < 0) kord = 0;
   *out = st->base;
   out->steps += nst;
   out->residual_evals += nre + nre_ls;
@@ -137,8 +140,11 @@ static f3r_status ida_advance(f3r_stepper* st, double tout, int exact, N_Vector 
   if (flag >= 0) return F3R_OK;
   char message[sizeof st->message];
   snprintf(message, sizeof message, "%s", st->message);
-  IDAGetDky(st->mem, t, 0, y); /* the last successful step: still a good state */
-  IDAGetDky(st->mem, t, 1, yp);
+  /* The last successful step is still a good state; IDASolve left y at it already when this
+   * interpolation cannot be had. */
+  if (IDAGetDky(st->mem, t, 0, y) < 0 || IDAGetDky(st->mem, t, 1, yp) < 0)
+    snprintf(message + strlen(message), sizeof message - strlen(message),
+             "; the state is IDASolve's own");
   snprintf(st->message, sizeof st->message, "%s", message);
   return f3r_error_set(err,
                        flag == IDA_RES_FAIL || flag == IDA_REP_RES_ERR ? F3R_ERR_NONFINITE
@@ -160,22 +166,3 @@ static void ida_release(f3r_stepper* st) {
 
 const f3r_stepper_ops f3r_ida_stepper = {ida_setup, ida_restart, ida_advance, ida_stats,
                                          ida_release};
-
-int f3r_root_functions(const f3r_stepper* st, const double* y, double* g) {
-  const f3r_model* m = st->model;
-  double q[F3R_MAX_Q], v[F3R_MAX_Q];
-  if (f3r_state_to_full(m, st->settings.formulation, y, q, v) != F3R_OK) return 1;
-  for (int i = 0; i < 3; ++i) {
-    g[2 * i] = m->scene.end_stops ? q[i] - m->scene.stroke_min : 1.0;
-    g[2 * i + 1] = m->scene.end_stops ? m->scene.stroke_max - q[i] : 1.0;
-    g[F3R_COLLAPSE_ROOT + i] = q[i] + (1.0 - F3R_MIN_LEG_FRACTION) * m->link_length;
-  }
-  return 0;
-}
-
-void f3r_stepper_error_handler(int code, const char* module, const char* function, char* msg,
-                               void* user) {
-  f3r_stepper* st = user;
-  (void)code;
-  snprintf(st->message, sizeof st->message, "%s %s: %s", module, function, msg);
-}

@@ -1,0 +1,53 @@
+/* The events of a run, in one place: the root functions the integrators watch (end stops and
+ * the collapse guard), what happens at an end-stop impact, and the breakpoints of the scripted
+ * inputs, where a run stops exactly. Every threshold is one named constant here. Private. */
+#ifndef FLEX3RPR_EVENTS_H
+#define FLEX3RPR_EVENTS_H
+
+#include "flex3rpr/sim.h"
+
+/* Root functions of state y, all crossing downwards: the end stops rho_i - min and max - rho_i
+ * (rows 2i, 2i + 1; constant 1 without end stops) and the collapse guard
+ * rho_i + l - F3R_COLLAPSE_LEG_FRACTION l (row F3R_COLLAPSE_ROOT + i), which stops a run before
+ * the beam's root reaches A_i, where the loop closure and the constraint Jacobian degenerate. */
+#define F3R_NROOTS 9
+#define F3R_COLLAPSE_ROOT 6
+#define F3R_COLLAPSE_LEG_FRACTION 0.1
+/* Impacts would repeat without end when a force holds a piston against its stop: resting contact
+ * is not modelled, so a run stops with an error past this many impacts within 1 ms. */
+#define F3R_MAX_IMPACTS_PER_MS 200
+/* Below this rebound speed (m/s) a leg is taken to come to rest on its stop: the rebounds that
+ * follow shrink geometrically (a Zeno sequence) and grow shorter than one integrator step, so
+ * root finding would miss one and let the piston pass the stop. */
+#define F3R_RESTING_SPEED 0.01
+
+/* g (F3R_NROOTS) at state y of the formulation. Returns 0, or 1 when y does not close (the
+ * integrators take that as a recoverable failure). */
+int f3r_event_roots(const f3r_model* m, f3r_formulation form, const double* y, double* g);
+
+/* The first breakpoint of the scripted inputs in (t, t_out]: 1 with *t_stop set, else 0. */
+int f3r_event_next_breakpoint(const f3r_model* m, double t, double t_out, double* t_stop);
+
+/* The leg (0..2) whose collapse guard fired according to root_info, or -1. */
+int f3r_event_collapsed_leg(const int* root_info);
+
+/* The error of a run stopped by the collapse guard of `leg` at t in state y. */
+f3r_status f3r_event_collapse_error(const f3r_model* m, f3r_formulation form, const double* y,
+                                    int leg, double t, f3r_error* err);
+
+/* Impacts counted in the current window of 1 ms, for F3R_MAX_IMPACTS_PER_MS. */
+typedef struct {
+  double window_start;
+  long count;
+} f3r_impact_window;
+
+/* At an end-stop event at t (root_info from the integrator) in the full state q, v: the legs in
+ * contact, the chatter and resting checks, and Newton's impact law (f3r_impact) with the
+ * model's restitution. Fills v_after, the record of the first leg, and *legs_hit (0 when no
+ * end-stop root fired). work holds f3r_impact_work_size doubles. */
+f3r_status f3r_event_impact(const f3r_model* m, double t, const int* root_info, const double* q,
+                            const double* v, f3r_impact_window* window, double* v_after,
+                            f3r_impact_record* record, int* legs_hit, double* work,
+                            f3r_error* err);
+
+#endif
