@@ -104,4 +104,41 @@ TEST(Residual, StateLayoutHoldsOnlyWhatTheLinksCallFor) {
       }
 }
 
+// The forward pass computes each angle's sine and cosine once per evaluation: dae one pair per
+// leg angle and one for phi_p (rotated onto the three platform joints); minimal only phi_p's,
+// since its loop closure gives each leg's direction algebraically. With gravity on (its forces
+// need the legs' directions too) and fixed-free links, whose tips enter the constraints.
+TEST(Residual, OneEvaluationComputesEachAngleOnce) {
+  f3r_scene scene = SceneWithLinks(F3R_LINK_FIXED_FREE, 3, F3R_LINK_FIXED_FREE, 3, F3R_LINK_FIXED_FREE, 3);
+  scene.gravity[0] = 3.0;
+  scene.gravity[1] = -4.0;
+  scene.platform_pose0[2] = 0.2;
+  scene.platform_velocity0[0] = 0.3;
+  auto m = MakeModel(scene);
+  for (f3r_formulation form : {F3R_FORMULATION_DAE, F3R_FORMULATION_MINIMAL}) {
+    const int ny = f3r_state_size(m.get(), form);
+    std::vector<double> q(F3R_MAX_Q), v(F3R_MAX_Q), y(ny), yp(ny), res(ny), J((size_t)ny * ny);
+    ASSERT_EQ(f3r_model_initial_state(m.get(), q.data(), v.data()), F3R_OK);
+    WorkspacePtr ws(f3r_workspace_create(m.get()));
+    ASSERT_EQ(f3r_consistent_state(m.get(), form, 0.0, q.data(), v.data(), nullptr, nullptr, 0.0,
+                                   y.data(), yp.data(), nullptr, ws.get()),
+              F3R_OK);
+    const long per_evaluation = form == F3R_FORMULATION_DAE ? 4 : 1;
+    long before = f3r_workspace_sincos_pairs(ws.get());
+    ASSERT_EQ(f3r_residual(m.get(), form, 0.001, y.data(), yp.data(), nullptr, res.data(), ws.get()), F3R_OK);
+    EXPECT_EQ(f3r_workspace_sincos_pairs(ws.get()) - before, per_evaluation) << "residual, form " << form;
+    if (form == F3R_FORMULATION_MINIMAL) {
+      before = f3r_workspace_sincos_pairs(ws.get());
+      ASSERT_EQ(f3r_explicit_rhs(m.get(), 0.001, y.data(), nullptr, res.data(), ws.get()), F3R_OK);
+      EXPECT_EQ(f3r_workspace_sincos_pairs(ws.get()) - before, 1) << "explicit right-hand side";
+    } else {
+      before = f3r_workspace_sincos_pairs(ws.get());
+      ASSERT_EQ(f3r_residual_jacobian(m.get(), form, 0.001, 1e4, y.data(), yp.data(), nullptr, J.data(), ny,
+                                      ws.get()),
+                F3R_OK);
+      EXPECT_EQ(f3r_workspace_sincos_pairs(ws.get()) - before, per_evaluation) << "dae Jacobian";
+    }
+  }
+}
+
 }  // namespace

@@ -241,6 +241,49 @@ TEST(Simulation, TwoSimulationsShareOneModelIndependently) {
   EXPECT_EQ(f3r_sim_outputs(sc.get())->q[6], xa);
 }
 
+// The outputs of one forward pass against the (q, v) functions of stages.h at the output state:
+// the loop forces against an LU solve of the whole constrained system [M -G^T; G 0] (the
+// minimal formulation's come from its accelerations y', so they agree to the solver's
+// tolerance; the dae's are its state), energies, deflections and constraint residuals.
+TEST(Simulation, OutputsAgreeWithTheStagesAtTheOutputState) {
+  for (f3r_formulation form : {F3R_FORMULATION_MINIMAL, F3R_FORMULATION_DAE}) {
+    f3r_scene s = Scene("paper_sim3_fixed_free.yaml");
+    s.gravity[1] = -9.81;  // in plane, so that gravity's forces are among the outputs
+    auto m = MakeModel(s);
+    f3r_solver_settings set = f3r_solver_settings_from_scene(&s);
+    set.formulation = form;
+    set.rtol = 1e-10;
+    set.atol = 1e-12;
+    f3r_sim* raw = nullptr;
+    f3r_error err{};
+    ASSERT_EQ(f3r_sim_create(m.get(), &set, &raw, &err), F3R_OK) << err.message;
+    SimPtr sim(raw);
+    ASSERT_EQ(f3r_sim_advance(sim.get(), 0.0123, &err), F3R_OK) << err.message;
+    const f3r_outputs* o = f3r_sim_outputs(sim.get());
+    const int nq = m->nq;
+    std::vector<double> Q(nq), a(nq), lambda(F3R_NCON), work(f3r_solve_accelerations_work_size(m.get()));
+    f3r_applied_forces(m.get(), o->t, nullptr, o->q, o->v, nullptr, Q.data(), nullptr);
+    for (int n = 0; n < nq; ++n) EXPECT_NEAR(o->forces[n], Q[n], 1e-12 * (1.0 + std::fabs(Q[n]))) << n;
+    ASSERT_EQ(f3r_solve_accelerations(m.get(), o->q, o->v, Q.data(), a.data(), lambda.data(), work.data()), F3R_OK);
+    double scale = 0.0;
+    for (double l : lambda) scale = std::max(scale, std::fabs(l));
+    for (int c = 0; c < F3R_NCON; ++c) EXPECT_NEAR(o->lambda[c], lambda[c], 1e-5 * scale) << "form " << form << ", lambda " << c;
+    EXPECT_NEAR(o->kinetic_energy, f3r_kinetic_energy(m.get(), o->q, o->v), 1e-14);
+    EXPECT_NEAR(o->potential_energy, f3r_potential_energy(m.get(), o->q), 1e-14);
+    for (int i = 0; i < 3; ++i) {
+      EXPECT_NEAR(o->tip_deflection[i], f3r_model_tip_deflection(m.get(), o->q, i), 1e-15);
+      EXPECT_NEAR(o->tip_deflection_rate[i], f3r_model_tip_deflection(m.get(), o->v, i), 1e-13);
+    }
+    double g[F3R_NCON], gv[F3R_NCON], worst = 0.0, worst_v = 0.0;
+    f3r_constraints(m.get(), o->q, g);
+    f3r_constraint_times(m.get(), o->q, o->v, gv);
+    for (int c = 0; c < F3R_NCON; ++c) worst = std::max(worst, std::fabs(g[c])), worst_v = std::max(worst_v, std::fabs(gv[c]));
+    EXPECT_DOUBLE_EQ(o->constraint_residual, worst);
+    EXPECT_DOUBLE_EQ(o->velocity_residual, worst_v);
+    EXPECT_NEAR(o->actuation_condition, f3r_model_actuation_condition(m.get(), o->q), 1e-9 * o->actuation_condition);
+  }
+}
+
 TEST(Simulation, NonFiniteForcesAreRejectedAndChangeNothing) {
   f3r_scene s = Scene("paper_sim1.yaml");
   auto m = MakeModel(s);

@@ -31,14 +31,18 @@ typedef struct {
 } f3r_link_params;
 
 struct f3r_model;
+struct f3r_data; /* the core's evaluation data (src/core/data.h): private */
 
 /* An optional force stage: adds its generalized forces to Q and, where they depend on q or v,
- * scale times their derivatives into a column-major A. A NULL derivative is zero. */
+ * scale times their derivatives into a column-major A. A NULL derivative is zero. d holds the
+ * forward pass's position stage at q (the legs' directions), so an effect computes no
+ * trigonometry of its own. */
 typedef struct {
   const char* name;
-  void (*add)(const struct f3r_model* m, double t, const double* q, const double* v, double* Q);
-  void (*add_dq)(const struct f3r_model* m, const double* q, const double* v, double scale,
-                 double* A, int ld);
+  void (*add)(const struct f3r_model* m, double t, const double* q, const double* v,
+              const struct f3r_data* d, double* Q);
+  void (*add_dq)(const struct f3r_model* m, const double* q, const double* v,
+                 const struct f3r_data* d, double scale, double* A, int ld);
   void (*add_dv)(const struct f3r_model* m, const double* q, const double* v, double scale,
                  double* A, int ld);
 } f3r_force_effect;
@@ -52,6 +56,7 @@ typedef struct f3r_model {
   double base_joint[3][2];   /* A_i (m) */
   double platform_angle[3];  /* phi_i of C_i on the platform: -pi/6, pi/2, 7pi/6 */
   double platform_radius;    /* r_PC (m) */
+  double platform_direction[3][2]; /* (cos, sin) phi_i: C_i's direction at phi_p = 0 */
 
   /* inertia and stiffness */
   double link_length;        /* l (m) */

@@ -35,6 +35,10 @@ f3r_workspace* f3r_workspace_create(const f3r_model* model);
 void f3r_workspace_destroy(f3r_workspace* ws);
 
 int f3r_state_size(const f3r_model* model, f3r_formulation form);
+
+/* sin/cos pairs the forward pass has evaluated through this workspace since its creation: a
+ * counter for tests and the benchmark (one evaluation's share is the difference of two reads). */
+long f3r_workspace_sincos_pairs(const f3r_workspace* ws);
 /* Index of the actuator lag states in y (valid when model->n_lag == 3). */
 static inline int f3r_lag_index(const f3r_model* model, f3r_formulation form) {
   return f3r_state_size(model, form) - 1 - model->n_lag;

@@ -13,6 +13,8 @@
 #ifndef FLEX3RPR_STAGES_H
 #define FLEX3RPR_STAGES_H
 
+#include <stddef.h>
+
 #include "flex3rpr/model.h"
 
 #ifdef __cplusplus

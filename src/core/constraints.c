@@ -7,90 +7,77 @@
  *   G_i: d/drho = e, d/dth = L n - w e, d/deta_j = psi_j(1) n, d/dP = -I, d/dphi_p = -r_PC n_c
  *   gamma_i = (dG_i/dt) v = 2 rho' th' n - L th'^2 e - 2 w' th' e - w th'^2 n + r_PC phi'^2 e_c */
 #include <math.h>
+#include <string.h>
 
+#include "data.h"
 #include "dense.h"
-#include "flex3rpr/stages.h"
-#include "link_state.h"
 
-void f3r_constraints(const f3r_model* m, const double* q, double* g) {
-  for (int i = 0; i < 3; ++i) {
-    f3r_link_state k;
-    f3r_link_state_fill(m, i, q, 0, &k);
-    const f3r_platform_joint pj = f3r_platform_joint_at(m, i, q);
-    const double r = m->platform_radius;
-    g[2 * i] = m->base_joint[i][0] + k.len * k.c - k.w * k.s - q[6] - r * pj.cc;
-    g[2 * i + 1] = m->base_joint[i][1] + k.len * k.s + k.w * k.c - q[7] - r * pj.sc;
-  }
-}
+/* --- kernels on the position stage ---------------------------------------------------------- */
 
 /* Calls put(row, col, value) for every nonzero of G, so G and G^T share one definition. */
-#define F3R_FOR_EACH_G_ENTRY(m, q, PUT)                                                    \
+#define F3R_FOR_EACH_G_ENTRY(m, d, PUT)                                                    \
   for (int i = 0; i < 3; ++i) {                                                            \
-    f3r_link_state k;                                                                      \
-    f3r_link_state_fill(m, i, q, 0, &k);                                                   \
-    const f3r_platform_joint pj = f3r_platform_joint_at(m, i, q);                          \
-    const double r = (m)->platform_radius;                                                 \
+    const f3r_link_data* k = &(d)->link[i];                                                \
     const int gx = 2 * i, gy = 2 * i + 1;                                                  \
-    PUT(gx, i, k.c);                                                                       \
-    PUT(gy, i, k.s);                                                                       \
-    PUT(gx, 3 + i, -k.len * k.s - k.w * k.c);                                              \
-    PUT(gy, 3 + i, k.len * k.c - k.w * k.s);                                               \
+    PUT(gx, i, k->c);                                                                      \
+    PUT(gy, i, k->s);                                                                      \
+    PUT(gx, 3 + i, k->g_theta[0]);                                                         \
+    PUT(gy, 3 + i, k->g_theta[1]);                                                         \
     PUT(gx, 6, -1.0);                                                                      \
     PUT(gy, 7, -1.0);                                                                      \
-    PUT(gx, 8, r * pj.sc);                                                                 \
-    PUT(gy, 8, -r * pj.cc);                                                                \
+    PUT(gx, 8, k->g_phi[0]);                                                               \
+    PUT(gy, 8, k->g_phi[1]);                                                               \
     const f3r_link_params* lp = &(m)->link[i];                                             \
     if (lp->model == F3R_LINK_FIXED_FREE)                                                  \
       for (int j = 0; j < lp->modes; ++j) {                                                \
-        PUT(gx, lp->eta_index + j, -lp->tip[j] * k.s);                                     \
-        PUT(gy, lp->eta_index + j, lp->tip[j] * k.c);                                      \
+        PUT(gx, lp->eta_index + j, -lp->tip[j] * k->s);                                    \
+        PUT(gy, lp->eta_index + j, lp->tip[j] * k->c);                                     \
       }                                                                                    \
   }
 
-void f3r_add_constraint_jacobian(const f3r_model* m, const double* q, double scale, double* A,
-                                 int ld) {
+void f3r_data_add_constraint_jacobian(const f3r_model* m, const f3r_data* d, double scale,
+                                      double* A, int ld) {
 #define PUT_G(row, col, value) F3R_AT(A, ld, row, col) += scale * (value)
-  F3R_FOR_EACH_G_ENTRY(m, q, PUT_G)
+  F3R_FOR_EACH_G_ENTRY(m, d, PUT_G)
 #undef PUT_G
 }
 
-void f3r_add_constraint_jacobian_transpose(const f3r_model* m, const double* q, double scale,
-                                           double* A, int ld) {
+void f3r_data_add_constraint_jacobian_transpose(const f3r_model* m, const f3r_data* d,
+                                                double scale, double* A, int ld) {
 #define PUT_GT(row, col, value) F3R_AT(A, ld, col, row) += scale * (value)
-  F3R_FOR_EACH_G_ENTRY(m, q, PUT_GT)
+  F3R_FOR_EACH_G_ENTRY(m, d, PUT_GT)
 #undef PUT_GT
 }
 
-void f3r_constraint_times(const f3r_model* m, const double* q, const double* v, double* out) {
+void f3r_data_constraint_times(const f3r_model* m, const f3r_data* d, const double* x,
+                               double* out) {
   for (int c = 0; c < F3R_NCON; ++c) out[c] = 0.0;
-#define PUT_GV(row, col, value) out[row] += (value) * v[col]
-  F3R_FOR_EACH_G_ENTRY(m, q, PUT_GV)
+#define PUT_GV(row, col, value) out[row] += (value) * x[col]
+  F3R_FOR_EACH_G_ENTRY(m, d, PUT_GV)
 #undef PUT_GV
 }
 
-void f3r_constraint_transpose_times(const f3r_model* m, const double* q, const double* lambda,
-                                    double* out) {
+void f3r_data_constraint_transpose_times(const f3r_model* m, const f3r_data* d, const double* y,
+                                         double* out) {
   for (int n = 0; n < m->nq; ++n) out[n] = 0.0;
-#define PUT_GTL(row, col, value) out[col] += (value) * lambda[row]
-  F3R_FOR_EACH_G_ENTRY(m, q, PUT_GTL)
+#define PUT_GTL(row, col, value) out[col] += (value) * y[row]
+  F3R_FOR_EACH_G_ENTRY(m, d, PUT_GTL)
 #undef PUT_GTL
 }
 
 /* Second derivatives of g: for a 6-vector y, d(G^T y)/dq and, with the same terms transposed,
  * d(G v)/dq. Nonzero only in the (rho, theta, eta) block of each link and at (phi_p, phi_p). */
-void f3r_add_constraint_transpose_times_dq(const f3r_model* m, const double* q,
-                                           const double* lambda, double scale, double* A, int ld) {
+void f3r_data_add_constraint_transpose_times_dq(const f3r_model* m, const f3r_data* d,
+                                                const double* y, double scale, double* A, int ld) {
   double phi_phi = 0.0;
   for (int i = 0; i < 3; ++i) {
-    f3r_link_state k;
-    f3r_link_state_fill(m, i, q, 0, &k);
-    const f3r_platform_joint pj = f3r_platform_joint_at(m, i, q);
-    const double lx = lambda[2 * i], ly = lambda[2 * i + 1];
-    const double e_l = k.c * lx + k.s * ly, n_l = -k.s * lx + k.c * ly;
+    const f3r_link_data* k = &d->link[i];
+    const double lx = y[2 * i], ly = y[2 * i + 1];
+    const double e_l = k->c * lx + k->s * ly, n_l = -k->s * lx + k->c * ly;
     const int r = i, t = 3 + i;
     F3R_AT(A, ld, r, t) += scale * n_l;
     F3R_AT(A, ld, t, r) += scale * n_l;
-    F3R_AT(A, ld, t, t) += scale * (-k.len * e_l - k.w * n_l);
+    F3R_AT(A, ld, t, t) += scale * (-k->len * e_l - k->w * n_l);
     const f3r_link_params* lp = &m->link[i];
     if (lp->model == F3R_LINK_FIXED_FREE)
       for (int j = 0; j < lp->modes; ++j) {
@@ -98,50 +85,111 @@ void f3r_add_constraint_transpose_times_dq(const f3r_model* m, const double* q,
         F3R_AT(A, ld, t, col) += scale * (-lp->tip[j] * e_l);
         F3R_AT(A, ld, col, t) += scale * (-lp->tip[j] * e_l);
       }
-    phi_phi += m->platform_radius * (pj.cc * lx + pj.sc * ly);
+    phi_phi += m->platform_radius * (k->cc * lx + k->sc * ly);
   }
   F3R_AT(A, ld, 8, 8) += scale * phi_phi;
 }
 
-void f3r_add_constraint_times_dq(const f3r_model* m, const double* q, const double* v,
-                                 double scale, double* A, int ld) {
+/* Needs the velocity stage (the rates of d) for the same v. */
+void f3r_data_add_constraint_times_dq(const f3r_model* m, const f3r_data* d, const double* v,
+                                      double scale, double* A, int ld) {
   for (int i = 0; i < 3; ++i) {
-    f3r_link_state k;
-    f3r_link_state_fill(m, i, q, v, &k);
-    const f3r_platform_joint pj = f3r_platform_joint_at(m, i, q);
+    const f3r_link_data* k = &d->link[i];
     const int gx = 2 * i, gy = 2 * i + 1, r = i, t = 3 + i;
-    const double rd = k.rho_dot, td = k.theta_dot;
+    const double rd = k->rho_dot, td = k->theta_dot;
     /* d/drho = n th' */
-    F3R_AT(A, ld, gx, r) += scale * (-k.s * td);
-    F3R_AT(A, ld, gy, r) += scale * (k.c * td);
+    F3R_AT(A, ld, gx, r) += scale * (-k->s * td);
+    F3R_AT(A, ld, gy, r) += scale * (k->c * td);
     /* d/dth = n rho' - (L e + w n) th' - w' e */
-    F3R_AT(A, ld, gx, t) += scale * (-k.s * rd - (k.len * k.c - k.w * k.s) * td - k.w_dot * k.c);
-    F3R_AT(A, ld, gy, t) += scale * (k.c * rd - (k.len * k.s + k.w * k.c) * td - k.w_dot * k.s);
+    F3R_AT(A, ld, gx, t) += scale * (-k->s * rd - (k->len * k->c - k->w * k->s) * td - k->w_dot * k->c);
+    F3R_AT(A, ld, gy, t) += scale * (k->c * rd - (k->len * k->s + k->w * k->c) * td - k->w_dot * k->s);
     const f3r_link_params* lp = &m->link[i];
     if (lp->model == F3R_LINK_FIXED_FREE)
       for (int j = 0; j < lp->modes; ++j) { /* d/deta_j = -psi_j(1) e th' */
         const int col = lp->eta_index + j;
-        F3R_AT(A, ld, gx, col) += scale * (-lp->tip[j] * k.c * td);
-        F3R_AT(A, ld, gy, col) += scale * (-lp->tip[j] * k.s * td);
+        F3R_AT(A, ld, gx, col) += scale * (-lp->tip[j] * k->c * td);
+        F3R_AT(A, ld, gy, col) += scale * (-lp->tip[j] * k->s * td);
       }
     /* d/dphi_p = r_PC e_c phi' */
-    F3R_AT(A, ld, gx, 8) += scale * (m->platform_radius * pj.cc * v[8]);
-    F3R_AT(A, ld, gy, 8) += scale * (m->platform_radius * pj.sc * v[8]);
+    F3R_AT(A, ld, gx, 8) += scale * (m->platform_radius * k->cc * v[8]);
+    F3R_AT(A, ld, gy, 8) += scale * (m->platform_radius * k->sc * v[8]);
   }
 }
 
-void f3r_constraint_bias(const f3r_model* m, const double* q, const double* v, double* gamma) {
+void f3r_data_solve_dependent(const f3r_data* d, const double* V, double* x) {
   for (int i = 0; i < 3; ++i) {
-    f3r_link_state k;
-    f3r_link_state_fill(m, i, q, v, &k);
-    const f3r_platform_joint pj = f3r_platform_joint_at(m, i, q);
-    const double rd = k.rho_dot, td = k.theta_dot, pd = v[8];
-    const double along = -k.len * td * td - 2.0 * k.w_dot * td; /* e component */
-    const double across = 2.0 * rd * td - k.w * td * td;        /* n component */
-    const double rp = m->platform_radius * pd * pd;
-    gamma[2 * i] = along * k.c - across * k.s + rp * pj.cc;
-    gamma[2 * i + 1] = along * k.s + across * k.c + rp * pj.sc;
+    const f3r_link_data* k = &d->link[i];
+    const double vn = -k->s * V[2 * i] + k->c * V[2 * i + 1];
+    const double ve = k->c * V[2 * i] + k->s * V[2 * i + 1];
+    x[3 + i] = vn / k->len;
+    x[i] = ve + k->w * x[3 + i];
   }
+}
+
+void f3r_data_solve_dependent_transpose(const f3r_data* d, const double* R, double* lambda) {
+  for (int i = 0; i < 3; ++i) {
+    const f3r_link_data* k = &d->link[i];
+    const double along = R[i], across = (R[3 + i] + k->w * R[i]) / k->len;
+    lambda[2 * i] = along * k->c - across * k->s;
+    lambda[2 * i + 1] = along * k->s + across * k->c;
+  }
+}
+
+/* --- the public (q, v) functions of stages.h ------------------------------------------------- */
+
+void f3r_constraints(const f3r_model* m, const double* q, double* g) {
+  f3r_data d = {.sincos_pairs = 0};
+  f3r_fwd_position(m, q, &d);
+  memcpy(g, d.g, sizeof d.g);
+}
+
+void f3r_add_constraint_jacobian(const f3r_model* m, const double* q, double scale, double* A,
+                                 int ld) {
+  f3r_data d = {.sincos_pairs = 0};
+  f3r_fwd_position(m, q, &d);
+  f3r_data_add_constraint_jacobian(m, &d, scale, A, ld);
+}
+
+void f3r_add_constraint_jacobian_transpose(const f3r_model* m, const double* q, double scale,
+                                           double* A, int ld) {
+  f3r_data d = {.sincos_pairs = 0};
+  f3r_fwd_position(m, q, &d);
+  f3r_data_add_constraint_jacobian_transpose(m, &d, scale, A, ld);
+}
+
+void f3r_constraint_times(const f3r_model* m, const double* q, const double* v, double* out) {
+  f3r_data d = {.sincos_pairs = 0};
+  f3r_fwd_position(m, q, &d);
+  f3r_data_constraint_times(m, &d, v, out);
+}
+
+void f3r_constraint_transpose_times(const f3r_model* m, const double* q, const double* lambda,
+                                    double* out) {
+  f3r_data d = {.sincos_pairs = 0};
+  f3r_fwd_position(m, q, &d);
+  f3r_data_constraint_transpose_times(m, &d, lambda, out);
+}
+
+void f3r_add_constraint_transpose_times_dq(const f3r_model* m, const double* q,
+                                           const double* lambda, double scale, double* A, int ld) {
+  f3r_data d = {.sincos_pairs = 0};
+  f3r_fwd_position(m, q, &d);
+  f3r_data_add_constraint_transpose_times_dq(m, &d, lambda, scale, A, ld);
+}
+
+void f3r_add_constraint_times_dq(const f3r_model* m, const double* q, const double* v,
+                                 double scale, double* A, int ld) {
+  f3r_data d = {.sincos_pairs = 0};
+  f3r_fwd_position(m, q, &d);
+  f3r_fwd_velocity(m, q, v, &d);
+  f3r_data_add_constraint_times_dq(m, &d, v, scale, A, ld);
+}
+
+void f3r_constraint_bias(const f3r_model* m, const double* q, const double* v, double* gamma) {
+  f3r_data d = {.sincos_pairs = 0};
+  f3r_fwd_position(m, q, &d);
+  f3r_fwd_velocity(m, q, v, &d);
+  memcpy(gamma, d.gamma, sizeof d.gamma);
 }
 
 size_t f3r_solve_accelerations_work_size(const f3r_model* m) {
@@ -155,17 +203,17 @@ f3r_status f3r_solve_accelerations(const f3r_model* m, const double* q, const do
   double* K = work;
   double* b = K + (size_t)n * n;
   int* piv = (int*)(b + n); /* n ints fit in n doubles */
-  double* h = b + 2 * n;
-  double* el = h + F3R_MAX_Q;
+  double* el = b + 2 * n;
+  f3r_data d = {.sincos_pairs = 0};
+  f3r_fwd_position(m, q, &d);
+  f3r_fwd_velocity(m, q, v, &d);
   for (size_t z = 0; z < (size_t)n * n; ++z) K[z] = 0.0;
-  f3r_add_mass_matrix(m, q, 1.0, K, n);
-  f3r_add_constraint_jacobian_transpose(m, q, -1.0, K + (size_t)nq * n, n); /* -G^T, top right */
-  f3r_add_constraint_jacobian(m, q, 1.0, K + nq, n);                        /* G, bottom left */
-  f3r_velocity_forces(m, q, v, h);
+  f3r_data_add_mass_matrix(m, &d, 1.0, K, n);
+  f3r_data_add_constraint_jacobian_transpose(m, &d, -1.0, K + (size_t)nq * n, n); /* -G^T, top right */
+  f3r_data_add_constraint_jacobian(m, &d, 1.0, K + nq, n);                        /* G, bottom left */
   f3r_elastic_forces(m, q, el);
-  for (int r = 0; r < nq; ++r) b[r] = Q[r] - h[r] - el[r];
-  f3r_constraint_bias(m, q, v, b + nq);
-  for (int c = 0; c < F3R_NCON; ++c) b[nq + c] = -b[nq + c];
+  for (int r = 0; r < nq; ++r) b[r] = Q[r] - d.h[r] - el[r];
+  for (int c = 0; c < F3R_NCON; ++c) b[nq + c] = -d.gamma[c];
   if (f3r_lu_factor(K, n, piv)) return F3R_ERR_SINGULAR;
   f3r_lu_solve(K, n, piv, b);
   for (int r = 0; r < nq; ++r) a[r] = b[r];

@@ -16,37 +16,26 @@
 #include <math.h>
 #include <string.h>
 
+#include "data.h"
 #include "dense.h"
-#include "flex3rpr/stages.h"
-#include "link_state.h"
 
 static double exact_flag(const f3r_model* m) { return m->exact_kinematics ? 1.0 : 0.0; }
 
-static double theta_inertia(const f3r_model* m, const f3r_link_state* k) {
-  const double l = m->link_length, mass = m->link_mass;
-  return m->cylinder_inertia + mass * (l * l / 3.0 + l * k->rho + k->rho * k->rho) +
-         exact_flag(m) * mass * k->eta_sq;
-}
+/* --- kernels on the position stage ---------------------------------------------------------- */
 
-static double theta_eta_coupling(const f3r_model* m, int i, int j, double rho) {
-  const f3r_link_params* lp = &m->link[i];
-  return m->link_mass * (m->link_length * lp->first_moment[j] + rho * lp->mean[j]);
-}
-
-void f3r_add_mass_matrix(const f3r_model* m, const double* q, double scale, double* A, int ld) {
-  const double mass = m->link_mass, e = exact_flag(m);
+void f3r_data_add_mass_matrix(const f3r_model* m, const f3r_data* d, double scale, double* A,
+                              int ld) {
+  const double mass = m->link_mass;
   for (int i = 0; i < 3; ++i) {
-    f3r_link_state k;
-    f3r_link_state_fill(m, i, q, 0, &k);
+    const f3r_link_data* k = &d->link[i];
     const int r = i, t = 3 + i, base = m->link[i].eta_index;
     F3R_AT(A, ld, r, r) += scale * mass;
-    F3R_AT(A, ld, r, t) += scale * (-e * mass * k.mean_defl);
-    F3R_AT(A, ld, t, r) += scale * (-e * mass * k.mean_defl);
-    F3R_AT(A, ld, t, t) += scale * theta_inertia(m, &k);
+    F3R_AT(A, ld, r, t) += scale * k->m_rho_theta;
+    F3R_AT(A, ld, t, r) += scale * k->m_rho_theta;
+    F3R_AT(A, ld, t, t) += scale * k->m_theta_theta;
     for (int j = 0; j < m->link[i].modes; ++j) {
-      const double cj = theta_eta_coupling(m, i, j, k.rho);
-      F3R_AT(A, ld, t, base + j) += scale * cj;
-      F3R_AT(A, ld, base + j, t) += scale * cj;
+      F3R_AT(A, ld, t, base + j) += scale * k->m_theta_eta[j];
+      F3R_AT(A, ld, base + j, t) += scale * k->m_theta_eta[j];
       F3R_AT(A, ld, base + j, base + j) += scale * mass;
     }
   }
@@ -55,26 +44,61 @@ void f3r_add_mass_matrix(const f3r_model* m, const double* q, double scale, doub
   F3R_AT(A, ld, 8, 8) += scale * m->platform_inertia;
 }
 
-void f3r_mass_times(const f3r_model* m, const double* q, const double* a, double* out) {
-  const double mass = m->link_mass, e = exact_flag(m);
+void f3r_data_mass_times(const f3r_model* m, const f3r_data* d, const double* x, double* out) {
+  const double mass = m->link_mass;
   for (int i = 0; i < 3; ++i) {
-    f3r_link_state k;
-    f3r_link_state_fill(m, i, q, 0, &k);
+    const f3r_link_data* k = &d->link[i];
     const int base = m->link[i].eta_index;
     double coupled = 0.0;
     for (int j = 0; j < m->link[i].modes; ++j) {
-      const double cj = theta_eta_coupling(m, i, j, k.rho);
-      coupled += cj * a[base + j];
-      out[base + j] = cj * a[3 + i] + mass * a[base + j];
+      coupled += k->m_theta_eta[j] * x[base + j];
+      out[base + j] = k->m_theta_eta[j] * x[3 + i] + mass * x[base + j];
     }
-    out[i] = mass * a[i] - e * mass * k.mean_defl * a[3 + i];
-    out[3 + i] = -e * mass * k.mean_defl * a[i] + theta_inertia(m, &k) * a[3 + i] + coupled;
+    out[i] = mass * x[i] + k->m_rho_theta * x[3 + i];
+    out[3 + i] = k->m_rho_theta * x[i] + k->m_theta_theta * x[3 + i] + coupled;
   }
-  out[6] = m->platform_mass * a[6];
-  out[7] = m->platform_mass * a[7];
-  out[8] = m->platform_inertia * a[8];
+  out[6] = m->platform_mass * x[6];
+  out[7] = m->platform_mass * x[7];
+  out[8] = m->platform_inertia * x[8];
 }
 
+void f3r_data_add_velocity_forces_dv(const f3r_model* m, const f3r_data* d, const double* q,
+                                     double scale, double* A, int ld) {
+  const double mass = m->link_mass, l = m->link_length, e = exact_flag(m);
+  for (int i = 0; i < 3; ++i) {
+    const f3r_link_data* k = &d->link[i];
+    const f3r_link_params* lp = &m->link[i];
+    const int r = i, t = 3 + i;
+    const double rd = k->rho_dot, td = k->theta_dot, arm = l + 2.0 * q[i];
+    F3R_AT(A, ld, r, t) += scale * (-mass * arm * td - (1.0 + e) * mass * k->mean_defl_dot);
+    F3R_AT(A, ld, t, r) += scale * (mass * arm * td + (1.0 - e) * mass * k->mean_defl_dot);
+    F3R_AT(A, ld, t, t) += scale * (mass * arm * rd + 2.0 * e * mass * k->eta_eta_dot);
+    for (int j = 0; j < lp->modes; ++j) {
+      const int col = lp->eta_index + j;
+      const double b = lp->mean[j], eta = q[col];
+      F3R_AT(A, ld, r, col) += scale * (-(1.0 + e) * mass * td * b);
+      F3R_AT(A, ld, t, col) += scale * ((1.0 - e) * mass * rd * b + 2.0 * e * mass * td * eta);
+      F3R_AT(A, ld, col, r) += scale * ((1.0 + e) * mass * td * b);
+      F3R_AT(A, ld, col, t) += scale * ((1.0 + e) * mass * rd * b - 2.0 * e * mass * td * eta);
+    }
+  }
+}
+
+/* --- the public (q, v) functions of stages.h: the stages they need, then the kernels --------- */
+
+void f3r_add_mass_matrix(const f3r_model* m, const double* q, double scale, double* A, int ld) {
+  f3r_data d = {.sincos_pairs = 0};
+  f3r_fwd_position(m, q, &d);
+  f3r_data_add_mass_matrix(m, &d, scale, A, ld);
+}
+
+void f3r_mass_times(const f3r_model* m, const double* q, const double* a, double* out) {
+  f3r_data d = {.sincos_pairs = 0};
+  f3r_fwd_position(m, q, &d);
+  f3r_data_mass_times(m, &d, a, out);
+}
+
+/* d(M(q) a)/dq: M depends on rho (J and c_j) and, with exact kinematics, on eta; never on theta. */
 void f3r_add_mass_times_dq(const f3r_model* m, const double* q, const double* a, double scale,
                            double* A, int ld) {
   const double mass = m->link_mass, l = m->link_length, e = exact_flag(m);
@@ -95,21 +119,13 @@ void f3r_add_mass_times_dq(const f3r_model* m, const double* q, const double* a,
 }
 
 void f3r_velocity_forces(const f3r_model* m, const double* q, const double* v, double* h) {
-  const double mass = m->link_mass, l = m->link_length, e = exact_flag(m);
-  for (int i = 0; i < 3; ++i) {
-    f3r_link_state k;
-    f3r_link_state_fill(m, i, q, v, &k);
-    const double rd = k.rho_dot, td = k.theta_dot, arm = l + 2.0 * k.rho;
-    h[i] = -0.5 * mass * arm * td * td - (1.0 + e) * mass * td * k.mean_defl_dot;
-    h[3 + i] = mass * arm * rd * td + (1.0 - e) * mass * rd * k.mean_defl_dot +
-               2.0 * e * mass * td * k.eta_eta_dot;
-    const f3r_link_params* lp = &m->link[i];
-    for (int j = 0; j < lp->modes; ++j)
-      h[lp->eta_index + j] = (1.0 + e) * mass * rd * td * lp->mean[j] - e * mass * td * td * k.eta[j];
-  }
-  h[6] = h[7] = h[8] = 0.0;
+  f3r_data d = {.sincos_pairs = 0};
+  f3r_fwd_position(m, q, &d);
+  f3r_fwd_velocity(m, q, v, &d);
+  memcpy(h, d.h, (size_t)m->nq * sizeof(double));
 }
 
+/* dh/dq: h depends on rho (the arm l + 2 rho) and, with exact kinematics, on eta. */
 void f3r_add_velocity_forces_dq(const f3r_model* m, const double* q, const double* v,
                                 double scale, double* A, int ld) {
   const double mass = m->link_mass, e = exact_flag(m);
@@ -131,25 +147,10 @@ void f3r_add_velocity_forces_dq(const f3r_model* m, const double* q, const doubl
 
 void f3r_add_velocity_forces_dv(const f3r_model* m, const double* q, const double* v,
                                 double scale, double* A, int ld) {
-  const double mass = m->link_mass, l = m->link_length, e = exact_flag(m);
-  for (int i = 0; i < 3; ++i) {
-    f3r_link_state k;
-    f3r_link_state_fill(m, i, q, v, &k);
-    const f3r_link_params* lp = &m->link[i];
-    const int r = i, t = 3 + i;
-    const double rd = k.rho_dot, td = k.theta_dot, arm = l + 2.0 * k.rho;
-    F3R_AT(A, ld, r, t) += scale * (-mass * arm * td - (1.0 + e) * mass * k.mean_defl_dot);
-    F3R_AT(A, ld, t, r) += scale * (mass * arm * td + (1.0 - e) * mass * k.mean_defl_dot);
-    F3R_AT(A, ld, t, t) += scale * (mass * arm * rd + 2.0 * e * mass * k.eta_eta_dot);
-    for (int j = 0; j < lp->modes; ++j) {
-      const int col = lp->eta_index + j;
-      const double b = lp->mean[j];
-      F3R_AT(A, ld, r, col) += scale * (-(1.0 + e) * mass * td * b);
-      F3R_AT(A, ld, t, col) += scale * ((1.0 - e) * mass * rd * b + 2.0 * e * mass * td * k.eta[j]);
-      F3R_AT(A, ld, col, r) += scale * ((1.0 + e) * mass * td * b);
-      F3R_AT(A, ld, col, t) += scale * ((1.0 + e) * mass * rd * b - 2.0 * e * mass * td * k.eta[j]);
-    }
-  }
+  f3r_data d = {.sincos_pairs = 0};
+  f3r_fwd_position(m, q, &d);
+  f3r_fwd_velocity(m, q, v, &d);
+  f3r_data_add_velocity_forces_dv(m, &d, q, scale, A, ld);
 }
 
 void f3r_elastic_forces(const f3r_model* m, const double* q, double* k) {
@@ -172,25 +173,27 @@ void f3r_add_elastic_forces_dq(const f3r_model* m, double scale, double* A, int 
 
 void f3r_generalized_forces(const f3r_model* m, double t, const double* held, const double* q,
                             const double* v, double* Q) {
+  f3r_data d = {.sincos_pairs = 0};
+  f3r_fwd_position(m, q, &d);
   for (int n = 0; n < m->nq; ++n) Q[n] = held ? held[n] : 0.0;
-  for (int e = 0; e < m->n_effects; ++e) m->effects[e]->add(m, t, q, v, Q);
+  for (int e = 0; e < m->n_effects; ++e) m->effects[e]->add(m, t, q, v, &d, Q);
 }
 
 void f3r_applied_forces(const f3r_model* m, double t, const double* held, const double* q,
                         const double* v, const double* lag, double* Q, double* commanded) {
-  f3r_generalized_forces(m, t, held, q, v, Q);
-  if (!m->n_lag) return;
-  for (int i = 0; i < 3; ++i) {
-    const double cmd = (held ? held[i] : 0.0) + f3r_input_value(&m->scene.inputs[F3R_FORCE_RHO + i], t);
-    if (commanded) commanded[i] = cmd;
-    Q[i] += (lag ? lag[i] : 0.0) - cmd;
-  }
+  f3r_data d = {.sincos_pairs = 0};
+  f3r_fwd_position(m, q, &d);
+  f3r_fwd_forces(m, t, held, q, v, lag, &d);
+  memcpy(Q, d.Q, (size_t)m->nq * sizeof(double));
+  if (commanded && m->n_lag) memcpy(commanded, d.commanded, sizeof d.commanded);
 }
 
 void f3r_add_generalized_forces_dq(const f3r_model* m, const double* q, const double* v,
                                    double scale, double* A, int ld) {
+  f3r_data d = {.sincos_pairs = 0};
+  f3r_fwd_position(m, q, &d);
   for (int e = 0; e < m->n_effects; ++e)
-    if (m->effects[e]->add_dq) m->effects[e]->add_dq(m, q, v, scale, A, ld);
+    if (m->effects[e]->add_dq) m->effects[e]->add_dq(m, q, v, &d, scale, A, ld);
 }
 
 void f3r_add_generalized_forces_dv(const f3r_model* m, const double* q, const double* v,

@@ -12,20 +12,20 @@
 
 #include "dense.h"
 #include "effects.h"
-#include "link_state.h"
+#include "data.h"
 
 /* --- gravity --------------------------------------------------------------------------------- */
 static double cylinder_moment(const f3r_model* m) { return m->cylinder_mass * m->cylinder_length / 2.0; }
 
-static void gravity_add(const f3r_model* m, double t, const double* q, const double* v, double* Q) {
+static void gravity_add(const f3r_model* m, double t, const double* q, const double* v,
+                        const f3r_data* d, double* Q) {
   (void)t, (void)v;
   const double gx = m->gravity[0], gy = m->gravity[1], mass = m->link_mass;
   for (int i = 0; i < 3; ++i) {
-    f3r_link_state k;
-    f3r_link_state_fill(m, i, q, 0, &k);
-    const double g_e = gx * k.c + gy * k.s, g_n = -gx * k.s + gy * k.c;
+    const f3r_link_data* k = &d->link[i];
+    const double g_e = gx * k->c + gy * k->s, g_n = -gx * k->s + gy * k->c;
     Q[i] += mass * g_e;
-    Q[3 + i] += (cylinder_moment(m) + mass * (k.rho + m->link_length / 2.0)) * g_n - mass * k.mean_defl * g_e;
+    Q[3 + i] += (cylinder_moment(m) + mass * (q[i] + m->link_length / 2.0)) * g_n - mass * k->mean_defl * g_e;
     const f3r_link_params* lp = &m->link[i];
     for (int j = 0; j < lp->modes; ++j) Q[lp->eta_index + j] += mass * lp->mean[j] * g_n;
   }
@@ -33,20 +33,19 @@ static void gravity_add(const f3r_model* m, double t, const double* q, const dou
   Q[7] += m->platform_mass * gy;
 }
 
-static void gravity_add_dq(const f3r_model* m, const double* q, const double* v, double scale,
-                           double* A, int ld) {
+static void gravity_add_dq(const f3r_model* m, const double* q, const double* v,
+                           const f3r_data* d, double scale, double* A, int ld) {
   (void)v;
   const double gx = m->gravity[0], gy = m->gravity[1], mass = m->link_mass;
   for (int i = 0; i < 3; ++i) {
-    f3r_link_state k;
-    f3r_link_state_fill(m, i, q, 0, &k);
-    const double g_e = gx * k.c + gy * k.s, g_n = -gx * k.s + gy * k.c;
+    const f3r_link_data* k = &d->link[i];
+    const double g_e = gx * k->c + gy * k->s, g_n = -gx * k->s + gy * k->c;
     const int r = i, th = 3 + i;
     /* de/dtheta = n, dn/dtheta = -e */
     F3R_AT(A, ld, r, th) += scale * mass * g_n;
     F3R_AT(A, ld, th, r) += scale * mass * g_n;
-    F3R_AT(A, ld, th, th) += scale * (-(cylinder_moment(m) + mass * (k.rho + m->link_length / 2.0)) * g_e -
-                                      mass * k.mean_defl * g_n);
+    F3R_AT(A, ld, th, th) += scale * (-(cylinder_moment(m) + mass * (q[i] + m->link_length / 2.0)) * g_e -
+                                      mass * k->mean_defl * g_n);
     const f3r_link_params* lp = &m->link[i];
     for (int j = 0; j < lp->modes; ++j) {
       const int col = lp->eta_index + j;
@@ -59,8 +58,9 @@ static void gravity_add_dq(const f3r_model* m, const double* q, const double* v,
 const f3r_force_effect f3r_gravity_effect = {"gravity", gravity_add, gravity_add_dq, 0};
 
 /* --- joint friction ---------------------------------------------------------------------------- */
-static void friction_add(const f3r_model* m, double t, const double* q, const double* v, double* Q) {
-  (void)t, (void)q;
+static void friction_add(const f3r_model* m, double t, const double* q, const double* v,
+                         const f3r_data* d, double* Q) {
+  (void)t, (void)q, (void)d;
   for (int i = 0; i < 3; ++i) {
     Q[i] -= m->scene.friction_prismatic[i] * v[i];
     Q[3 + i] -= m->scene.friction_revolute[i] * v[3 + i];
@@ -83,8 +83,9 @@ static double damping_coefficient(const f3r_model* m, int i, int j) {
   return 2.0 * m->scene.links[i].damping_ratio * m->link[i].omega_clamped[j] * m->link_mass;
 }
 
-static void damping_add(const f3r_model* m, double t, const double* q, const double* v, double* Q) {
-  (void)t, (void)q;
+static void damping_add(const f3r_model* m, double t, const double* q, const double* v,
+                        const f3r_data* d, double* Q) {
+  (void)t, (void)q, (void)d;
   for (int i = 0; i < 3; ++i)
     for (int j = 0; j < m->link[i].modes; ++j) {
       const int n = m->link[i].eta_index + j;
@@ -105,8 +106,9 @@ static void damping_add_dv(const f3r_model* m, const double* q, const double* v,
 const f3r_force_effect f3r_damping_effect = {"damping", damping_add, 0, damping_add_dv};
 
 /* --- scripted inputs ------------------------------------------------------------------------------ */
-static void inputs_add(const f3r_model* m, double t, const double* q, const double* v, double* Q) {
-  (void)q, (void)v;
+static void inputs_add(const f3r_model* m, double t, const double* q, const double* v,
+                       const f3r_data* d, double* Q) {
+  (void)q, (void)v, (void)d;
   for (int n = 0; n < F3R_RIGID_FORCES; ++n) Q[n] += f3r_input_value(&m->scene.inputs[n], t);
 }
 

@@ -1,37 +1,47 @@
-/* The stabilised index-2 (Gear-Gupta-Leimkuhler) residual and its exact Jacobian.
- * Layout and equations: include/flex3rpr/residual.h. */
+/* The stabilised index-2 (Gear-Gupta-Leimkuhler) residual and its exact Jacobian, in named
+ * blocks read from one forward pass (data.h). Layout and equations: include/flex3rpr/residual.h. */
 #include "dense.h"
 #include "workspace.h"
+
+/* The forward pass at the state y: position, velocity and force stages. */
+static void forward(const f3r_model* m, double t, const double* y, const double* held,
+                    f3r_data* d) {
+  const int nq = m->nq;
+  const double *q = y, *v = y + nq;
+  f3r_fwd_position(m, q, d);
+  f3r_fwd_velocity(m, q, v, d);
+  f3r_fwd_forces(m, t, held, q, v, m->n_lag ? y + f3r_lag_index(m, F3R_FORMULATION_DAE) : 0, d);
+}
 
 f3r_status f3r_dae_residual(const f3r_model* m, double t, const double* y, const double* yp,
                             const double* held, double* res, f3r_workspace* ws) {
   const int nq = m->nq;
-  const double *q = y, *v = y + nq, *lambda = y + 2 * nq, *mu = lambda + F3R_NCON;
+  const double *v = y + nq, *lambda = y + 2 * nq, *mu = lambda + F3R_NCON;
   const double *qd = yp, *vd = yp + nq;
   const int lag_at = f3r_lag_index(m, F3R_FORMULATION_DAE), w_at = lag_at + m->n_lag;
-  const double* lag = m->n_lag ? y + lag_at : 0;
+  f3r_data* d = &ws->data;
   double* tmp = ws->tmp;
-  double commanded[3];
+  forward(m, t, y, held, d);
 
-  f3r_constraint_transpose_times(m, q, mu, tmp);
+  /* kinematic rows: q' - v + G^T mu */
+  f3r_data_constraint_transpose_times(m, d, mu, tmp);
   for (int n = 0; n < nq; ++n) res[n] = qd[n] - v[n] + tmp[n];
 
+  /* dynamic rows: M v' + h + k - Q - G^T lambda */
   double* dyn = res + nq;
-  f3r_mass_times(m, q, vd, dyn);
-  f3r_velocity_forces(m, q, v, ws->h);
-  f3r_elastic_forces(m, q, ws->k);
-  f3r_applied_forces(m, t, held, q, v, lag, ws->Q, commanded);
-  f3r_constraint_transpose_times(m, q, lambda, tmp);
-  double power = 0.0;
-  for (int n = 0; n < nq; ++n) {
-    dyn[n] += ws->h[n] + ws->k[n] - ws->Q[n] - tmp[n];
-    power += ws->Q[n] * v[n];
-  }
-  f3r_constraints(m, q, res + 2 * nq);
-  f3r_constraint_times(m, q, v, res + 2 * nq + F3R_NCON);
+  f3r_data_mass_times(m, d, vd, dyn);
+  f3r_data_constraint_transpose_times(m, d, lambda, tmp);
+  for (int n = 0; n < nq; ++n) dyn[n] += d->h[n] + d->k[n] - d->Q[n] - tmp[n];
+  for (int c = 0; c < F3R_NCON; ++c) d->lambda[c] = lambda[c];
+
+  /* position and velocity constraints: g(q), G v */
+  for (int c = 0; c < F3R_NCON; ++c) res[2 * nq + c] = d->g[c];
+  f3r_data_constraint_times(m, d, v, res + 2 * nq + F3R_NCON);
+
+  /* actuator lag and work */
   for (int i = 0; i < m->n_lag; ++i)
-    res[lag_at + i] = m->lag_time_constant * yp[lag_at + i] - (commanded[i] - y[lag_at + i]);
-  res[w_at] = yp[w_at] - power;
+    res[lag_at + i] = m->lag_time_constant * yp[lag_at + i] - (d->commanded[i] - y[lag_at + i]);
+  res[w_at] = yp[w_at] - d->power;
   return F3R_OK;
 }
 
@@ -44,6 +54,8 @@ f3r_status f3r_dae_jacobian(const f3r_model* m, double t, double cj, const doubl
   const int col_v = nq, col_lambda = 2 * nq, col_mu = 2 * nq + F3R_NCON, col_w = row_w;
   const double *q = y, *v = y + nq, *lambda = y + 2 * nq, *mu = lambda + F3R_NCON;
   const double* vd = yp + nq;
+  f3r_data* d = &ws->data;
+  forward(m, t, y, held, d);
 #define BLOCK(row, col) (J + (size_t)(col) * (size_t)ld + (row))
 
   /* q' - v + G^T mu */
@@ -51,26 +63,25 @@ f3r_status f3r_dae_jacobian(const f3r_model* m, double t, double cj, const doubl
     F3R_AT(J, ld, n, n) += cj;
     F3R_AT(J, ld, n, col_v + n) -= 1.0;
   }
-  f3r_add_constraint_transpose_times_dq(m, q, mu, 1.0, BLOCK(0, 0), ld);
-  f3r_add_constraint_jacobian_transpose(m, q, 1.0, BLOCK(0, col_mu), ld);
+  f3r_data_add_constraint_transpose_times_dq(m, d, mu, 1.0, BLOCK(0, 0), ld);
+  f3r_data_add_constraint_jacobian_transpose(m, d, 1.0, BLOCK(0, col_mu), ld);
 
   /* M v' + h + k - Q - G^T lambda */
   f3r_add_mass_times_dq(m, q, vd, 1.0, BLOCK(row_v, 0), ld);
   f3r_add_velocity_forces_dq(m, q, v, 1.0, BLOCK(row_v, 0), ld);
   f3r_add_elastic_forces_dq(m, 1.0, BLOCK(row_v, 0), ld);
-  f3r_add_constraint_transpose_times_dq(m, q, lambda, -1.0, BLOCK(row_v, 0), ld);
-  f3r_add_mass_matrix(m, q, cj, BLOCK(row_v, col_v), ld);
-  f3r_add_velocity_forces_dv(m, q, v, 1.0, BLOCK(row_v, col_v), ld);
-  f3r_add_constraint_jacobian_transpose(m, q, -1.0, BLOCK(row_v, col_lambda), ld);
+  f3r_data_add_constraint_transpose_times_dq(m, d, lambda, -1.0, BLOCK(row_v, 0), ld);
+  f3r_data_add_mass_matrix(m, d, cj, BLOCK(row_v, col_v), ld);
+  f3r_data_add_velocity_forces_dv(m, d, q, 1.0, BLOCK(row_v, col_v), ld);
+  f3r_data_add_constraint_jacobian_transpose(m, d, -1.0, BLOCK(row_v, col_lambda), ld);
 
   /* g(q) and G v */
-  f3r_add_constraint_jacobian(m, q, 1.0, BLOCK(row_g, 0), ld);
-  f3r_add_constraint_times_dq(m, q, v, 1.0, BLOCK(row_gv, 0), ld);
-  f3r_add_constraint_jacobian(m, q, 1.0, BLOCK(row_gv, col_v), ld);
+  f3r_data_add_constraint_jacobian(m, d, 1.0, BLOCK(row_g, 0), ld);
+  f3r_data_add_constraint_times_dq(m, d, v, 1.0, BLOCK(row_gv, 0), ld);
+  f3r_data_add_constraint_jacobian(m, d, 1.0, BLOCK(row_gv, col_v), ld);
 
   /* -dQ/dq, -dQ/dv of the effects; W' - Q . v: d/dv = -Q - (dQ/dv)^T v, d/dq = -(dQ/dq)^T v */
-  f3r_applied_forces(m, t, held, q, v, m->n_lag ? y + row_lag : 0, ws->Q, 0);
-  for (int n = 0; n < nq; ++n) F3R_AT(J, ld, row_w, col_v + n) -= ws->Q[n];
+  for (int n = 0; n < nq; ++n) F3R_AT(J, ld, row_w, col_v + n) -= d->Q[n];
   /* actuator lag: tau F_a' - (F_cmd - F_a); the applied F_a enters Q_rho and Q . v */
   for (int i = 0; i < m->n_lag; ++i) {
     F3R_AT(J, ld, row_lag + i, row_lag + i) += 1.0 + cj * m->lag_time_constant;
@@ -81,8 +92,10 @@ f3r_status f3r_dae_jacobian(const f3r_model* m, double t, double cj, const doubl
     double* dq = ws->dQ;
     double* dv = ws->dQ + (size_t)nq * (size_t)nq;
     for (size_t z = 0; z < 2 * (size_t)nq * (size_t)nq; ++z) ws->dQ[z] = 0.0;
-    f3r_add_generalized_forces_dq(m, q, v, 1.0, dq, nq);
-    f3r_add_generalized_forces_dv(m, q, v, 1.0, dv, nq);
+    for (int e = 0; e < m->n_effects; ++e) {
+      if (m->effects[e]->add_dq) m->effects[e]->add_dq(m, q, v, d, 1.0, dq, nq);
+      if (m->effects[e]->add_dv) m->effects[e]->add_dv(m, q, v, 1.0, dv, nq);
+    }
     for (int j = 0; j < nq; ++j) {
       double wq = 0.0, wv = 0.0;
       for (int i = 0; i < nq; ++i) {

@@ -10,78 +10,71 @@
 #include <string.h>
 
 #include "dense.h"
-#include "link_state.h"
 #include "workspace.h"
 
-/* x (rho and theta entries of each link) from G_d x = V, V holding (x, y) per link. */
-static void solve_dependent_at(const f3r_link_state k[3], const double* V, double* x) {
-  for (int i = 0; i < 3; ++i) {
-    const double vn = -k[i].s * V[2 * i] + k[i].c * V[2 * i + 1];
-    const double ve = k[i].c * V[2 * i] + k[i].s * V[2 * i + 1];
-    x[3 + i] = vn / k[i].len;
-    x[i] = ve + k[i].w * x[3 + i];
-  }
-}
+static void dependent_accelerations(const f3r_model* m, f3r_data* d);
 
-static void solve_dependent(const f3r_model* m, const double* q, const double* V, double* x) {
-  f3r_link_state k[3];
-  for (int i = 0; i < 3; ++i) f3r_link_state_fill(m, i, q, 0, &k[i]);
-  solve_dependent_at(k, V, x);
-}
-
-/* Full q, v, a from the minimal state and its derivative. */
+/* The position and velocity stages from the minimal state, then the full accelerations: the
+ * loop closure fills rho, rho', theta' (not theta: nothing in the residual needs the angle
+ * itself), and a_d = G_d^{-1} (-G_z a_z - gamma). */
 static f3r_status expand(const f3r_model* m, const double* y, const double* yp,
                          f3r_workspace* ws) {
   const int nz = m->n_independent;
-  double *q = ws->q, *v = ws->v, *a = ws->a;
+  f3r_data* d = &ws->data;
+  double *q = ws->q, *v = ws->v;
   memcpy(q + 6, y, (size_t)nz * sizeof(double));
   memcpy(v + 6, y + nz, (size_t)nz * sizeof(double));
-  const f3r_status st = f3r_model_close_loops(m, q);
+  const f3r_status st = f3r_fwd_position_closed(m, q, d);
   if (st != F3R_OK) return st;
-  f3r_model_close_loop_rates(m, q, v);
-  for (int n = 0; n < 6; ++n) a[n] = 0.0;
-  memcpy(a + 6, yp + nz, (size_t)nz * sizeof(double));
-  double rhs[F3R_NCON];
-  f3r_constraint_times(m, q, a, rhs); /* G_z a_z */
-  f3r_constraint_bias(m, q, v, ws->gamma);
-  for (int c = 0; c < F3R_NCON; ++c) rhs[c] = -rhs[c] - ws->gamma[c];
-  solve_dependent(m, q, rhs, a);
+  f3r_fwd_velocity_closed(m, q, v, d);
+  memcpy(d->a + 6, yp + nz, (size_t)nz * sizeof(double));
+  dependent_accelerations(m, d);
   return F3R_OK;
+}
+
+/* The dependent accelerations a_d = G_d^{-1} (-G_z a_z - gamma), with a_z given in d->a. */
+static void dependent_accelerations(const f3r_model* m, f3r_data* d) {
+  double* a = d->a;
+  for (int n = 0; n < 6; ++n) a[n] = 0.0;
+  double rhs[F3R_NCON];
+  f3r_data_constraint_times(m, d, a, rhs); /* G_z a_z */
+  for (int c = 0; c < F3R_NCON; ++c) rhs[c] = -rhs[c] - d->gamma[c];
+  f3r_data_solve_dependent(d, rhs, a);
+}
+
+/* R = M a + h + k - Q; its dependent rows give the loop forces lambda = G_d^{-T} R_d, its
+ * independent rows less G_z^T lambda are the reduced equations B^T R. */
+static void loop_forces(const f3r_model* m, f3r_data* d) {
+  double* R = d->R;
+  f3r_data_mass_times(m, d, d->a, R);
+  for (int n = 0; n < m->nq; ++n) R[n] += d->h[n] + d->k[n] - d->Q[n];
+  f3r_data_solve_dependent_transpose(d, R, d->lambda);
+}
+
+void f3r_minimal_multipliers(const f3r_model* m, const double* yp, f3r_data* d) {
+  memcpy(d->a + 6, yp + m->n_independent, (size_t)m->n_independent * sizeof(double));
+  dependent_accelerations(m, d);
+  loop_forces(m, d);
 }
 
 f3r_status f3r_minimal_residual(const f3r_model* m, double t, const double* y, const double* yp,
                                 const double* held, double* res, f3r_workspace* ws) {
-  const int nq = m->nq, nz = m->n_independent;
+  const int nz = m->n_independent;
   const f3r_status st = expand(m, y, yp, ws);
   if (st != F3R_OK) return st;
-  const double *q = ws->q, *v = ws->v;
-  double* R = ws->R;
-  f3r_mass_times(m, q, ws->a, R);
-  f3r_velocity_forces(m, q, v, ws->h);
-  f3r_elastic_forces(m, q, ws->k);
+  f3r_data* d = &ws->data;
   const int lag_at = f3r_lag_index(m, F3R_FORMULATION_MINIMAL), w_at = lag_at + m->n_lag;
-  double commanded[3];
-  f3r_applied_forces(m, t, held, q, v, m->n_lag ? y + lag_at : 0, ws->Q, commanded);
-  double power = 0.0;
-  for (int n = 0; n < nq; ++n) {
-    R[n] += ws->h[n] + ws->k[n] - ws->Q[n];
-    power += ws->Q[n] * v[n];
-  }
-  for (int i = 0; i < 3; ++i) {
-    f3r_link_state k;
-    f3r_link_state_fill(m, i, q, 0, &k);
-    const double along = R[i], across = (R[3 + i] + k.w * R[i]) / k.len;
-    ws->lambda[2 * i] = along * k.c - across * k.s;
-    ws->lambda[2 * i + 1] = along * k.s + across * k.c;
-  }
-  f3r_constraint_transpose_times(m, q, ws->lambda, ws->tmp);
+  f3r_fwd_forces(m, t, held, ws->q, ws->v, m->n_lag ? y + lag_at : 0, d);
+  loop_forces(m, d);
+  const double* R = d->R;
+  f3r_data_constraint_transpose_times(m, d, d->lambda, ws->tmp);
   for (int j = 0; j < nz; ++j) {
     res[j] = yp[j] - y[nz + j];
     res[nz + j] = R[6 + j] - ws->tmp[6 + j];
   }
   for (int i = 0; i < m->n_lag; ++i)
-    res[lag_at + i] = m->lag_time_constant * yp[lag_at + i] - (commanded[i] - y[lag_at + i]);
-  res[w_at] = yp[w_at] - power;
+    res[lag_at + i] = m->lag_time_constant * yp[lag_at + i] - (d->commanded[i] - y[lag_at + i]);
+  res[w_at] = yp[w_at] - d->power;
   return F3R_OK;
 }
 
@@ -95,25 +88,23 @@ static double typical_size(const f3r_model* m, int index) {
   return is_rate ? 1e-2 : 1e-5;
 }
 
-/* B (nq x nz) and M B at the configuration in ws->q. B is the identity on z above the
- * dependent rows G_d^{-1} (-G_z); M and G are assembled once, so the trigonometry of each link
- * is evaluated once per call rather than once per column. */
+/* B (nq x nz) and M B at the position stage in ws->data (the last expanded state). B is the
+ * identity on z above the dependent rows G_d^{-1} (-G_z). */
 static void assemble_velocity_map(const f3r_model* m, f3r_workspace* ws) {
   const int nq = m->nq, nz = m->n_independent;
+  const f3r_data* d = &ws->data;
   double *B = ws->B, *M = ws->M, *G = ws->G;
   memset(B, 0, (size_t)nq * (size_t)nz * sizeof(double));
   memset(M, 0, (size_t)nq * (size_t)nq * sizeof(double));
   memset(G, 0, (size_t)F3R_NCON * (size_t)nq * sizeof(double));
-  f3r_add_mass_matrix(m, ws->q, 1.0, M, nq);
-  f3r_add_constraint_jacobian(m, ws->q, 1.0, G, F3R_NCON);
-  f3r_link_state k[3];
-  for (int i = 0; i < 3; ++i) f3r_link_state_fill(m, i, ws->q, 0, &k[i]);
+  f3r_data_add_mass_matrix(m, d, 1.0, M, nq);
+  f3r_data_add_constraint_jacobian(m, d, 1.0, G, F3R_NCON);
   for (int j = 0; j < nz; ++j) {
     double* col = B + (size_t)j * (size_t)nq;
     double V[F3R_NCON];
     for (int c = 0; c < F3R_NCON; ++c) V[c] = -F3R_AT(G, F3R_NCON, c, 6 + j);
     col[6 + j] = 1.0;
-    solve_dependent_at(k, V, col);
+    f3r_data_solve_dependent(d, V, col);
     /* M B: B's column is nonzero only in rows 0..5 and 6 + j */
     double* out = ws->MB + (size_t)j * (size_t)nq;
     for (int n = 0; n < nq; ++n) {
@@ -176,7 +167,7 @@ f3r_status f3r_minimal_jacobian(const f3r_model* m, double t, double cj, const d
   for (int j = 0; j < nz; ++j) F3R_AT(J, ld, j, j) += cj;
   for (int i = 0; i < m->n_lag; ++i) F3R_AT(J, ld, 2 * nz + i, 2 * nz + i) += cj * m->lag_time_constant;
   F3R_AT(J, ld, ny - 1, ny - 1) += cj;
-  st = expand(m, y, yp, ws); /* restores q at y */
+  st = expand(m, y, yp, ws); /* restores the position stage at y */
   if (st != F3R_OK) return st;
   assemble_velocity_map(m, ws);
   for (int j = 0; j < nz; ++j)

@@ -6,13 +6,7 @@
 
 #include "flex3rpr/model.h"
 #include "effects.h"
-#include "link_state.h"
-
-/* Legs whose beam root comes closer than this fraction of l to A_i are degenerate: there the
- * constraint Jacobian loses rank (det of the leg's 2x2 block is rho + l), and the loop closure
- * refuses them. A run stops long before, at the collapse guard (stepper.h,
- * F3R_COLLAPSE_LEG_FRACTION = 0.1); this bound only keeps the closure itself finite. */
-#define F3R_CLOSURE_MIN_LEG_FRACTION 1e-3
+#include "data.h"
 
 static const double kPlatformAngle[3] = {-M_PI / 6.0, M_PI / 2.0, 7.0 * M_PI / 6.0};
 
@@ -88,6 +82,8 @@ f3r_status f3r_model_create(const f3r_scene* scene, f3r_model** out, f3r_error* 
   m->platform_radius = scene->platform_side / sqrt(3.0);
   for (int i = 0; i < 3; ++i) {
     m->platform_angle[i] = kPlatformAngle[i];
+    m->platform_direction[i][0] = cos(kPlatformAngle[i]);
+    m->platform_direction[i][1] = sin(kPlatformAngle[i]);
     m->base_joint[i][0] = base_radius * cos(kPlatformAngle[i]);
     m->base_joint[i][1] = base_radius * sin(kPlatformAngle[i]);
   }
@@ -188,38 +184,20 @@ double f3r_model_tip_deflection(const f3r_model* m, const double* q, int link) {
   return w;
 }
 
-/* Each loop closes in closed form: |C_i - A_i|^2 = L^2 + w^2, and the direction of C_i - A_i
- * is theta_i + atan2(w, L), with L = rho_i + l and w the tip deflection. */
+/* The closed-form loop closure and its rates are the minimal formulation's position and
+ * velocity stages (forward.c). */
 f3r_status f3r_model_close_loops(const f3r_model* m, double* q) {
-  for (int i = 0; i < 3; ++i) {
-    const f3r_platform_joint pj = f3r_platform_joint_at(m, i, q);
-    const double dx = q[6] + m->platform_radius * pj.cc - m->base_joint[i][0];
-    const double dy = q[7] + m->platform_radius * pj.sc - m->base_joint[i][1];
-    const double w = f3r_model_tip_deflection(m, q, i);
-    const double len_sq = dx * dx + dy * dy - w * w;
-    const double min_len = F3R_CLOSURE_MIN_LEG_FRACTION * m->link_length;
-    if (!(len_sq > min_len * min_len)) return F3R_ERR_SINGULAR;
-    const double len = sqrt(len_sq);
-    const double raw = atan2(dy, dx) - atan2(w, len);
-    q[i] = len - m->link_length;
-    q[3 + i] = m->theta_branch[i] + remainder(raw - m->theta_branch[i], 2.0 * M_PI);
-  }
+  f3r_data d = {.sincos_pairs = 0};
+  const f3r_status st = f3r_fwd_position_closed(m, q, &d);
+  if (st != F3R_OK) return st;
+  f3r_fwd_leg_angles(m, &d, q);
   return F3R_OK;
 }
 
-/* From G q' = 0 for link i: with C' the velocity of C_i and w' the tip deflection rate,
- * theta' = (n . C' - w') / L and rho' = e . C' + w theta'. */
 void f3r_model_close_loop_rates(const f3r_model* m, const double* q, double* qdot) {
-  for (int i = 0; i < 3; ++i) {
-    f3r_link_state k = {0};
-    f3r_link_state_fill(m, i, q, qdot, &k);
-    const f3r_platform_joint pj = f3r_platform_joint_at(m, i, q);
-    const double r = m->platform_radius;
-    const double cx = qdot[6] - r * pj.sc * qdot[8], cy = qdot[7] + r * pj.cc * qdot[8];
-    const double theta_dot = (-k.s * cx + k.c * cy - k.w_dot) / k.len;
-    qdot[i] = k.c * cx + k.s * cy + k.w * theta_dot;
-    qdot[3 + i] = theta_dot;
-  }
+  f3r_data d = {.sincos_pairs = 0};
+  f3r_fwd_position(m, q, &d);
+  f3r_fwd_velocity_closed(m, q, qdot, &d);
 }
 
 void f3r_model_beam_point(const f3r_model* m, const double* q, int link, double xi,
@@ -285,10 +263,15 @@ static void symmetric_eigenvalues3(const double a[3][3], double ev[3]) {
 }
 
 double f3r_model_actuation_condition(const f3r_model* m, const double* q) {
+  f3r_data d = {.sincos_pairs = 0};
+  f3r_fwd_position(m, q, &d);
+  return f3r_data_actuation_condition(m, &d, q);
+}
+
+double f3r_data_actuation_condition(const f3r_model* m, const f3r_data* d, const double* q) {
   double J[3][3]; /* rows: force x, force y, moment / r_PC; column i: leg i */
   for (int i = 0; i < 3; ++i) {
-    const double angle = m->platform_angle[i] + q[8];
-    const double cx = m->platform_radius * cos(angle), cy = m->platform_radius * sin(angle);
+    const double cx = m->platform_radius * d->link[i].cc, cy = m->platform_radius * d->link[i].sc;
     double ux = q[6] + cx - m->base_joint[i][0], uy = q[7] + cy - m->base_joint[i][1];
     const double len = hypot(ux, uy);
     ux /= len;

@@ -43,6 +43,8 @@ void f3r_workspace_destroy(f3r_workspace* ws) {
   free(ws);
 }
 
+long f3r_workspace_sincos_pairs(const f3r_workspace* ws) { return ws->data.sincos_pairs; }
+
 int f3r_state_size(const f3r_model* m, f3r_formulation form) {
   return (form == F3R_FORMULATION_DAE ? 2 * m->nq + 2 * F3R_NCON : 2 * m->n_independent) +
          m->n_lag + 1;
@@ -107,33 +109,33 @@ f3r_status f3r_consistent_state(const f3r_model* m, f3r_formulation form, double
                                 const double* lag, double work, double* y, double* yp,
                                 double* lambda_out, f3r_workspace* ws) {
   const int nq = m->nq, nz = m->n_independent, ny = f3r_state_size(m, form);
-  double commanded[3] = {0.0, 0.0, 0.0};
-  f3r_applied_forces(m, t, held, q, v, lag, ws->Q, commanded);
-  const f3r_status st = f3r_solve_accelerations(m, q, v, ws->Q, ws->a, ws->lambda, ws->solve_work);
+  f3r_data* d = &ws->data;
+  f3r_fwd_position(m, q, d);
+  f3r_fwd_velocity(m, q, v, d);
+  f3r_fwd_forces(m, t, held, q, v, lag, d);
+  const f3r_status st = f3r_solve_accelerations(m, q, v, d->Q, d->a, d->lambda, ws->solve_work);
   if (st != F3R_OK) return st;
-  double power = 0.0;
-  for (int n = 0; n < nq; ++n) power += ws->Q[n] * v[n];
-  if (lambda_out) memcpy(lambda_out, ws->lambda, sizeof ws->lambda);
+  if (lambda_out) memcpy(lambda_out, d->lambda, sizeof d->lambda);
   if (form == F3R_FORMULATION_DAE) {
     memset(y, 0, (size_t)ny * sizeof(double));
     memset(yp, 0, (size_t)ny * sizeof(double));
     memcpy(y, q, (size_t)nq * sizeof(double));
     memcpy(y + nq, v, (size_t)nq * sizeof(double));
-    memcpy(y + 2 * nq, ws->lambda, sizeof ws->lambda);
+    memcpy(y + 2 * nq, d->lambda, sizeof d->lambda);
     memcpy(yp, v, (size_t)nq * sizeof(double));
-    memcpy(yp + nq, ws->a, (size_t)nq * sizeof(double));
+    memcpy(yp + nq, d->a, (size_t)nq * sizeof(double));
   } else {
     memcpy(y, q + 6, (size_t)nz * sizeof(double));
     memcpy(y + nz, v + 6, (size_t)nz * sizeof(double));
     memcpy(yp, v + 6, (size_t)nz * sizeof(double));
-    memcpy(yp + nz, ws->a + 6, (size_t)nz * sizeof(double));
+    memcpy(yp + nz, d->a + 6, (size_t)nz * sizeof(double));
   }
   for (int i = 0; i < m->n_lag; ++i) {
     const int k = f3r_lag_index(m, form) + i;
     y[k] = lag ? lag[i] : 0.0;
-    yp[k] = (commanded[i] - y[k]) / m->lag_time_constant;
+    yp[k] = (d->commanded[i] - y[k]) / m->lag_time_constant;
   }
   y[ny - 1] = work;
-  yp[ny - 1] = power;
+  yp[ny - 1] = d->power;
   return check_finite(y, f3r_state_size(m, form));
 }

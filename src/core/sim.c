@@ -230,41 +230,50 @@ const f3r_model* f3r_sim_model(const f3r_sim* s) { return s->model; }
 f3r_formulation f3r_sim_formulation(const f3r_sim* s) { return s->settings.formulation; }
 const double* f3r_sim_state(const f3r_sim* s) { return N_VGetArrayPointer(s->y); }
 
+/* One forward pass at the current state (position, velocity, forces) gives every output; the
+ * multipliers are the state's own (dae) or follow from its accelerations y' (minimal). */
 const f3r_outputs* f3r_sim_outputs(f3r_sim* s) {
   const f3r_model* m = s->model;
+  const int nq = m->nq;
   f3r_outputs* o = &s->out;
   const double* y = N_VGetArrayPointer(s->y);
+  f3r_data* d = &s->out_ws->data;
   o->t = s->t;
   if (f3r_state_to_full(m, s->settings.formulation, y, o->q, o->v) != F3R_OK) return o;
   double lag[3];
-  f3r_applied_forces(m, s->t, s->held, o->q, o->v, lag_states(s, lag), o->forces, NULL);
+  f3r_fwd_position(m, o->q, d);
+  f3r_fwd_velocity(m, o->q, o->v, d);
+  f3r_fwd_forces(m, s->t, s->held, o->q, o->v, lag_states(s, lag), d);
+  memcpy(o->forces, d->Q, (size_t)nq * sizeof(double));
   if (s->settings.formulation == F3R_FORMULATION_DAE) {
-    memcpy(o->lambda, y + 2 * m->nq, sizeof o->lambda);
+    memcpy(o->lambda, y + 2 * nq, sizeof o->lambda);
   } else {
-    double a[F3R_MAX_Q];
-    if (f3r_solve_accelerations(m, o->q, o->v, o->forces, a, o->lambda, s->out_ws->solve_work) !=
-        F3R_OK)
-      memset(o->lambda, 0, sizeof o->lambda);
+    f3r_minimal_multipliers(m, N_VGetArrayPointer(s->yp), d);
+    memcpy(o->lambda, d->lambda, sizeof o->lambda);
+  }
+  double Mv[F3R_MAX_Q];
+  f3r_data_mass_times(m, d, o->v, Mv);
+  o->kinetic_energy = o->potential_energy = 0.0;
+  for (int n = 0; n < nq; ++n) {
+    o->kinetic_energy += 0.5 * o->v[n] * Mv[n];
+    o->potential_energy += 0.5 * d->k[n] * o->q[n]; /* k = K eta: V = eta^T K eta / 2 */
   }
   for (int i = 0; i < 3; ++i) {
-    o->tip_deflection[i] = f3r_model_tip_deflection(m, o->q, i);
-    o->tip_deflection_rate[i] = f3r_model_tip_deflection(m, o->v, i);
+    o->tip_deflection[i] = d->link[i].w;
+    o->tip_deflection_rate[i] = d->link[i].w_dot;
   }
-  o->kinetic_energy = f3r_kinetic_energy(m, o->q, o->v);
-  o->potential_energy = f3r_potential_energy(m, o->q);
   o->external_work = y[s->ny - 1];
   o->energy_balance_error = fabs(o->kinetic_energy + o->potential_energy - o->external_work +
                                  s->impact_loss - s->energy0);
   o->impacts = s->impacts;
   o->impact_loss = s->impact_loss;
   o->last_impact = s->last_impact;
-  double g[F3R_NCON], gv[F3R_NCON];
-  f3r_constraints(m, o->q, g);
-  f3r_constraint_times(m, o->q, o->v, gv);
-  o->actuation_condition = f3r_model_actuation_condition(m, o->q);
+  double gv[F3R_NCON];
+  f3r_data_constraint_times(m, d, o->v, gv);
+  o->actuation_condition = f3r_data_actuation_condition(m, d, o->q);
   o->constraint_residual = o->velocity_residual = 0.0;
   for (int c = 0; c < F3R_NCON; ++c) {
-    o->constraint_residual = fmax(o->constraint_residual, fabs(g[c]));
+    o->constraint_residual = fmax(o->constraint_residual, fabs(d->g[c]));
     o->velocity_residual = fmax(o->velocity_residual, fabs(gv[c]));
   }
   s->ops->stats(&s->stepper, &o->stats);

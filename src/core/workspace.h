@@ -2,14 +2,14 @@
 #ifndef FLEX3RPR_WORKSPACE_H
 #define FLEX3RPR_WORKSPACE_H
 
+#include "data.h"
 #include "flex3rpr/residual.h"
-#include "flex3rpr/stages.h"
 
 struct f3r_workspace {
   int nq, nz, ny;
-  double q[F3R_MAX_Q], v[F3R_MAX_Q], a[F3R_MAX_Q], Q[F3R_MAX_Q];
-  double h[F3R_MAX_Q], k[F3R_MAX_Q], tmp[F3R_MAX_Q], R[F3R_MAX_Q];
-  double lambda[F3R_NCON], gamma[F3R_NCON];
+  f3r_data data;      /* the last evaluation's forward pass */
+  double q[F3R_MAX_Q], v[F3R_MAX_Q]; /* its full coordinates (the minimal formulation's expansion) */
+  double tmp[F3R_MAX_Q];
   double* solve_work; /* f3r_solve_accelerations_work_size */
   double* y_perturbed;/* ny */
   double* res_base;   /* ny */
@@ -31,6 +31,10 @@ f3r_status f3r_minimal_residual(const f3r_model* m, double t, const double* y, c
 f3r_status f3r_minimal_jacobian(const f3r_model* m, double t, double cj, const double* y,
                                 const double* yp, const double* held, double* J, int ld,
                                 f3r_workspace* ws);
+
+/* The minimal formulation's accelerations and loop forces (d->a, d->R, d->lambda) from the
+ * independent accelerations in yp, given the position, velocity and force stages in d. */
+void f3r_minimal_multipliers(const f3r_model* m, const double* yp, f3r_data* d);
 
 f3r_status f3r_minimal_rhs(const f3r_model* m, double t, const double* y, const double* held,
                            double* ydot, f3r_workspace* ws);
