@@ -83,6 +83,10 @@ typedef struct f3r_model {
   int n_lag;                 /* 3 with actuator lag (applied leg forces are states), else 0 */
   double lag_time_constant;  /* s */
 
+  /* coefficients of the effects (effects.c), copied from the scene so that the loop never reads it */
+  double joint_friction[6];          /* viscous, per coordinate: rho_i (N s/m), theta_i (N m s) */
+  double modal_damping[F3R_MAX_Q];   /* per modal coordinate n >= 9: 2 zeta omega_j m (N s/m) */
+
   /* end stops of the pistons (events.c): active only when end_stops is 1 */
   int end_stops;
   double stroke_min, stroke_max; /* limits of rho_i (m) */

@@ -61,46 +61,29 @@ const f3r_force_effect f3r_gravity_effect = {"gravity", gravity_add, gravity_add
 static void friction_add(const f3r_model* m, double t, const double* q, const double* v,
                          const f3r_data* d, double* Q) {
   (void)t, (void)q, (void)d;
-  for (int i = 0; i < 3; ++i) {
-    Q[i] -= m->scene.friction_prismatic[i] * v[i];
-    Q[3 + i] -= m->scene.friction_revolute[i] * v[3 + i];
-  }
+  for (int n = 0; n < 6; ++n) Q[n] -= m->joint_friction[n] * v[n];
 }
 
 static void friction_add_dv(const f3r_model* m, const double* q, const double* v, double scale,
                             double* A, int ld) {
   (void)q, (void)v;
-  for (int i = 0; i < 3; ++i) {
-    F3R_AT(A, ld, i, i) -= scale * m->scene.friction_prismatic[i];
-    F3R_AT(A, ld, 3 + i, 3 + i) -= scale * m->scene.friction_revolute[i];
-  }
+  for (int n = 0; n < 6; ++n) F3R_AT(A, ld, n, n) -= scale * m->joint_friction[n];
 }
 
 const f3r_force_effect f3r_friction_effect = {"joint_friction", friction_add, 0, friction_add_dv};
 
 /* --- modal damping ------------------------------------------------------------------------------ */
-static double damping_coefficient(const f3r_model* m, int i, int j) {
-  return 2.0 * m->scene.links[i].damping_ratio * m->link[i].omega_clamped[j] * m->link_mass;
-}
 
 static void damping_add(const f3r_model* m, double t, const double* q, const double* v,
                         const f3r_data* d, double* Q) {
   (void)t, (void)q, (void)d;
-  for (int i = 0; i < 3; ++i)
-    for (int j = 0; j < m->link[i].modes; ++j) {
-      const int n = m->link[i].eta_index + j;
-      Q[n] -= damping_coefficient(m, i, j) * v[n];
-    }
+  for (int n = 9; n < m->nq; ++n) Q[n] -= m->modal_damping[n] * v[n];
 }
 
 static void damping_add_dv(const f3r_model* m, const double* q, const double* v, double scale,
                            double* A, int ld) {
   (void)q, (void)v;
-  for (int i = 0; i < 3; ++i)
-    for (int j = 0; j < m->link[i].modes; ++j) {
-      const int n = m->link[i].eta_index + j;
-      F3R_AT(A, ld, n, n) -= scale * damping_coefficient(m, i, j);
-    }
+  for (int n = 9; n < m->nq; ++n) F3R_AT(A, ld, n, n) -= scale * m->modal_damping[n];
 }
 
 const f3r_force_effect f3r_damping_effect = {"damping", damping_add, 0, damping_add_dv};
@@ -116,6 +99,13 @@ const f3r_force_effect f3r_inputs_effect = {"inputs", inputs_add, 0, 0};
 
 void f3r_model_compile_effects(f3r_model* m) {
   const f3r_scene* s = &m->scene;
+  for (int i = 0; i < 3; ++i) {
+    m->joint_friction[i] = s->friction_prismatic[i];
+    m->joint_friction[3 + i] = s->friction_revolute[i];
+    for (int j = 0; j < m->link[i].modes; ++j)
+      m->modal_damping[m->link[i].eta_index + j] =
+          2.0 * s->links[i].damping_ratio * m->link[i].omega_clamped[j] * m->link_mass;
+  }
   m->n_effects = 0;
   int any_input = 0;
   for (int n = 0; n < F3R_RIGID_FORCES; ++n) any_input |= s->inputs[n].kind != F3R_INPUT_NONE;
