@@ -5,6 +5,7 @@
 #ifndef FLEX3RPR_SCENE_H
 #define FLEX3RPR_SCENE_H
 
+#include "flex3rpr/coords.h"
 #include "flex3rpr/beam_modes.h"
 #include "flex3rpr/status.h"
 
@@ -60,10 +61,10 @@ typedef struct {
 
 /* Index of a rigid generalized force in f3r_scene.inputs and in force vectors. */
 enum {
-  F3R_FORCE_RHO = 0,      /* 0..2: force along leg i on its piston (N) */
-  F3R_FORCE_THETA = 3,    /* 3..5: torque on cylinder i about A_i (N m) */
-  F3R_FORCE_PLATFORM = 6, /* 6, 7, 8: platform F_x (N), F_y (N), torque (N m) */
-  F3R_RIGID_FORCES = 9
+  F3R_FORCE_RHO = F3R_Q_RHO,          /* 0..2: force along leg i on its piston (N) */
+  F3R_FORCE_THETA = F3R_Q_THETA,      /* 3..5: torque on cylinder i about A_i (N m) */
+  F3R_FORCE_PLATFORM = F3R_Q_X,       /* 6, 7, 8: platform F_x (N), F_y (N), torque (N m) */
+  F3R_RIGID_FORCES = F3R_Q_MODAL
 };
 
 #define F3R_MODES_AUTO (-1)

@@ -108,7 +108,7 @@ static void write_header(FILE* f, const f3r_model* m) {
   fprintf(f, "t");
   for (int pass = 0; pass < 2; ++pass) {
     const char* suffix = pass ? "_dot" : "";
-    for (int n = 0; n < 9; ++n) fprintf(f, ",%s%s", rigid[n], suffix);
+    for (int n = 0; n < F3R_Q_MODAL; ++n) fprintf(f, ",%s%s", rigid[n], suffix);
     for (int i = 0; i < 3; ++i)
       for (int j = 0; j < m->link[i].modes; ++j) fprintf(f, ",eta_%d_%d%s", i + 1, j + 1, suffix);
     for (int i = 0; i < 3; ++i) fprintf(f, ",w_tip_%d%s", i + 1, suffix);
@@ -271,7 +271,7 @@ int main(int argc, char** argv) {
   printf("max constraint res  %.3e m\n", max_constraint);
   printf("energy balance err  %.3e J (%.3e of max T+V)\n", max_energy_error,
          max_energy > 0 ? max_energy_error / max_energy : 0.0);
-  printf("final pose          x_p %.9f y_p %.9f phi_p %.9f\n", out->q[6], out->q[7], out->q[8]);
+  printf("final pose          x_p %.9f y_p %.9f phi_p %.9f\n", out->q[F3R_Q_X], out->q[F3R_Q_Y], out->q[F3R_Q_PHI]);
   if (o.out_path) printf("csv                 %s\n", o.out_path);
   f3r_sim_destroy(sim);
   f3r_model_destroy(model);

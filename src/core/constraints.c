@@ -21,12 +21,12 @@
     const int gx = 2 * i, gy = 2 * i + 1;                                                  \
     PUT(gx, i, k->c);                                                                      \
     PUT(gy, i, k->s);                                                                      \
-    PUT(gx, 3 + i, k->g_theta[0]);                                                         \
-    PUT(gy, 3 + i, k->g_theta[1]);                                                         \
-    PUT(gx, 6, -1.0);                                                                      \
-    PUT(gy, 7, -1.0);                                                                      \
-    PUT(gx, 8, k->g_phi[0]);                                                               \
-    PUT(gy, 8, k->g_phi[1]);                                                               \
+    PUT(gx, F3R_Q_THETA + i, k->g_theta[0]);                                                         \
+    PUT(gy, F3R_Q_THETA + i, k->g_theta[1]);                                                         \
+    PUT(gx, F3R_Q_X, -1.0);                                                                      \
+    PUT(gy, F3R_Q_Y, -1.0);                                                                      \
+    PUT(gx, F3R_Q_PHI, k->g_phi[0]);                                                               \
+    PUT(gy, F3R_Q_PHI, k->g_phi[1]);                                                               \
     const f3r_link_params* lp = &(m)->link[i];                                             \
     if (lp->model == F3R_LINK_FIXED_FREE)                                                  \
       for (int j = 0; j < lp->modes; ++j) {                                                \
@@ -74,7 +74,7 @@ void f3r_data_add_constraint_transpose_times_dq(const f3r_model* m, const f3r_da
     const f3r_link_data* k = &d->link[i];
     const double lx = y[2 * i], ly = y[2 * i + 1];
     const double e_l = k->c * lx + k->s * ly, n_l = -k->s * lx + k->c * ly;
-    const int r = i, t = 3 + i;
+    const int r = i, t = F3R_Q_THETA + i;
     F3R_AT(A, ld, r, t) += scale * n_l;
     F3R_AT(A, ld, t, r) += scale * n_l;
     F3R_AT(A, ld, t, t) += scale * (-k->len * e_l - k->w * n_l);
@@ -87,7 +87,7 @@ void f3r_data_add_constraint_transpose_times_dq(const f3r_model* m, const f3r_da
       }
     phi_phi += m->platform_radius * (k->cc * lx + k->sc * ly);
   }
-  F3R_AT(A, ld, 8, 8) += scale * phi_phi;
+  F3R_AT(A, ld, F3R_Q_PHI, F3R_Q_PHI) += scale * phi_phi;
 }
 
 /* Needs the velocity stage (the rates of d) for the same v. */
@@ -95,7 +95,7 @@ void f3r_data_add_constraint_times_dq(const f3r_model* m, const f3r_data* d, con
                                       double scale, double* A, int ld) {
   for (int i = 0; i < 3; ++i) {
     const f3r_link_data* k = &d->link[i];
-    const int gx = 2 * i, gy = 2 * i + 1, r = i, t = 3 + i;
+    const int gx = 2 * i, gy = 2 * i + 1, r = i, t = F3R_Q_THETA + i;
     const double rd = k->rho_dot, td = k->theta_dot;
     /* d/drho = n th' */
     F3R_AT(A, ld, gx, r) += scale * (-k->s * td);
@@ -111,8 +111,8 @@ void f3r_data_add_constraint_times_dq(const f3r_model* m, const f3r_data* d, con
         F3R_AT(A, ld, gy, col) += scale * (-lp->tip[j] * k->s * td);
       }
     /* d/dphi_p = r_PC e_c phi' */
-    F3R_AT(A, ld, gx, 8) += scale * (m->platform_radius * k->cc * v[8]);
-    F3R_AT(A, ld, gy, 8) += scale * (m->platform_radius * k->sc * v[8]);
+    F3R_AT(A, ld, gx, F3R_Q_PHI) += scale * (m->platform_radius * k->cc * v[F3R_Q_PHI]);
+    F3R_AT(A, ld, gy, F3R_Q_PHI) += scale * (m->platform_radius * k->sc * v[F3R_Q_PHI]);
   }
 }
 
@@ -121,15 +121,15 @@ void f3r_data_solve_dependent(const f3r_data* d, const double* V, double* x) {
     const f3r_link_data* k = &d->link[i];
     const double vn = -k->s * V[2 * i] + k->c * V[2 * i + 1];
     const double ve = k->c * V[2 * i] + k->s * V[2 * i + 1];
-    x[3 + i] = vn / k->len;
-    x[i] = ve + k->w * x[3 + i];
+    x[F3R_Q_THETA + i] = vn / k->len;
+    x[i] = ve + k->w * x[F3R_Q_THETA + i];
   }
 }
 
 void f3r_data_solve_dependent_transpose(const f3r_data* d, const double* R, double* lambda) {
   for (int i = 0; i < 3; ++i) {
     const f3r_link_data* k = &d->link[i];
-    const double along = R[i], across = (R[3 + i] + k->w * R[i]) / k->len;
+    const double along = R[i], across = (R[F3R_Q_THETA + i] + k->w * R[i]) / k->len;
     lambda[2 * i] = along * k->c - across * k->s;
     lambda[2 * i + 1] = along * k->s + across * k->c;
   }

@@ -28,7 +28,7 @@ void f3r_data_add_mass_matrix(const f3r_model* m, const f3r_data* d, double scal
   const double mass = m->link_mass;
   for (int i = 0; i < 3; ++i) {
     const f3r_link_data* k = &d->link[i];
-    const int r = i, t = 3 + i, base = m->link[i].eta_index;
+    const int r = i, t = F3R_Q_THETA + i, base = m->link[i].eta_index;
     F3R_AT(A, ld, r, r) += scale * mass;
     F3R_AT(A, ld, r, t) += scale * k->m_rho_theta;
     F3R_AT(A, ld, t, r) += scale * k->m_rho_theta;
@@ -39,9 +39,9 @@ void f3r_data_add_mass_matrix(const f3r_model* m, const f3r_data* d, double scal
       F3R_AT(A, ld, base + j, base + j) += scale * mass;
     }
   }
-  F3R_AT(A, ld, 6, 6) += scale * m->platform_mass;
-  F3R_AT(A, ld, 7, 7) += scale * m->platform_mass;
-  F3R_AT(A, ld, 8, 8) += scale * m->platform_inertia;
+  F3R_AT(A, ld, F3R_Q_X, F3R_Q_X) += scale * m->platform_mass;
+  F3R_AT(A, ld, F3R_Q_Y, F3R_Q_Y) += scale * m->platform_mass;
+  F3R_AT(A, ld, F3R_Q_PHI, F3R_Q_PHI) += scale * m->platform_inertia;
 }
 
 void f3r_data_mass_times(const f3r_model* m, const f3r_data* d, const double* x, double* out) {
@@ -52,14 +52,14 @@ void f3r_data_mass_times(const f3r_model* m, const f3r_data* d, const double* x,
     double coupled = 0.0;
     for (int j = 0; j < m->link[i].modes; ++j) {
       coupled += k->m_theta_eta[j] * x[base + j];
-      out[base + j] = k->m_theta_eta[j] * x[3 + i] + mass * x[base + j];
+      out[base + j] = k->m_theta_eta[j] * x[F3R_Q_THETA + i] + mass * x[base + j];
     }
-    out[i] = mass * x[i] + k->m_rho_theta * x[3 + i];
-    out[3 + i] = k->m_rho_theta * x[i] + k->m_theta_theta * x[3 + i] + coupled;
+    out[i] = mass * x[i] + k->m_rho_theta * x[F3R_Q_THETA + i];
+    out[F3R_Q_THETA + i] = k->m_rho_theta * x[i] + k->m_theta_theta * x[F3R_Q_THETA + i] + coupled;
   }
-  out[6] = m->platform_mass * x[6];
-  out[7] = m->platform_mass * x[7];
-  out[8] = m->platform_inertia * x[8];
+  out[6] = m->platform_mass * x[F3R_Q_X];
+  out[7] = m->platform_mass * x[F3R_Q_Y];
+  out[8] = m->platform_inertia * x[F3R_Q_PHI];
 }
 
 void f3r_data_add_velocity_forces_dv(const f3r_model* m, const f3r_data* d, const double* q,
@@ -68,7 +68,7 @@ void f3r_data_add_velocity_forces_dv(const f3r_model* m, const f3r_data* d, cons
   for (int i = 0; i < 3; ++i) {
     const f3r_link_data* k = &d->link[i];
     const f3r_link_params* lp = &m->link[i];
-    const int r = i, t = 3 + i;
+    const int r = i, t = F3R_Q_THETA + i;
     const double rd = k->rho_dot, td = k->theta_dot, arm = l + 2.0 * q[i];
     F3R_AT(A, ld, r, t) += scale * (-mass * arm * td - (1.0 + e) * mass * k->mean_defl_dot);
     F3R_AT(A, ld, t, r) += scale * (mass * arm * td + (1.0 - e) * mass * k->mean_defl_dot);
@@ -104,7 +104,7 @@ void f3r_add_mass_times_dq(const f3r_model* m, const double* q, const double* a,
   const double mass = m->link_mass, l = m->link_length, e = exact_flag(m);
   for (int i = 0; i < 3; ++i) {
     const f3r_link_params* lp = &m->link[i];
-    const int r = i, t = 3 + i, base = lp->eta_index;
+    const int r = i, t = F3R_Q_THETA + i, base = lp->eta_index;
     const double rho = q[i];
     double d_theta_d_rho = mass * (l + 2.0 * rho) * a[t];
     for (int j = 0; j < lp->modes; ++j) {
@@ -131,7 +131,7 @@ void f3r_add_velocity_forces_dq(const f3r_model* m, const double* q, const doubl
   const double mass = m->link_mass, e = exact_flag(m);
   for (int i = 0; i < 3; ++i) {
     const f3r_link_params* lp = &m->link[i];
-    const int r = i, t = 3 + i;
+    const int r = i, t = F3R_Q_THETA + i;
     const double rd = v[r], td = v[t];
     F3R_AT(A, ld, r, r) += scale * (-mass * td * td);
     F3R_AT(A, ld, t, r) += scale * (2.0 * mass * rd * td);
@@ -154,7 +154,7 @@ void f3r_add_velocity_forces_dv(const f3r_model* m, const double* q, const doubl
 }
 
 void f3r_elastic_forces(const f3r_model* m, const double* q, double* k) {
-  for (int n = 0; n < 9; ++n) k[n] = 0.0;
+  for (int n = 0; n < F3R_Q_MODAL; ++n) k[n] = 0.0;
   for (int i = 0; i < 3; ++i) {
     const f3r_link_params* lp = &m->link[i];
     for (int j = 0; j < lp->modes; ++j) k[lp->eta_index + j] = lp->stiffness[j] * q[lp->eta_index + j];

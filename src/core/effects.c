@@ -25,12 +25,12 @@ static void gravity_add(const f3r_model* m, double t, const double* q, const dou
     const f3r_link_data* k = &d->link[i];
     const double g_e = gx * k->c + gy * k->s, g_n = -gx * k->s + gy * k->c;
     Q[i] += mass * g_e;
-    Q[3 + i] += (cylinder_moment(m) + mass * (q[i] + m->link_length / 2.0)) * g_n - mass * k->mean_defl * g_e;
+    Q[F3R_Q_THETA + i] += (cylinder_moment(m) + mass * (q[i] + m->link_length / 2.0)) * g_n - mass * k->mean_defl * g_e;
     const f3r_link_params* lp = &m->link[i];
     for (int j = 0; j < lp->modes; ++j) Q[lp->eta_index + j] += mass * lp->mean[j] * g_n;
   }
-  Q[6] += m->platform_mass * gx;
-  Q[7] += m->platform_mass * gy;
+  Q[F3R_Q_X] += m->platform_mass * gx;
+  Q[F3R_Q_Y] += m->platform_mass * gy;
 }
 
 static void gravity_add_dq(const f3r_model* m, const double* q, const double* v,
@@ -40,7 +40,7 @@ static void gravity_add_dq(const f3r_model* m, const double* q, const double* v,
   for (int i = 0; i < 3; ++i) {
     const f3r_link_data* k = &d->link[i];
     const double g_e = gx * k->c + gy * k->s, g_n = -gx * k->s + gy * k->c;
-    const int r = i, th = 3 + i;
+    const int r = i, th = F3R_Q_THETA + i;
     /* de/dtheta = n, dn/dtheta = -e */
     F3R_AT(A, ld, r, th) += scale * mass * g_n;
     F3R_AT(A, ld, th, r) += scale * mass * g_n;
@@ -61,13 +61,13 @@ const f3r_force_effect f3r_gravity_effect = {"gravity", gravity_add, gravity_add
 static void friction_add(const f3r_model* m, double t, const double* q, const double* v,
                          const f3r_data* d, double* Q) {
   (void)t, (void)q, (void)d;
-  for (int n = 0; n < 6; ++n) Q[n] -= m->joint_friction[n] * v[n];
+  for (int n = 0; n < F3R_Q_LEG_JOINTS; ++n) Q[n] -= m->joint_friction[n] * v[n];
 }
 
 static void friction_add_dv(const f3r_model* m, const double* q, const double* v, double scale,
                             double* A, int ld) {
   (void)q, (void)v;
-  for (int n = 0; n < 6; ++n) F3R_AT(A, ld, n, n) -= scale * m->joint_friction[n];
+  for (int n = 0; n < F3R_Q_LEG_JOINTS; ++n) F3R_AT(A, ld, n, n) -= scale * m->joint_friction[n];
 }
 
 const f3r_force_effect f3r_friction_effect = {"joint_friction", friction_add, 0, friction_add_dv};
@@ -77,13 +77,13 @@ const f3r_force_effect f3r_friction_effect = {"joint_friction", friction_add, 0,
 static void damping_add(const f3r_model* m, double t, const double* q, const double* v,
                         const f3r_data* d, double* Q) {
   (void)t, (void)q, (void)d;
-  for (int n = 9; n < m->nq; ++n) Q[n] -= m->modal_damping[n] * v[n];
+  for (int n = F3R_Q_MODAL; n < m->nq; ++n) Q[n] -= m->modal_damping[n] * v[n];
 }
 
 static void damping_add_dv(const f3r_model* m, const double* q, const double* v, double scale,
                            double* A, int ld) {
   (void)q, (void)v;
-  for (int n = 9; n < m->nq; ++n) F3R_AT(A, ld, n, n) -= scale * m->modal_damping[n];
+  for (int n = F3R_Q_MODAL; n < m->nq; ++n) F3R_AT(A, ld, n, n) -= scale * m->modal_damping[n];
 }
 
 const f3r_force_effect f3r_damping_effect = {"damping", damping_add, 0, damping_add_dv};
@@ -101,7 +101,7 @@ void f3r_model_compile_effects(f3r_model* m) {
   const f3r_scene* s = &m->scene;
   for (int i = 0; i < 3; ++i) {
     m->joint_friction[i] = s->friction_prismatic[i];
-    m->joint_friction[3 + i] = s->friction_revolute[i];
+    m->joint_friction[F3R_Q_THETA + i] = s->friction_revolute[i];
     for (int j = 0; j < m->link[i].modes; ++j)
       m->modal_damping[m->link[i].eta_index + j] =
           2.0 * s->links[i].damping_ratio * m->link[i].omega_clamped[j] * m->link_mass;

@@ -22,12 +22,12 @@ static f3r_status expand(const f3r_model* m, const double* y, const double* yp,
   const int nz = m->n_independent;
   f3r_data* d = &ws->data;
   double *q = ws->q, *v = ws->v;
-  memcpy(q + 6, y, (size_t)nz * sizeof(double));
-  memcpy(v + 6, y + nz, (size_t)nz * sizeof(double));
+  memcpy(q + F3R_Q_INDEPENDENT, y, (size_t)nz * sizeof(double));
+  memcpy(v + F3R_Q_INDEPENDENT, y + nz, (size_t)nz * sizeof(double));
   const f3r_status st = f3r_fwd_position_closed(m, q, d);
   if (st != F3R_OK) return st;
   f3r_fwd_velocity_closed(m, q, v, d);
-  memcpy(d->a + 6, yp + nz, (size_t)nz * sizeof(double));
+  memcpy(d->a + F3R_Q_INDEPENDENT, yp + nz, (size_t)nz * sizeof(double));
   dependent_accelerations(m, d);
   return F3R_OK;
 }
@@ -35,7 +35,7 @@ static f3r_status expand(const f3r_model* m, const double* y, const double* yp,
 /* The dependent accelerations a_d = G_d^{-1} (-G_z a_z - gamma), with a_z given in d->a. */
 static void dependent_accelerations(const f3r_model* m, f3r_data* d) {
   double* a = d->a;
-  for (int n = 0; n < 6; ++n) a[n] = 0.0;
+  for (int n = 0; n < F3R_Q_INDEPENDENT; ++n) a[n] = 0.0;
   double rhs[F3R_NCON];
   f3r_data_constraint_times(m, d, a, rhs); /* G_z a_z */
   for (int c = 0; c < F3R_NCON; ++c) rhs[c] = -rhs[c] - d->gamma[c];
@@ -52,7 +52,7 @@ static void loop_forces(const f3r_model* m, f3r_data* d) {
 }
 
 void f3r_minimal_multipliers(const f3r_model* m, const double* yp, f3r_data* d) {
-  memcpy(d->a + 6, yp + m->n_independent, (size_t)m->n_independent * sizeof(double));
+  memcpy(d->a + F3R_Q_INDEPENDENT, yp + m->n_independent, (size_t)m->n_independent * sizeof(double));
   dependent_accelerations(m, d);
   loop_forces(m, d);
 }
@@ -70,7 +70,7 @@ f3r_status f3r_minimal_residual(const f3r_model* m, double t, const double* y, c
   f3r_data_constraint_transpose_times(m, d, d->lambda, ws->tmp);
   for (int j = 0; j < nz; ++j) {
     res[j] = yp[j] - y[nz + j];
-    res[nz + j] = R[6 + j] - ws->tmp[6 + j];
+    res[nz + j] = R[F3R_Q_INDEPENDENT + j] - ws->tmp[F3R_Q_INDEPENDENT + j];
   }
   for (int i = 0; i < m->n_lag; ++i)
     res[lag_at + i] = m->lag_time_constant * yp[lag_at + i] - (d->commanded[i] - y[lag_at + i]);
@@ -102,25 +102,26 @@ static void assemble_velocity_map(const f3r_model* m, f3r_workspace* ws) {
   for (int j = 0; j < nz; ++j) {
     double* col = B + (size_t)j * (size_t)nq;
     double V[F3R_NCON];
-    for (int c = 0; c < F3R_NCON; ++c) V[c] = -F3R_AT(G, F3R_NCON, c, 6 + j);
-    col[6 + j] = 1.0;
+    for (int c = 0; c < F3R_NCON; ++c) V[c] = -F3R_AT(G, F3R_NCON, c, F3R_Q_INDEPENDENT + j);
+    col[F3R_Q_INDEPENDENT + j] = 1.0;
     f3r_data_solve_dependent(d, V, col);
-    /* M B: B's column is nonzero only in rows 0..5 and 6 + j */
+    /* M B: B's column is nonzero only in the legs' rows and in row F3R_Q_INDEPENDENT + j */
     double* out = ws->MB + (size_t)j * (size_t)nq;
     for (int n = 0; n < nq; ++n) {
-      double sum = F3R_AT(M, nq, n, 6 + j);
-      for (int d = 0; d < 6; ++d) sum += F3R_AT(M, nq, n, d) * col[d];
+      double sum = F3R_AT(M, nq, n, F3R_Q_INDEPENDENT + j);
+      for (int d = 0; d < F3R_Q_LEG_JOINTS; ++d) sum += F3R_AT(M, nq, n, d) * col[d];
       out[n] = sum;
     }
   }
 }
 
-/* (B^T M B)(i, j): column i of B is nonzero only in the dependent rows 0..5 and in row 6 + i. */
+/* (B^T M B)(i, j): column i of B is nonzero only in the legs' (dependent) rows and in row
+ * F3R_Q_INDEPENDENT + i. */
 static double reduced_mass(const f3r_model* m, const f3r_workspace* ws, int i, int j) {
   const int nq = m->nq;
   const double *b = ws->B + (size_t)i * nq, *mb = ws->MB + (size_t)j * nq;
-  double s = mb[6 + i];
-  for (int d = 0; d < 6; ++d) s += b[d] * mb[d];
+  double s = mb[F3R_Q_INDEPENDENT + i];
+  for (int d = 0; d < F3R_Q_LEG_JOINTS; ++d) s += b[d] * mb[d];
   return s;
 }
 

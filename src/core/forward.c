@@ -56,32 +56,32 @@ static void constraint_blocks(const f3r_model* m, f3r_link_data* k) {
 }
 
 void f3r_fwd_position(const f3r_model* m, const double* q, f3r_data* d) {
-  platform_joints(m, q[8], d);
+  platform_joints(m, q[F3R_Q_PHI], d);
   for (int i = 0; i < 3; ++i) {
     f3r_link_data* k = &d->link[i];
-    k->c = cos(q[3 + i]);
-    k->s = sin(q[3 + i]);
+    k->c = cos(q[F3R_Q_THETA + i]);
+    k->s = sin(q[F3R_Q_THETA + i]);
     d->sincos_pairs++;
     k->len = q[i] + m->link_length;
     modal_sums(m, i, q, k);
     mass_blocks(m, i, q[i], k);
     constraint_blocks(m, k);
     const double r = m->platform_radius;
-    d->g[2 * i] = m->base_joint[i][0] + k->len * k->c - k->w * k->s - q[6] - r * k->cc;
-    d->g[2 * i + 1] = m->base_joint[i][1] + k->len * k->s + k->w * k->c - q[7] - r * k->sc;
+    d->g[2 * i] = m->base_joint[i][0] + k->len * k->c - k->w * k->s - q[F3R_Q_X] - r * k->cc;
+    d->g[2 * i + 1] = m->base_joint[i][1] + k->len * k->s + k->w * k->c - q[F3R_Q_Y] - r * k->sc;
   }
 }
 
 /* Each loop closes in closed form: with D = C_i - A_i, |D|^2 = L^2 + w^2, and D points along
  * theta_i + beta with tan beta = w / L, so e = (D_x L + D_y w, D_y L - D_x w) / |D|^2. */
 f3r_status f3r_fwd_position_closed(const f3r_model* m, double* q, f3r_data* d) {
-  platform_joints(m, q[8], d);
+  platform_joints(m, q[F3R_Q_PHI], d);
   const double min_len = F3R_CLOSURE_MIN_LEG_FRACTION * m->link_length;
   for (int i = 0; i < 3; ++i) {
     f3r_link_data* k = &d->link[i];
     modal_sums(m, i, q, k);
-    const double dx = q[6] + m->platform_radius * k->cc - m->base_joint[i][0];
-    const double dy = q[7] + m->platform_radius * k->sc - m->base_joint[i][1];
+    const double dx = q[F3R_Q_X] + m->platform_radius * k->cc - m->base_joint[i][0];
+    const double dy = q[F3R_Q_Y] + m->platform_radius * k->sc - m->base_joint[i][1];
     const double d_sq = dx * dx + dy * dy;
     const double len_sq = d_sq - k->w * k->w;
     if (!(len_sq > min_len * min_len)) return F3R_ERR_SINGULAR;
@@ -100,7 +100,7 @@ f3r_status f3r_fwd_position_closed(const f3r_model* m, double* q, f3r_data* d) {
 void f3r_fwd_leg_angles(const f3r_model* m, const f3r_data* d, double* q) {
   for (int i = 0; i < 3; ++i) {
     const double raw = atan2(d->link[i].s, d->link[i].c);
-    q[3 + i] = m->theta_branch[i] + remainder(raw - m->theta_branch[i], 2.0 * M_PI);
+    q[F3R_Q_THETA + i] = m->theta_branch[i] + remainder(raw - m->theta_branch[i], 2.0 * M_PI);
   }
 }
 
@@ -119,14 +119,14 @@ static void link_velocity(const f3r_model* m, int i, const double* q, const doub
   }
   const double rd = k->rho_dot, td = k->theta_dot, arm = m->link_length + 2.0 * q[i];
   d->h[i] = -0.5 * mass * arm * td * td - (1.0 + e) * mass * td * k->mean_defl_dot;
-  d->h[3 + i] = mass * arm * rd * td + (1.0 - e) * mass * rd * k->mean_defl_dot +
+  d->h[F3R_Q_THETA + i] = mass * arm * rd * td + (1.0 - e) * mass * rd * k->mean_defl_dot +
                 2.0 * e * mass * td * k->eta_eta_dot;
   for (int j = 0; j < lp->modes; ++j)
     d->h[lp->eta_index + j] =
         (1.0 + e) * mass * rd * td * lp->mean[j] - e * mass * td * td * q[lp->eta_index + j];
   const double along = -k->len * td * td - 2.0 * k->w_dot * td; /* e component */
   const double across = 2.0 * rd * td - k->w * td * td;        /* n component */
-  const double rp = m->platform_radius * v[8] * v[8];
+  const double rp = m->platform_radius * v[F3R_Q_PHI] * v[F3R_Q_PHI];
   d->gamma[2 * i] = along * k->c - across * k->s + rp * k->cc;
   d->gamma[2 * i + 1] = along * k->s + across * k->c + rp * k->sc;
 }
@@ -134,10 +134,10 @@ static void link_velocity(const f3r_model* m, int i, const double* q, const doub
 void f3r_fwd_velocity(const f3r_model* m, const double* q, const double* v, f3r_data* d) {
   for (int i = 0; i < 3; ++i) {
     d->link[i].rho_dot = v[i];
-    d->link[i].theta_dot = v[3 + i];
+    d->link[i].theta_dot = v[F3R_Q_THETA + i];
     link_velocity(m, i, q, v, d);
   }
-  d->h[6] = d->h[7] = d->h[8] = 0.0;
+  d->h[F3R_Q_X] = d->h[F3R_Q_Y] = d->h[F3R_Q_PHI] = 0.0;
 }
 
 /* From G v = 0 for link i, with C' the velocity of C_i and w' the tip deflection rate:
@@ -149,10 +149,10 @@ void f3r_fwd_velocity_closed(const f3r_model* m, const double* q, double* v, f3r
     f3r_link_data* k = &d->link[i];
     double w_dot = 0.0;
     for (int j = 0; j < lp->modes; ++j) w_dot += lp->tip[j] * v[lp->eta_index + j];
-    const double cx = v[6] - r * k->sc * v[8], cy = v[7] + r * k->cc * v[8];
+    const double cx = v[F3R_Q_X] - r * k->sc * v[F3R_Q_PHI], cy = v[F3R_Q_Y] + r * k->cc * v[F3R_Q_PHI];
     const double theta_dot = (-k->s * cx + k->c * cy - w_dot) / k->len;
     v[i] = k->c * cx + k->s * cy + k->w * theta_dot;
-    v[3 + i] = theta_dot;
+    v[F3R_Q_THETA + i] = theta_dot;
   }
   f3r_fwd_velocity(m, q, v, d);
 }
@@ -160,7 +160,7 @@ void f3r_fwd_velocity_closed(const f3r_model* m, const double* q, double* v, f3r
 void f3r_fwd_forces(const f3r_model* m, double t, const double* held, const double* q,
                     const double* v, const double* lag, f3r_data* d) {
   const int nq = m->nq;
-  for (int n = 0; n < 9; ++n) d->k[n] = 0.0;
+  for (int n = 0; n < F3R_Q_MODAL; ++n) d->k[n] = 0.0;
   for (int i = 0; i < 3; ++i) {
     const f3r_link_params* lp = &m->link[i];
     for (int j = 0; j < lp->modes; ++j)

@@ -155,7 +155,7 @@ f3r_status f3r_model_create(const f3r_scene* scene, f3r_model** out, f3r_error* 
 
   /* The branch of each leg's direction is fixed by the scene's initial pose. */
   double q[F3R_MAX_Q] = {0};
-  for (int k = 0; k < 3; ++k) q[6 + k] = scene->platform_pose0[k];
+  for (int k = 0; k < 3; ++k) q[F3R_Q_X + k] = scene->platform_pose0[k];
   for (int i = 0; i < 3; ++i) {
     const double* P = scene->platform_pose0;
     const double cx = P[0] + m->platform_radius * cos(m->platform_angle[i] + P[2]);
@@ -223,8 +223,8 @@ f3r_status f3r_model_initial_state(const f3r_model* m, double* q, double* v) {
   memset(q, 0, F3R_MAX_Q * sizeof(double));
   memset(v, 0, F3R_MAX_Q * sizeof(double));
   for (int k = 0; k < 3; ++k) {
-    q[6 + k] = sc->platform_pose0[k];
-    v[6 + k] = sc->platform_velocity0[k];
+    q[F3R_Q_X + k] = sc->platform_pose0[k];
+    v[F3R_Q_X + k] = sc->platform_velocity0[k];
   }
   for (int i = 0; i < 3; ++i)
     for (int j = 0; j < m->link[i].modes; ++j) {
@@ -272,7 +272,7 @@ double f3r_data_actuation_condition(const f3r_model* m, const f3r_data* d, const
   double J[3][3]; /* rows: force x, force y, moment / r_PC; column i: leg i */
   for (int i = 0; i < 3; ++i) {
     const double cx = m->platform_radius * d->link[i].cc, cy = m->platform_radius * d->link[i].sc;
-    double ux = q[6] + cx - m->base_joint[i][0], uy = q[7] + cy - m->base_joint[i][1];
+    double ux = q[F3R_Q_X] + cx - m->base_joint[i][0], uy = q[F3R_Q_Y] + cy - m->base_joint[i][1];
     const double len = hypot(ux, uy);
     ux /= len;
     uy /= len;

@@ -96,8 +96,8 @@ f3r_status f3r_state_to_full(const f3r_model* m, f3r_formulation form, const dou
     memcpy(v, y + nq, (size_t)nq * sizeof(double));
     return F3R_OK;
   }
-  memcpy(q + 6, y, (size_t)nz * sizeof(double));
-  memcpy(v + 6, y + nz, (size_t)nz * sizeof(double));
+  memcpy(q + F3R_Q_INDEPENDENT, y, (size_t)nz * sizeof(double));
+  memcpy(v + F3R_Q_INDEPENDENT, y + nz, (size_t)nz * sizeof(double));
   const f3r_status st = f3r_model_close_loops(m, q);
   if (st != F3R_OK) return st;
   f3r_model_close_loop_rates(m, q, v);
@@ -125,10 +125,10 @@ f3r_status f3r_consistent_state(const f3r_model* m, f3r_formulation form, double
     memcpy(yp, v, (size_t)nq * sizeof(double));
     memcpy(yp + nq, d->a, (size_t)nq * sizeof(double));
   } else {
-    memcpy(y, q + 6, (size_t)nz * sizeof(double));
-    memcpy(y + nz, v + 6, (size_t)nz * sizeof(double));
-    memcpy(yp, v + 6, (size_t)nz * sizeof(double));
-    memcpy(yp + nz, d->a + 6, (size_t)nz * sizeof(double));
+    memcpy(y, q + F3R_Q_INDEPENDENT, (size_t)nz * sizeof(double));
+    memcpy(y + nz, v + F3R_Q_INDEPENDENT, (size_t)nz * sizeof(double));
+    memcpy(yp, v + F3R_Q_INDEPENDENT, (size_t)nz * sizeof(double));
+    memcpy(yp + nz, d->a + F3R_Q_INDEPENDENT, (size_t)nz * sizeof(double));
   }
   for (int i = 0; i < m->n_lag; ++i) {
     const int k = f3r_lag_index(m, form) + i;

@@ -24,7 +24,7 @@ std::string Indexed(const char* name, size_t i) { return std::string(name) + "["
 
 std::string DecodeEffortCommand(const EffortCommand& msg, const f3r_model& model,
                                 const CommandLimits& limits, std::vector<double>* forces) {
-  const size_t n_modal = static_cast<size_t>(model.nq - 9);
+  const size_t n_modal = static_cast<size_t>(model.nq - F3R_Q_MODAL);
   if (!msg.modal.empty() && msg.modal.size() != n_modal)
     return "modal has " + std::to_string(msg.modal.size()) + " values, expected 0 or " +
            std::to_string(n_modal);
@@ -44,21 +44,21 @@ std::string DecodeEffortCommand(const EffortCommand& msg, const f3r_model& model
     (*forces)[F3R_FORCE_THETA + i] = msg.cylinder_torque[i];
     (*forces)[F3R_FORCE_PLATFORM + i] = msg.platform[i];
   }
-  for (size_t k = 0; k < msg.modal.size(); ++k) (*forces)[9 + k] = msg.modal[k];
+  for (size_t k = 0; k < msg.modal.size(); ++k) (*forces)[F3R_Q_MODAL + k] = msg.modal[k];
   return "";
 }
 
 std::string DecodeEffortGroup(const std_msgs::Float64MultiArray& msg, const f3r_model& model,
                               const CommandLimits& limits, std::vector<double>* forces) {
-  if (msg.data.size() != 6)
+  if (msg.data.size() != F3R_Q_LEG_JOINTS)
     return "data has " + std::to_string(msg.data.size()) +
            " values, expected 6 (leg_force_1..3, cylinder_torque_1..3)";
-  for (size_t k = 0; k < 6; ++k) {
-    const std::string why = Check(Indexed("data", k), msg.data[k], k < 3 ? limits.force : limits.torque);
+  for (size_t k = 0; k < F3R_Q_LEG_JOINTS; ++k) {
+    const std::string why = Check(Indexed("data", k), msg.data[k], k < F3R_Q_THETA ? limits.force : limits.torque);
     if (!why.empty()) return why;
   }
   forces->assign(static_cast<size_t>(model.nq), 0.0);
-  for (size_t k = 0; k < 6; ++k) (*forces)[k] = msg.data[k];
+  for (size_t k = 0; k < F3R_Q_LEG_JOINTS; ++k) (*forces)[F3R_Q_RHO + k] = msg.data[k];  // ros_control order is q's
   return "";
 }
 

@@ -162,7 +162,7 @@ int SimNode::Run() {
       break;
     }
     const f3r_outputs& out = *f3r_sim_outputs(sim_.get());
-    phi_p_ = out.q[8];
+    phi_p_ = out.q[F3R_Q_PHI];
     ros::WallTime now = ros::WallTime::now();
     info_.wall_time = (now - start).toSec();
     const double window = (now - window_wall).toSec();

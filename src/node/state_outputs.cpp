@@ -62,7 +62,7 @@ StateOutputs::StateOutputs(ros::NodeHandle& nh, ros::NodeHandle& pnh, const f3r_
   joints_.velocity.assign(6, 0.0);
   joints_.effort.assign(6, 0.0);
 
-  const int nmodal = model.nq - 9;
+  const int nmodal = model.nq - F3R_Q_MODAL;
   for (int i = 0; i < 3; ++i) {
     beam_.model[i] = ModelName(model.link[i].model);
     beam_.modes[i] = static_cast<uint32_t>(model.link[i].modes);
@@ -118,16 +118,16 @@ void StateOutputs::FillTransforms(const f3r_outputs& out, const ros::Time& stamp
   const double* q = out.q;
   size_t n = 0;
   for (int i = 0; i < 3; ++i) {
-    SetPlanar(&tf_.transforms[n++], model_.base_joint[i][0], model_.base_joint[i][1], q[3 + i]);
-    SetPlanar(&tf_.transforms[n++], q[i], 0.0, 0.0);
+    SetPlanar(&tf_.transforms[n++], model_.base_joint[i][0], model_.base_joint[i][1], q[F3R_Q_THETA + i]);
+    SetPlanar(&tf_.transforms[n++], q[F3R_Q_RHO + i], 0.0, 0.0);
   }
-  SetPlanar(&tf_.transforms[n++], q[6], q[7], q[8]);
+  SetPlanar(&tf_.transforms[n++], q[F3R_Q_X], q[F3R_Q_Y], q[F3R_Q_PHI]);
   const int points = params_.beam_points;
   const double exaggeration = params_.beam_marker_exaggeration;
   for (int i = 0; i < 3; ++i) {
     auto& marker = markers_.markers[static_cast<size_t>(i)];
     marker.header.stamp = stamp;
-    const double c = std::cos(q[3 + i]), s = std::sin(q[3 + i]);
+    const double c = std::cos(q[F3R_Q_THETA + i]), s = std::sin(q[F3R_Q_THETA + i]);
     for (int k = 0; k < points; ++k) {
       const double xi = static_cast<double>(k) / (points - 1);
       double pos[2], angle, w;
@@ -151,12 +151,12 @@ void StateOutputs::Publish(const f3r_outputs& out, const RunInfo& info) {
   }
   joints_.header.stamp = stamp;
   for (int i = 0; i < 3; ++i) {
-    joints_.position[2 * i] = out.q[3 + i];
-    joints_.velocity[2 * i] = out.v[3 + i];
-    joints_.effort[2 * i] = out.forces[3 + i];
-    joints_.position[2 * i + 1] = out.q[i];
-    joints_.velocity[2 * i + 1] = out.v[i];
-    joints_.effort[2 * i + 1] = out.forces[i];
+    joints_.position[2 * i] = out.q[F3R_Q_THETA + i];
+    joints_.velocity[2 * i] = out.v[F3R_Q_THETA + i];
+    joints_.effort[2 * i] = out.forces[F3R_Q_THETA + i];
+    joints_.position[2 * i + 1] = out.q[F3R_Q_RHO + i];
+    joints_.velocity[2 * i + 1] = out.v[F3R_Q_RHO + i];
+    joints_.effort[2 * i + 1] = out.forces[F3R_Q_RHO + i];
   }
   joints_pub_.publish(joints_);
 
@@ -166,8 +166,8 @@ void StateOutputs::Publish(const f3r_outputs& out, const RunInfo& info) {
 
   beam_.header.stamp = stamp;
   for (size_t k = 0; k < beam_.modal.size(); ++k) {
-    beam_.modal[k] = out.q[9 + k];
-    beam_.modal_rate[k] = out.v[9 + k];
+    beam_.modal[k] = out.q[F3R_Q_MODAL + k];
+    beam_.modal_rate[k] = out.v[F3R_Q_MODAL + k];
   }
   for (int i = 0; i < 3; ++i) {
     beam_.tip_deflection[i] = out.tip_deflection[i];
