@@ -59,9 +59,14 @@ f3r_status f3r_residual_jacobian(const f3r_model* model, f3r_formulation form, d
                                  const double* held, double* J, int ld, f3r_workspace* ws);
 
 /* The minimal formulation as an explicit ODE y' = f(t, y), y = [z | u | W]: one residual
- * evaluation and one solve with B^T M B. For explicit integrators and ODE peers. */
+ * evaluation and one solve with the reduced mass B^T M B, by its arrow structure (each link's
+ * modes couple only to themselves and to the platform). For explicit integrators and ODE peers. */
 f3r_status f3r_explicit_rhs(const f3r_model* model, double t, const double* y,
                             const double* held, double* ydot, f3r_workspace* ws);
+/* The same with B^T M B assembled whole and factored by a dense Cholesky: the benchmark's
+ * comparison for the arrow solve. */
+f3r_status f3r_explicit_rhs_dense(const f3r_model* model, double t, const double* y,
+                                  const double* held, double* ydot, f3r_workspace* ws);
 
 /* Full coordinates q, v (nq each) of a state y. */
 f3r_status f3r_state_to_full(const f3r_model* model, f3r_formulation form, const double* y,

@@ -1,6 +1,9 @@
-/* Nanoseconds per residual and per Jacobian evaluation of both formulations, for r = 1, 3, 8
- * and 20 fixed-free modes per link, at a generic moving state. Prints a Markdown table.
- *   f3r_microbench [repetitions] */
+/* Nanoseconds per residual, per Jacobian and per explicit right-hand side (minimal) of both
+ * formulations, for r = 1, 3, 8 and 20 fixed-free modes per link, at a generic moving state, and
+ * the sin/cos pairs of one residual. Prints a Markdown table.
+ *   f3r_microbench [repetitions]
+ * The source also links against a core without the sin/cos counter (an older build, for a
+ * before/after comparison in one run): that column then says n/a. */
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -8,6 +11,9 @@
 
 #include "flex3rpr/residual.h"
 #include "flex3rpr/stages.h"
+
+/* weak: absent from cores built before the forward pass */
+extern long f3r_workspace_sincos_pairs(const f3r_workspace* ws) __attribute__((weak));
 
 static double now(void) {
   struct timespec ts;
@@ -18,8 +24,8 @@ static double now(void) {
 int main(int argc, char** argv) {
   const long reps = argc > 1 ? atol(argv[1]) : 200000;
   const int modes[] = {1, 3, 8, 20};
-  printf("| modes per link | formulation | state size | residual (ns) | Jacobian (ns) |\n");
-  printf("|---:|---|---:|---:|---:|\n");
+  printf("| modes per link | formulation | state size | residual (ns) | Jacobian (ns) | explicit RHS (ns) | sin/cos pairs per residual |\n");
+  printf("|---:|---|---:|---:|---:|---:|---:|\n");
   for (int k = 0; k < 4; ++k) {
     f3r_scene s = f3r_default_scene();
     for (int i = 0; i < 3; ++i) {
@@ -52,6 +58,12 @@ int main(int argc, char** argv) {
       double* J = calloc((size_t)ny * ny, sizeof(double));
       f3r_consistent_state(m, (f3r_formulation)form, 0.0, q, v, NULL, NULL, 0.0, y, yp, NULL, ws);
       double sink = 0.0;
+      char pairs[32] = "n/a";
+      if (f3r_workspace_sincos_pairs) {
+        const long before = f3r_workspace_sincos_pairs(ws);
+        f3r_residual(m, (f3r_formulation)form, 0.0, y, yp, NULL, res, ws);
+        snprintf(pairs, sizeof pairs, "%ld", f3r_workspace_sincos_pairs(ws) - before);
+      }
       double t0 = now();
       for (long r = 0; r < reps; ++r) {
         f3r_residual(m, (f3r_formulation)form, 1e-9 * r, y, yp, NULL, res, ws);
@@ -65,8 +77,18 @@ int main(int argc, char** argv) {
         sink += J[0];
       }
       const double jacobian_ns = (now() - t0) / jreps * 1e9;
-      printf("| %d | %s | %d | %.0f | %.0f |\n", modes[k], form ? "minimal" : "dae", ny,
-             residual_ns, jacobian_ns);
+      char rhs[32] = "";
+      if (form == F3R_FORMULATION_MINIMAL) {
+        const long rreps = reps / 4 + 1;
+        t0 = now();
+        for (long r = 0; r < rreps; ++r) {
+          f3r_explicit_rhs(m, 1e-9 * r, y, NULL, res, ws);
+          sink += res[0];
+        }
+        snprintf(rhs, sizeof rhs, "%.0f", (now() - t0) / rreps * 1e9);
+      }
+      printf("| %d | %s | %d | %.0f | %.0f | %s | %s |\n", modes[k], form ? "minimal" : "dae", ny,
+             residual_ns, jacobian_ns, rhs, pairs);
       if (sink == 12345.678) printf(" ");
       free(y), free(yp), free(res), free(J);
       f3r_workspace_destroy(ws);

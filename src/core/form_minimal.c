@@ -88,64 +88,161 @@ static double typical_size(const f3r_model* m, int index) {
   return is_rate ? 1e-2 : 1e-5;
 }
 
-/* B (nq x nz) and M B at the position stage in ws->data (the last expanded state). B is the
- * identity on z above the dependent rows G_d^{-1} (-G_z). */
-static void assemble_velocity_map(const f3r_model* m, f3r_workspace* ws) {
-  const int nq = m->nq, nz = m->n_independent;
+/* The reduced mass K = B^T M B, B = dq/dz, in its arrow blocks at the position stage in
+ * ws->data. The dependent coordinates of link i, d_i = (rho_i, theta_i), move with the platform
+ * and with link i's own modes only: B's rows d_i are B_iP (2 x 3) on the pose and B_ie (2 x r_i)
+ * on eta_i, G_d^{-1} applied to -G_z's columns (-G_P = I on X, Y; -g_phi on phi_p; -psi_j(1) n on
+ * eta_j of a fixed-free link). With link i's mass blocks M_dd (2 x 2), M_de = (0; m_theta_eta)
+ * and M_ee = m I, K adds per link
+ *   K_PP += B_iP^T M_dd B_iP,   K_Pe_i = B_iP^T (M_dd B_ie + M_de),
+ *   K_ee_i = B_ie^T M_dd B_ie + B_ie^T M_de + M_de^T B_ie + m I,
+ * to the platform's diag(m_p, m_p, I_p), and nothing couples two links' modes. */
+static void reduced_mass_blocks(const f3r_model* m, f3r_workspace* ws) {
   const f3r_data* d = &ws->data;
-  double *B = ws->B, *M = ws->M, *G = ws->G;
-  memset(B, 0, (size_t)nq * (size_t)nz * sizeof(double));
-  memset(M, 0, (size_t)nq * (size_t)nq * sizeof(double));
-  memset(G, 0, (size_t)F3R_NCON * (size_t)nq * sizeof(double));
-  f3r_data_add_mass_matrix(m, d, 1.0, M, nq);
-  f3r_data_add_constraint_jacobian(m, d, 1.0, G, F3R_NCON);
-  for (int j = 0; j < nz; ++j) {
-    double* col = B + (size_t)j * (size_t)nq;
-    double V[F3R_NCON];
-    for (int c = 0; c < F3R_NCON; ++c) V[c] = -F3R_AT(G, F3R_NCON, c, F3R_Q_INDEPENDENT + j);
-    col[F3R_Q_INDEPENDENT + j] = 1.0;
-    f3r_data_solve_dependent(d, V, col);
-    /* M B: B's column is nonzero only in the legs' rows and in row F3R_Q_INDEPENDENT + j */
-    double* out = ws->MB + (size_t)j * (size_t)nq;
-    for (int n = 0; n < nq; ++n) {
-      double sum = F3R_AT(M, nq, n, F3R_Q_INDEPENDENT + j);
-      for (int d = 0; d < F3R_Q_LEG_JOINTS; ++d) sum += F3R_AT(M, nq, n, d) * col[d];
-      out[n] = sum;
+  const double mass = m->link_mass;
+  double* kpp = ws->mass_pp;
+  for (int z = 0; z < 9; ++z) kpp[z] = 0.0;
+  kpp[0] = kpp[4] = m->platform_mass;
+  kpp[8] = m->platform_inertia;
+  for (int i = 0; i < 3; ++i) {
+    const f3r_link_data* k = &d->link[i];
+    const f3r_link_params* lp = &m->link[i];
+    const int r = lp->modes, tip = lp->model == F3R_LINK_FIXED_FREE;
+    /* B_iP: G_d^{-1} V for V = (1, 0), (0, 1), -g_phi (theta' = n.V / L, rho' = e.V + w theta') */
+    double bp[2][3];
+    const double V[3][2] = {{1.0, 0.0}, {0.0, 1.0}, {-k->g_phi[0], -k->g_phi[1]}};
+    for (int c = 0; c < 3; ++c) {
+      bp[1][c] = (-k->s * V[c][0] + k->c * V[c][1]) / k->len;
+      bp[0][c] = k->c * V[c][0] + k->s * V[c][1] + k->w * bp[1][c];
+    }
+    /* M_dd B_iP */
+    double mbp[2][3];
+    for (int c = 0; c < 3; ++c) {
+      mbp[0][c] = mass * bp[0][c] + k->m_rho_theta * bp[1][c];
+      mbp[1][c] = k->m_rho_theta * bp[0][c] + k->m_theta_theta * bp[1][c];
+    }
+    for (int c = 0; c < 3; ++c)
+      for (int e = 0; e < 3; ++e) kpp[c + 3 * e] += bp[0][c] * mbp[0][e] + bp[1][c] * mbp[1][e];
+    if (!r) continue;
+    /* B_ie: V = -psi_j(1) n gives theta' = -psi_j(1) / L, rho' = w theta' (0 when fixed-pinned) */
+    double be[2][F3R_MAX_MODES], mbe[2][F3R_MAX_MODES];
+    for (int j = 0; j < r; ++j) {
+      be[1][j] = tip ? -lp->tip[j] / k->len : 0.0;
+      be[0][j] = k->w * be[1][j];
+      /* M_dd B_ie + M_de */
+      mbe[0][j] = mass * be[0][j] + k->m_rho_theta * be[1][j];
+      mbe[1][j] = k->m_rho_theta * be[0][j] + k->m_theta_theta * be[1][j] + k->m_theta_eta[j];
+    }
+    double* kpe = ws->mass_pe[i]; /* 3 x r, column-major */
+    double* kee = ws->mass_ee[i]; /* r x r, column-major */
+    for (int j = 0; j < r; ++j) {
+      for (int c = 0; c < 3; ++c) kpe[c + 3 * j] = bp[0][c] * mbe[0][j] + bp[1][c] * mbe[1][j];
+      for (int l = 0; l < r; ++l)
+        kee[l + r * j] = be[0][l] * mbe[0][j] + be[1][l] * mbe[1][j] +
+                         be[1][j] * k->m_theta_eta[l] + (l == j ? mass : 0.0);
     }
   }
 }
 
-/* (B^T M B)(i, j): column i of B is nonzero only in the legs' (dependent) rows and in row
- * F3R_Q_INDEPENDENT + i. */
-static double reduced_mass(const f3r_model* m, const f3r_workspace* ws, int i, int j) {
-  const int nq = m->nq;
-  const double *b = ws->B + (size_t)i * nq, *mb = ws->MB + (size_t)j * nq;
-  double s = mb[F3R_Q_INDEPENDENT + i];
-  for (int d = 0; d < F3R_Q_LEG_JOINTS; ++d) s += b[d] * mb[d];
-  return s;
+/* z index of link i's first modal coordinate. */
+static int modal_z(const f3r_model* m, int i) { return m->link[i].eta_index - F3R_Q_INDEPENDENT; }
+
+/* K (nz x nz, leading dimension ld) from its blocks, scaled, added into A. */
+static void add_reduced_mass(const f3r_model* m, const f3r_workspace* ws, double scale, double* A,
+                             int ld) {
+  for (int e = 0; e < 3; ++e)
+    for (int c = 0; c < 3; ++c) F3R_AT(A, ld, c, e) += scale * ws->mass_pp[c + 3 * e];
+  for (int i = 0; i < 3; ++i) {
+    const int r = m->link[i].modes, z = modal_z(m, i);
+    for (int j = 0; j < r; ++j) {
+      for (int c = 0; c < 3; ++c) {
+        F3R_AT(A, ld, c, z + j) += scale * ws->mass_pe[i][c + 3 * j];
+        F3R_AT(A, ld, z + j, c) += scale * ws->mass_pe[i][c + 3 * j];
+      }
+      for (int l = 0; l < r; ++l) F3R_AT(A, ld, z + l, z + j) += scale * ws->mass_ee[i][l + r * j];
+    }
+  }
 }
 
-f3r_status f3r_minimal_rhs(const f3r_model* m, double t, const double* y, const double* held,
-                           double* ydot, f3r_workspace* ws) {
+/* Solves K x = b (b overwritten) by the arrow structure: each link's modal block D_i is
+ * factored alone, the platform's Schur complement S = K_PP - sum K_Pe_i D_i^{-1} K_Pe_i^T is
+ * 3 x 3, and the modes follow from the pose: x_i = D_i^{-1} (b_i - K_Pe_i^T x_P). */
+static f3r_status arrow_solve(const f3r_model* m, f3r_workspace* ws, double* b) {
+  double S[9];
+  memcpy(S, ws->mass_pp, sizeof S);
+  double* bp = b; /* the pose's three entries */
+  for (int i = 0; i < 3; ++i) {
+    const int r = m->link[i].modes;
+    if (!r) continue;
+    double* D = ws->mass_ee[i]; /* factored in place: the blocks are rebuilt every call */
+    const double* C = ws->mass_pe[i];
+    double* W = ws->arrow_w[i]; /* D^{-1} K_Pe^T, r x 3 */
+    if (f3r_cholesky_factor(D, r)) return F3R_ERR_SINGULAR;
+    for (int c = 0; c < 3; ++c) {
+      for (int j = 0; j < r; ++j) W[j + r * c] = C[c + 3 * j];
+      f3r_cholesky_solve(D, r, W + r * c);
+    }
+    double* bi = b + modal_z(m, i);
+    f3r_cholesky_solve(D, r, bi); /* bi = D^{-1} b_i */
+    for (int c = 0; c < 3; ++c) {
+      for (int e = 0; e < 3; ++e) {
+        double sum = 0.0;
+        for (int j = 0; j < r; ++j) sum += C[c + 3 * j] * W[j + r * e];
+        S[c + 3 * e] -= sum;
+      }
+      double sum = 0.0;
+      for (int j = 0; j < r; ++j) sum += C[c + 3 * j] * bi[j];
+      bp[c] -= sum;
+    }
+  }
+  if (f3r_cholesky_factor(S, 3)) return F3R_ERR_SINGULAR;
+  f3r_cholesky_solve(S, 3, bp);
+  for (int i = 0; i < 3; ++i) {
+    const int r = m->link[i].modes;
+    double* bi = b + modal_z(m, i);
+    const double* W = ws->arrow_w[i];
+    for (int j = 0; j < r; ++j) bi[j] -= W[j] * bp[0] + W[j + r] * bp[1] + W[j + 2 * r] * bp[2];
+  }
+  return F3R_OK;
+}
+
+/* y' of the minimal formulation. F_u is linear in u': F_u(u') = F_u(0) + K u'; likewise the
+ * lag and W rows. dense: solve with K assembled whole and Cholesky (the benchmark's comparison)
+ * instead of its arrow structure. */
+static f3r_status minimal_rhs(const f3r_model* m, double t, const double* y, const double* held,
+                              double* ydot, f3r_workspace* ws, int dense) {
   const int nz = m->n_independent, ny = f3r_state_size(m, F3R_FORMULATION_MINIMAL);
-  /* F_u is linear in u': F_u(u') = F_u(0) + B^T M B u'; likewise the lag and W rows. */
   double* zero_rate = ws->y_perturbed;
   memset(zero_rate, 0, (size_t)ny * sizeof(double));
   f3r_status st = f3r_minimal_residual(m, t, y, zero_rate, held, ws->res_base, ws);
   if (st != F3R_OK) return st;
-  assemble_velocity_map(m, ws);
-  double* K = ws->solve_work; /* nz x nz fits in the (nq + 6)^2 of the acceleration solver */
-  for (int j = 0; j < nz; ++j)
-    for (int i = j; i < nz; ++i) F3R_AT(K, nz, i, j) = reduced_mass(m, ws, i, j);
+  reduced_mass_blocks(m, ws);
   double* rate = ydot + nz;
   for (int i = 0; i < nz; ++i) rate[i] = -ws->res_base[nz + i];
-  if (f3r_cholesky_factor(K, nz)) return F3R_ERR_SINGULAR; /* B^T M B is positive definite */
-  f3r_cholesky_solve(K, nz, rate);
+  if (dense) {
+    double* K = ws->solve_work; /* nz x nz fits in the (nq + 6)^2 of the acceleration solver */
+    memset(K, 0, (size_t)nz * (size_t)nz * sizeof(double));
+    add_reduced_mass(m, ws, 1.0, K, nz);
+    if (f3r_cholesky_factor(K, nz)) return F3R_ERR_SINGULAR; /* K is positive definite */
+    f3r_cholesky_solve(K, nz, rate);
+  } else if ((st = arrow_solve(m, ws, rate)) != F3R_OK) {
+    return st;
+  }
   for (int i = 0; i < nz; ++i) ydot[i] = y[nz + i];
   const int lag_at = 2 * nz;
   for (int i = 0; i < m->n_lag; ++i) ydot[lag_at + i] = -ws->res_base[lag_at + i] / m->lag_time_constant;
   ydot[ny - 1] = -ws->res_base[ny - 1]; /* F_W(W' = 0) = -Q.v */
   return F3R_OK;
+}
+
+f3r_status f3r_minimal_rhs(const f3r_model* m, double t, const double* y, const double* held,
+                           double* ydot, f3r_workspace* ws) {
+  return minimal_rhs(m, t, y, held, ydot, ws, 0);
+}
+
+f3r_status f3r_minimal_rhs_dense(const f3r_model* m, double t, const double* y,
+                                 const double* held, double* ydot, f3r_workspace* ws) {
+  return minimal_rhs(m, t, y, held, ydot, ws, 1);
 }
 
 f3r_status f3r_minimal_jacobian(const f3r_model* m, double t, double cj, const double* y,
@@ -170,8 +267,7 @@ f3r_status f3r_minimal_jacobian(const f3r_model* m, double t, double cj, const d
   F3R_AT(J, ld, ny - 1, ny - 1) += cj;
   st = expand(m, y, yp, ws); /* restores the position stage at y */
   if (st != F3R_OK) return st;
-  assemble_velocity_map(m, ws);
-  for (int j = 0; j < nz; ++j)
-    for (int i = 0; i < nz; ++i) F3R_AT(J, ld, nz + i, nz + j) += cj * reduced_mass(m, ws, i, j);
+  reduced_mass_blocks(m, ws);
+  add_reduced_mass(m, ws, cj, &F3R_AT(J, ld, nz, nz), ld);
   return F3R_OK;
 }

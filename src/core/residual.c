@@ -16,13 +16,8 @@ f3r_workspace* f3r_workspace_create(const f3r_model* m) {
   ws->y_perturbed = calloc((size_t)ny_dae, sizeof(double));
   ws->res_base = calloc((size_t)ny_dae, sizeof(double));
   ws->res_perturbed = calloc((size_t)ny_dae, sizeof(double));
-  ws->B = calloc((size_t)m->nq * (size_t)ws->nz, sizeof(double));
-  ws->MB = calloc((size_t)m->nq * (size_t)ws->nz, sizeof(double));
   ws->dQ = calloc(2 * (size_t)m->nq * (size_t)m->nq, sizeof(double));
-  ws->M = calloc((size_t)m->nq * (size_t)m->nq, sizeof(double));
-  ws->G = calloc((size_t)F3R_NCON * (size_t)m->nq, sizeof(double));
-  if (!ws->solve_work || !ws->y_perturbed || !ws->res_base || !ws->res_perturbed || !ws->B ||
-      !ws->MB || !ws->dQ || !ws->M || !ws->G) {
+  if (!ws->solve_work || !ws->y_perturbed || !ws->res_base || !ws->res_perturbed || !ws->dQ) {
     f3r_workspace_destroy(ws);
     return NULL;
   }
@@ -35,11 +30,7 @@ void f3r_workspace_destroy(f3r_workspace* ws) {
   free(ws->y_perturbed);
   free(ws->res_base);
   free(ws->res_perturbed);
-  free(ws->B);
-  free(ws->MB);
   free(ws->dQ);
-  free(ws->M);
-  free(ws->G);
   free(ws);
 }
 
@@ -84,6 +75,13 @@ f3r_status f3r_residual_jacobian(const f3r_model* m, f3r_formulation form, doubl
 f3r_status f3r_explicit_rhs(const f3r_model* m, double t, const double* y, const double* held,
                             double* ydot, f3r_workspace* ws) {
   const f3r_status st = f3r_minimal_rhs(m, t, y, held, ydot, ws);
+  if (st != F3R_OK) return st;
+  return check_finite(ydot, f3r_state_size(m, F3R_FORMULATION_MINIMAL));
+}
+
+f3r_status f3r_explicit_rhs_dense(const f3r_model* m, double t, const double* y,
+                                  const double* held, double* ydot, f3r_workspace* ws) {
+  const f3r_status st = f3r_minimal_rhs_dense(m, t, y, held, ydot, ws);
   if (st != F3R_OK) return st;
   return check_finite(ydot, f3r_state_size(m, F3R_FORMULATION_MINIMAL));
 }

@@ -14,10 +14,11 @@ struct f3r_workspace {
   double* y_perturbed;/* ny */
   double* res_base;   /* ny */
   double* res_perturbed; /* ny */
-  double* B;          /* nq x nz: dq/dz of the minimal formulation */
-  double* MB;         /* nq x nz */
-  double* M;          /* nq x nq: mass matrix */
-  double* G;          /* 6 x nq: constraint Jacobian */
+  /* the minimal formulation's reduced mass B^T M B in its arrow blocks (form_minimal.c) */
+  double mass_pp[9];                                   /* platform, 3 x 3 */
+  double mass_pe[3][3 * F3R_MAX_MODES];                /* link i's modes with the platform, 3 x r_i */
+  double mass_ee[3][F3R_MAX_MODES * F3R_MAX_MODES];    /* link i's modes, r_i x r_i */
+  double arrow_w[3][3 * F3R_MAX_MODES];                /* the arrow solve's D_i^{-1} K_Pe_i^T */
   double* dQ;         /* 2 nq x nq: dQ/dq and dQ/dv of the effects */
 };
 
@@ -38,5 +39,7 @@ void f3r_minimal_multipliers(const f3r_model* m, const double* yp, f3r_data* d);
 
 f3r_status f3r_minimal_rhs(const f3r_model* m, double t, const double* y, const double* held,
                            double* ydot, f3r_workspace* ws);
+f3r_status f3r_minimal_rhs_dense(const f3r_model* m, double t, const double* y,
+                                 const double* held, double* ydot, f3r_workspace* ws);
 
 #endif
