@@ -18,7 +18,7 @@ struct f3r_workspace {
   double mass_pp[9];                                   /* platform, 3 x 3 */
   double mass_pe[3][3 * F3R_MAX_MODES];                /* link i's modes with the platform, 3 x r_i */
   double mass_ee[3][F3R_MAX_MODES * F3R_MAX_MODES];    /* link i's modes, r_i x r_i */
-  double arrow_w[3][3 * F3R_MAX_MODES];                /* the arrow solve's D_i^{-1} K_Pe_i^T */
+  double arrow_w[3][4 * F3R_MAX_MODES];                /* the arrow solve's D_i^{-1} [K_Pe_i^T | b_i] */
   double* dQ;         /* 2 nq x nq: dQ/dq and dQ/dv of the effects */
 };
 
