@@ -59,14 +59,16 @@ f3r_status f3r_residual_jacobian(const f3r_model* model, f3r_formulation form, d
                                  const double* held, double* J, int ld, f3r_workspace* ws);
 
 /* The minimal formulation as an explicit ODE y' = f(t, y), y = [z | u | W]: one residual
- * evaluation and one solve with the reduced mass B^T M B, by its arrow structure (each link's
- * modes couple only to themselves and to the platform). For explicit integrators and ODE peers. */
+ * evaluation and one solve with the reduced mass B^T M B, whose blocks are assembled per link
+ * (each link's modes couple only to themselves and to the platform). The solve is a dense
+ * Cholesky up to 15 independent coordinates and the arrow structure above, whichever
+ * f3r_microbench measured faster. For explicit integrators and ODE peers. */
 f3r_status f3r_explicit_rhs(const f3r_model* model, double t, const double* y,
                             const double* held, double* ydot, f3r_workspace* ws);
-/* The same with B^T M B assembled whole and factored by a dense Cholesky: the benchmark's
- * comparison for the arrow solve. */
-f3r_status f3r_explicit_rhs_dense(const f3r_model* model, double t, const double* y,
-                                  const double* held, double* ydot, f3r_workspace* ws);
+/* The same with the solve chosen: arrow 1 (Schur complement on the pose), 0 (dense Cholesky).
+ * For the benchmark's comparison and the tests of both. */
+f3r_status f3r_explicit_rhs_solver(const f3r_model* model, int arrow, double t, const double* y,
+                                   const double* held, double* ydot, f3r_workspace* ws);
 
 /* Full coordinates q, v (nq each) of a state y. */
 f3r_status f3r_state_to_full(const f3r_model* model, f3r_formulation form, const double* y,

@@ -14,6 +14,9 @@
 
 /* weak: absent from cores built before the forward pass */
 extern long f3r_workspace_sincos_pairs(const f3r_workspace* ws) __attribute__((weak));
+extern f3r_status f3r_explicit_rhs_solver(const f3r_model* model, int arrow, double t,
+                                          const double* y, const double* held, double* ydot,
+                                          f3r_workspace* ws) __attribute__((weak));
 
 static double now(void) {
   struct timespec ts;
@@ -24,8 +27,8 @@ static double now(void) {
 int main(int argc, char** argv) {
   const long reps = argc > 1 ? atol(argv[1]) : 200000;
   const int modes[] = {1, 3, 8, 20};
-  printf("| modes per link | formulation | state size | residual (ns) | Jacobian (ns) | explicit RHS (ns) | sin/cos pairs per residual |\n");
-  printf("|---:|---|---:|---:|---:|---:|---:|\n");
+  printf("| modes per link | formulation | state size | residual (ns) | Jacobian (ns) | explicit RHS (ns) | explicit RHS, arrow / dense Cholesky (ns) | sin/cos pairs per residual |\n");
+  printf("|---:|---|---:|---:|---:|---:|---:|---:|\n");
   for (int k = 0; k < 4; ++k) {
     f3r_scene s = f3r_default_scene();
     for (int i = 0; i < 3; ++i) {
@@ -77,7 +80,7 @@ int main(int argc, char** argv) {
         sink += J[0];
       }
       const double jacobian_ns = (now() - t0) / jreps * 1e9;
-      char rhs[32] = "";
+      char rhs[32] = "", rhs_dense[32] = "";
       if (form == F3R_FORMULATION_MINIMAL) {
         const long rreps = reps / 4 + 1;
         t0 = now();
@@ -86,9 +89,22 @@ int main(int argc, char** argv) {
           sink += res[0];
         }
         snprintf(rhs, sizeof rhs, "%.0f", (now() - t0) / rreps * 1e9);
+        snprintf(rhs_dense, sizeof rhs_dense, "n/a");
+        if (f3r_explicit_rhs_solver) {
+          double ns[2];
+          for (int arrow = 1; arrow >= 0; --arrow) {
+            t0 = now();
+            for (long r = 0; r < rreps; ++r) {
+              f3r_explicit_rhs_solver(m, arrow, 1e-9 * r, y, NULL, res, ws);
+              sink += res[0];
+            }
+            ns[arrow] = (now() - t0) / rreps * 1e9;
+          }
+          snprintf(rhs_dense, sizeof rhs_dense, "%.0f / %.0f", ns[1], ns[0]);
+        }
       }
-      printf("| %d | %s | %d | %.0f | %.0f | %s | %s |\n", modes[k], form ? "minimal" : "dae", ny,
-             residual_ns, jacobian_ns, rhs, pairs);
+      printf("| %d | %s | %d | %.0f | %.0f | %s | %s | %s |\n", modes[k], form ? "minimal" : "dae",
+             ny, residual_ns, jacobian_ns, rhs, rhs_dense, pairs);
       if (sink == 12345.678) printf(" ");
       free(y), free(yp), free(res), free(J);
       f3r_workspace_destroy(ws);

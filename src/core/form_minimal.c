@@ -273,14 +273,25 @@ static f3r_status minimal_rhs(const f3r_model* m, double t, const double* y, con
   return F3R_OK;
 }
 
+/* Up to this many independent coordinates a dense Cholesky of K beats its arrow structure:
+ * f3r_microbench, 2026-11-23, ns per explicit right-hand side (arrow / dense), nz = 6 + 3r:
+ * r = 1: 416-678 / 575-686; r = 3: 1088-1298 / 945-1246; r = 8: 2753-3186 / 3544-3947;
+ * r = 20: 9986-10259 / 27814-31632. */
+#define F3R_DENSE_REDUCED_MASS_MAX 15
+
 f3r_status f3r_minimal_rhs(const f3r_model* m, double t, const double* y, const double* held,
                            double* ydot, f3r_workspace* ws) {
-  return minimal_rhs(m, t, y, held, ydot, ws, 0);
+  return minimal_rhs(m, t, y, held, ydot, ws, m->n_independent <= F3R_DENSE_REDUCED_MASS_MAX);
 }
 
 f3r_status f3r_minimal_rhs_dense(const f3r_model* m, double t, const double* y,
                                  const double* held, double* ydot, f3r_workspace* ws) {
   return minimal_rhs(m, t, y, held, ydot, ws, 1);
+}
+
+f3r_status f3r_minimal_rhs_arrow(const f3r_model* m, double t, const double* y,
+                                 const double* held, double* ydot, f3r_workspace* ws) {
+  return minimal_rhs(m, t, y, held, ydot, ws, 0);
 }
 
 f3r_status f3r_minimal_jacobian(const f3r_model* m, double t, double cj, const double* y,

@@ -79,9 +79,10 @@ f3r_status f3r_explicit_rhs(const f3r_model* m, double t, const double* y, const
   return check_finite(ydot, f3r_state_size(m, F3R_FORMULATION_MINIMAL));
 }
 
-f3r_status f3r_explicit_rhs_dense(const f3r_model* m, double t, const double* y,
-                                  const double* held, double* ydot, f3r_workspace* ws) {
-  const f3r_status st = f3r_minimal_rhs_dense(m, t, y, held, ydot, ws);
+f3r_status f3r_explicit_rhs_solver(const f3r_model* m, int arrow, double t, const double* y,
+                                   const double* held, double* ydot, f3r_workspace* ws) {
+  const f3r_status st = arrow ? f3r_minimal_rhs_arrow(m, t, y, held, ydot, ws)
+                              : f3r_minimal_rhs_dense(m, t, y, held, ydot, ws);
   if (st != F3R_OK) return st;
   return check_finite(ydot, f3r_state_size(m, F3R_FORMULATION_MINIMAL));
 }

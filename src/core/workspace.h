@@ -41,5 +41,7 @@ f3r_status f3r_minimal_rhs(const f3r_model* m, double t, const double* y, const 
                            double* ydot, f3r_workspace* ws);
 f3r_status f3r_minimal_rhs_dense(const f3r_model* m, double t, const double* y,
                                  const double* held, double* ydot, f3r_workspace* ws);
+f3r_status f3r_minimal_rhs_arrow(const f3r_model* m, double t, const double* y,
+                                 const double* held, double* ydot, f3r_workspace* ws);
 
 #endif
