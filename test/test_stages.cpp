@@ -139,6 +139,14 @@ TEST_P(StagesTest, ConstraintsAndTheirDerivativesMatchFiniteDifferences) {
   f3r_constraint_times(mp, qp.data(), v.data(), gp);
   f3r_constraint_times(mp, qm.data(), v.data(), gm);
   for (int r = 0; r < 6; ++r) EXPECT_NEAR(gamma[r], (gp[r] - gm[r]) / (2 * dt), 1e-7 * (1 + std::fabs(gamma[r])));
+
+  // d(gamma)/dq and d(gamma)/dv (the minimal formulation's analytic Jacobian needs both).
+  auto dgq = Dense(6, nq, [&](double* A, int ld) { f3r_add_constraint_bias_dq(mp, q.data(), v.data(), 1.0, A, ld); });
+  auto dgq_n = Numeric(6, q, nq, [&](const double* x, double* out) { f3r_constraint_bias(mp, x, v.data(), out); }, 1e-6);
+  ExpectMatrixNear(dgq, dgq_n, 1e-7, "d(gamma)/dq");
+  auto dgv = Dense(6, nq, [&](double* A, int ld) { f3r_add_constraint_bias_dv(mp, q.data(), v.data(), 1.0, A, ld); });
+  auto dgv_n = Numeric(6, v, nq, [&](const double* x, double* out) { f3r_constraint_bias(mp, q.data(), x, out); }, 1e-6);
+  ExpectMatrixNear(dgv, dgv_n, 1e-7, "d(gamma)/dv");
 }
 
 TEST_P(StagesTest, InertiaAndForceDerivativesMatchFiniteDifferences) {

@@ -51,9 +51,8 @@ void f3r_state_kinds(const f3r_model* model, f3r_formulation form, double* id);
 f3r_status f3r_residual(const f3r_model* model, f3r_formulation form, double t, const double* y,
                         const double* yp, const double* held, double* res, f3r_workspace* ws);
 
-/* J (ny x ny, column-major, leading dimension ld) = dF/dy + cj dF/dy'. For dae it is exact and
- * analytic. For minimal the columns of z and u come from forward differences of the residual
- * (the cj dF/dy' part is analytic). */
+/* J (ny x ny, column-major, leading dimension ld) = dF/dy + cj dF/dy', exact and analytic for
+ * both formulations (form_minimal.c derives the minimal one through the loop closure). */
 f3r_status f3r_residual_jacobian(const f3r_model* model, f3r_formulation form, double t,
                                  double cj, const double* y, const double* yp,
                                  const double* held, double* J, int ld, f3r_workspace* ws);

@@ -72,6 +72,11 @@ void f3r_add_constraint_times_dq(const f3r_model* m, const double* q, const doub
                                  double scale, double* A, int ld);
 /* gamma = (dG/dt) v, so that G a + gamma = 0 along a motion. */
 void f3r_constraint_bias(const f3r_model* m, const double* q, const double* v, double* gamma);
+/* scale * d(gamma)/dq and scale * d(gamma)/dv (6 x nq) added into A. */
+void f3r_add_constraint_bias_dq(const f3r_model* m, const double* q, const double* v,
+                                double scale, double* A, int ld);
+void f3r_add_constraint_bias_dv(const f3r_model* m, const double* q, const double* v,
+                                double scale, double* A, int ld);
 
 /* --- energy ------------------------------------------------------------------------------------- */
 double f3r_kinetic_energy(const f3r_model* m, const double* q, const double* v);

@@ -90,20 +90,23 @@ void f3r_data_add_constraint_transpose_times_dq(const f3r_model* m, const f3r_da
   F3R_AT(A, ld, F3R_Q_PHI, F3R_Q_PHI) += scale * phi_phi;
 }
 
-/* Needs the velocity stage (the rates of d) for the same v. */
-void f3r_data_add_constraint_times_dq(const f3r_model* m, const f3r_data* d, const double* v,
+/* d(G x)/dq for any x (v, or the accelerations a). */
+void f3r_data_add_constraint_times_dq(const f3r_model* m, const f3r_data* d, const double* x,
                                       double scale, double* A, int ld) {
+  const double* v = x;
   for (int i = 0; i < 3; ++i) {
     const f3r_link_data* k = &d->link[i];
+    const f3r_link_params* lp = &m->link[i];
     const int gx = 2 * i, gy = 2 * i + 1, r = i, t = F3R_Q_THETA + i;
-    const double rd = k->rho_dot, td = k->theta_dot;
+    const double rd = x[F3R_Q_RHO + i], td = x[F3R_Q_THETA + i];
+    double wd = 0.0;
+    for (int j = 0; j < lp->modes; ++j) wd += lp->tip[j] * x[lp->eta_index + j];
     /* d/drho = n th' */
     F3R_AT(A, ld, gx, r) += scale * (-k->s * td);
     F3R_AT(A, ld, gy, r) += scale * (k->c * td);
     /* d/dth = n rho' - (L e + w n) th' - w' e */
-    F3R_AT(A, ld, gx, t) += scale * (-k->s * rd - (k->len * k->c - k->w * k->s) * td - k->w_dot * k->c);
-    F3R_AT(A, ld, gy, t) += scale * (k->c * rd - (k->len * k->s + k->w * k->c) * td - k->w_dot * k->s);
-    const f3r_link_params* lp = &m->link[i];
+    F3R_AT(A, ld, gx, t) += scale * (-k->s * rd - (k->len * k->c - k->w * k->s) * td - wd * k->c);
+    F3R_AT(A, ld, gy, t) += scale * (k->c * rd - (k->len * k->s + k->w * k->c) * td - wd * k->s);
     if (lp->model == F3R_LINK_FIXED_FREE)
       for (int j = 0; j < lp->modes; ++j) { /* d/deta_j = -psi_j(1) e th' */
         const int col = lp->eta_index + j;
@@ -113,6 +116,59 @@ void f3r_data_add_constraint_times_dq(const f3r_model* m, const f3r_data* d, con
     /* d/dphi_p = r_PC e_c phi' */
     F3R_AT(A, ld, gx, F3R_Q_PHI) += scale * (m->platform_radius * k->cc * v[F3R_Q_PHI]);
     F3R_AT(A, ld, gy, F3R_Q_PHI) += scale * (m->platform_radius * k->sc * v[F3R_Q_PHI]);
+  }
+}
+
+/* gamma_i = along e + across n + r_PC phi'^2 e_c with along = -L th'^2 - 2 w' th' and
+ * across = 2 rho' th' - w th'^2 (f3r_fwd_velocity), so, per link,
+ *   d/drho = -th'^2 e,  d/dth = along n - across e,  d/deta_j = -psi_j(1) th'^2 n,
+ *   d/dphi_p = r_PC phi'^2 (-sc, cc);
+ *   d/drho' = 2 th' n,  d/dth' = (-2 L th' - 2 w') e + (2 rho' - 2 w th') n,
+ *   d/deta_j' = -2 psi_j(1) th' e,  d/dphi_p' = 2 r_PC phi' e_c.
+ * Both need the velocity stage of v in d. */
+void f3r_data_add_constraint_bias_dq(const f3r_model* m, const f3r_data* d, const double* v,
+                                     double scale, double* A, int ld) {
+  const double pd = v[F3R_Q_PHI], rp = m->platform_radius * pd * pd;
+  for (int i = 0; i < 3; ++i) {
+    const f3r_link_data* k = &d->link[i];
+    const f3r_link_params* lp = &m->link[i];
+    const int gx = 2 * i, gy = 2 * i + 1;
+    const double rd = k->rho_dot, td = k->theta_dot;
+    const double along = -k->len * td * td - 2.0 * k->w_dot * td, across = 2.0 * rd * td - k->w * td * td;
+    F3R_AT(A, ld, gx, F3R_Q_RHO + i) += scale * (-td * td * k->c);
+    F3R_AT(A, ld, gy, F3R_Q_RHO + i) += scale * (-td * td * k->s);
+    F3R_AT(A, ld, gx, F3R_Q_THETA + i) += scale * (-along * k->s - across * k->c);
+    F3R_AT(A, ld, gy, F3R_Q_THETA + i) += scale * (along * k->c - across * k->s);
+    for (int j = 0; j < lp->modes; ++j) {
+      const int col = lp->eta_index + j;
+      F3R_AT(A, ld, gx, col) += scale * (lp->tip[j] * td * td * k->s);
+      F3R_AT(A, ld, gy, col) += scale * (-lp->tip[j] * td * td * k->c);
+    }
+    F3R_AT(A, ld, gx, F3R_Q_PHI) += scale * (-rp * k->sc);
+    F3R_AT(A, ld, gy, F3R_Q_PHI) += scale * (rp * k->cc);
+  }
+}
+
+void f3r_data_add_constraint_bias_dv(const f3r_model* m, const f3r_data* d, const double* v,
+                                     double scale, double* A, int ld) {
+  const double pd = v[F3R_Q_PHI];
+  for (int i = 0; i < 3; ++i) {
+    const f3r_link_data* k = &d->link[i];
+    const f3r_link_params* lp = &m->link[i];
+    const int gx = 2 * i, gy = 2 * i + 1;
+    const double rd = k->rho_dot, td = k->theta_dot;
+    F3R_AT(A, ld, gx, F3R_Q_RHO + i) += scale * (-2.0 * td * k->s);
+    F3R_AT(A, ld, gy, F3R_Q_RHO + i) += scale * (2.0 * td * k->c);
+    const double de = -2.0 * k->len * td - 2.0 * k->w_dot, dn = 2.0 * rd - 2.0 * k->w * td;
+    F3R_AT(A, ld, gx, F3R_Q_THETA + i) += scale * (de * k->c - dn * k->s);
+    F3R_AT(A, ld, gy, F3R_Q_THETA + i) += scale * (de * k->s + dn * k->c);
+    for (int j = 0; j < lp->modes; ++j) {
+      const int col = lp->eta_index + j;
+      F3R_AT(A, ld, gx, col) += scale * (-2.0 * lp->tip[j] * td * k->c);
+      F3R_AT(A, ld, gy, col) += scale * (-2.0 * lp->tip[j] * td * k->s);
+    }
+    F3R_AT(A, ld, gx, F3R_Q_PHI) += scale * (2.0 * m->platform_radius * pd * k->cc);
+    F3R_AT(A, ld, gy, F3R_Q_PHI) += scale * (2.0 * m->platform_radius * pd * k->sc);
   }
 }
 
@@ -183,6 +239,22 @@ void f3r_add_constraint_times_dq(const f3r_model* m, const double* q, const doub
   f3r_fwd_position(m, q, &d);
   f3r_fwd_velocity(m, q, v, &d);
   f3r_data_add_constraint_times_dq(m, &d, v, scale, A, ld);
+}
+
+void f3r_add_constraint_bias_dq(const f3r_model* m, const double* q, const double* v,
+                                double scale, double* A, int ld) {
+  f3r_data d = {.sincos_pairs = 0};
+  f3r_fwd_position(m, q, &d);
+  f3r_fwd_velocity(m, q, v, &d);
+  f3r_data_add_constraint_bias_dq(m, &d, v, scale, A, ld);
+}
+
+void f3r_add_constraint_bias_dv(const f3r_model* m, const double* q, const double* v,
+                                double scale, double* A, int ld) {
+  f3r_data d = {.sincos_pairs = 0};
+  f3r_fwd_position(m, q, &d);
+  f3r_fwd_velocity(m, q, v, &d);
+  f3r_data_add_constraint_bias_dv(m, &d, v, scale, A, ld);
 }
 
 void f3r_constraint_bias(const f3r_model* m, const double* q, const double* v, double* gamma) {

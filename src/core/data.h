@@ -96,8 +96,12 @@ void f3r_data_add_constraint_jacobian_transpose(const f3r_model* m, const f3r_da
                                                 double scale, double* A, int ld);
 void f3r_data_add_constraint_transpose_times_dq(const f3r_model* m, const f3r_data* d,
                                                 const double* y, double scale, double* A, int ld);
-void f3r_data_add_constraint_times_dq(const f3r_model* m, const f3r_data* d, const double* v,
+void f3r_data_add_constraint_times_dq(const f3r_model* m, const f3r_data* d, const double* x,
                                       double scale, double* A, int ld);
+void f3r_data_add_constraint_bias_dq(const f3r_model* m, const f3r_data* d, const double* v,
+                                     double scale, double* A, int ld);
+void f3r_data_add_constraint_bias_dv(const f3r_model* m, const f3r_data* d, const double* v,
+                                     double scale, double* A, int ld);
 /* Per link, the dependent block G_d = [e, L n - w e] of the constraint Jacobian (det L):
  *   x = G_d^{-1} V  (x's rho and theta entries from V's (x, y) per link),
  *   x = G_d^{-T} R  (the loop force (x, y) per link from R's rho and theta entries). */

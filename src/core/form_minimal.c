@@ -78,16 +78,6 @@ f3r_status f3r_minimal_residual(const f3r_model* m, double t, const double* y, c
   return F3R_OK;
 }
 
-/* Typical magnitudes that set the difference increments: m for the pose, m for modal
- * coordinates, and their rates. */
-static double typical_size(const f3r_model* m, int index) {
-  const int nz = m->n_independent;
-  const int j = index % nz;
-  const int is_rate = index >= nz;
-  if (j < 3) return is_rate ? 1e-1 : 1e-1;
-  return is_rate ? 1e-2 : 1e-5;
-}
-
 /* The reduced mass K = B^T M B, B = dq/dz, in its arrow blocks at the position stage in
  * ws->data. The dependent coordinates of link i, d_i = (rho_i, theta_i), move with the platform
  * and with link i's own modes only: B's rows d_i are B_iP (2 x 3) on the pose and B_ie (2 x r_i)
@@ -294,29 +284,153 @@ f3r_status f3r_minimal_rhs_arrow(const f3r_model* m, double t, const double* y,
   return minimal_rhs(m, t, y, held, ydot, ws, 0);
 }
 
+/* out (rows x nz) = X B for X (rows x nq, leading dimension rows): B is the identity on z below
+ * its dependent rows Bd (6 x nz), so (X B)(:, j) = X(:, z_j) + X(:, legs) Bd(:, j). */
+static void times_B(const double* X, int rows, const double* Bd, int nz, double* out) {
+  for (int j = 0; j < nz; ++j)
+    for (int r = 0; r < rows; ++r) {
+      double sum = X[r + rows * (F3R_Q_INDEPENDENT + j)];
+      for (int c = 0; c < F3R_Q_LEG_JOINTS; ++c) sum += X[r + rows * c] * Bd[c + 6 * j];
+      out[r + rows * j] = sum;
+    }
+}
+
+/* J(rows0.., cols0..) += scale B^T Y for Y (nq x nz). */
+static void add_B_transpose_times(const double* Bd, const double* Y, int nq, int nz, double scale,
+                                  double* J, int ld) {
+  for (int j = 0; j < nz; ++j)
+    for (int i = 0; i < nz; ++i) {
+      double sum = Y[F3R_Q_INDEPENDENT + i + nq * j];
+      for (int c = 0; c < F3R_Q_LEG_JOINTS; ++c) sum += Bd[c + 6 * i] * Y[c + nq * j];
+      F3R_AT(J, ld, i, j) += scale * sum;
+    }
+}
+
+/* The legs' rows of -G_d^{-1} X for each of the nz columns of X (6 x nz), into out (6 x nz). */
+static void minus_dependent_solve(const f3r_data* d, const double* X, int nz, double* out) {
+  double x[F3R_Q_LEG_JOINTS];
+  for (int j = 0; j < nz; ++j) {
+    f3r_data_solve_dependent(d, X + 6 * j, x);
+    for (int c = 0; c < F3R_Q_LEG_JOINTS; ++c) out[c + 6 * j] = -x[c];
+  }
+}
+
+/* The analytic Jacobian of the minimal residual. With the loop forces lambda held, the reduced
+ * equations vary as dF_u = B^T (dR - d(G^T lambda)/dq dq), R = M a + h + k - Q, and the loop
+ * closure gives dq/dz = B, dv/dz = V_z, dv/du = B, da/dz = A_z, da/du = A_u, da/du' = B, whose
+ * dependent rows follow from G v = 0 and G a + gamma = 0 (their z rows are zero):
+ *   V_z = -G_d^{-1} d(G v)/dq B,
+ *   A_z = -G_d^{-1} [(d(G a)/dq + dgamma/dq) B + dgamma/dv V_z],   A_u = -G_d^{-1} dgamma/dv B.
+ * Hence, with Z = d(M a)/dq + dh/dq + dk/dq - dQ/dq - d(G^T lambda)/dq and H = dh/dv - dQ/dv,
+ *   dF_u/dz = B^T (Z B + H V_z + M A_z),  dF_u/du = B^T (H B + M A_u),  dF_u/du' = B^T M B;
+ * the lag states enter R_rho with -1; F_W = W' - Q.v gives dF_W/dz = -(v^T dQ/dq B +
+ * (v^T dQ/dv + Q^T) V_z), dF_W/du = -(v^T dQ/dv + Q^T) B, dF_W/dF_a = -rho'. */
 f3r_status f3r_minimal_jacobian(const f3r_model* m, double t, double cj, const double* y,
                                 const double* yp, const double* held, double* J, int ld,
                                 f3r_workspace* ws) {
-  const int nz = m->n_independent, ny = f3r_state_size(m, F3R_FORMULATION_MINIMAL);
+  const int nq = m->nq, nz = m->n_independent, ny = f3r_state_size(m, F3R_FORMULATION_MINIMAL);
+  const int lag_at = 2 * nz, w_at = ny - 1;
   f3r_status st = f3r_minimal_residual(m, t, y, yp, held, ws->res_base, ws);
   if (st != F3R_OK) return st;
-  memcpy(ws->y_perturbed, y, (size_t)ny * sizeof(double));
-  for (int j = 0; j < ny - 1; ++j) { /* every column but W's, which nothing depends on */
-    const double inc = 1.5e-8 * fmax(fabs(y[j]), j < 2 * nz ? typical_size(m, j) : 1.0);
-    ws->y_perturbed[j] = y[j] + inc;
-    st = f3r_minimal_residual(m, t, ws->y_perturbed, yp, held, ws->res_perturbed, ws);
-    ws->y_perturbed[j] = y[j];
-    if (st != F3R_OK) return st;
-    for (int i = 0; i < ny; ++i)
-      F3R_AT(J, ld, i, j) += (ws->res_perturbed[i] - ws->res_base[i]) / inc;
+  const f3r_data* d = &ws->data;
+  const double *q = ws->q, *v = ws->v, *a = d->a;
+  double* Z = ws->jac_work;             /* nq x nq */
+  double* H = Z + (size_t)nq * nq;      /* nq x nq */
+  double* Gvq = H + (size_t)nq * nq;    /* 6 x nq: d(G v)/dq */
+  double* Caq = Gvq + 6 * nq;           /* 6 x nq: d(G a)/dq + dgamma/dq */
+  double* gv = Caq + 6 * nq;            /* 6 x nq: dgamma/dv */
+  double* Bd = gv + 6 * nq;             /* 6 x nz: B's dependent rows */
+  double* Vz = Bd + 6 * nz;             /* nq x nz */
+  double* Az = Vz + (size_t)nq * nz;    /* nq x nz */
+  double* Au = Az + (size_t)nq * nz;    /* nq x nz */
+  double* T = Au + (size_t)nq * nz;     /* nq x nz */
+  double* S6 = T + (size_t)nq * nz;     /* 6 x nz */
+  double* Qq = ws->dQ;                  /* nq x nq: dQ/dq */
+  double* Qv = ws->dQ + (size_t)nq * nq;/* nq x nq: dQ/dv */
+  memset(ws->jac_work, 0, (2 * (size_t)nq * nq + 18 * (size_t)nq) * sizeof(double));
+  memset(ws->dQ, 0, 2 * (size_t)nq * nq * sizeof(double));
+  for (int e = 0; e < m->n_effects; ++e) {
+    if (m->effects[e]->add_dq) m->effects[e]->add_dq(m, q, v, d, 1.0, Qq, nq);
+    if (m->effects[e]->add_dv) m->effects[e]->add_dv(m, q, v, 1.0, Qv, nq);
   }
-  /* cj dF/dy': identity for z and W, B^T M B for u, tau for the lag states. */
-  for (int j = 0; j < nz; ++j) F3R_AT(J, ld, j, j) += cj;
-  for (int i = 0; i < m->n_lag; ++i) F3R_AT(J, ld, 2 * nz + i, 2 * nz + i) += cj * m->lag_time_constant;
-  F3R_AT(J, ld, ny - 1, ny - 1) += cj;
-  st = expand(m, y, yp, ws); /* restores the position stage at y */
-  if (st != F3R_OK) return st;
+  f3r_add_mass_times_dq(m, q, a, 1.0, Z, nq);
+  f3r_add_velocity_forces_dq(m, q, v, 1.0, Z, nq);
+  f3r_add_elastic_forces_dq(m, 1.0, Z, nq);
+  f3r_data_add_constraint_transpose_times_dq(m, d, d->lambda, -1.0, Z, nq);
+  f3r_data_add_velocity_forces_dv(m, d, q, 1.0, H, nq);
+  for (size_t k = 0; k < (size_t)nq * nq; ++k) Z[k] -= Qq[k], H[k] -= Qv[k];
+  f3r_data_add_constraint_times_dq(m, d, v, 1.0, Gvq, 6);
+  f3r_data_add_constraint_times_dq(m, d, a, 1.0, Caq, 6);
+  f3r_data_add_constraint_bias_dq(m, d, v, 1.0, Caq, 6);
+  f3r_data_add_constraint_bias_dv(m, d, v, 1.0, gv, 6);
+
+  /* B's dependent rows: G_d^{-1} applied to -G_z's columns */
+  double G[F3R_NCON * F3R_MAX_Q] = {0};
+  f3r_data_add_constraint_jacobian(m, d, -1.0, G, F3R_NCON);
+  minus_dependent_solve(d, G + F3R_NCON * F3R_Q_INDEPENDENT, nz, Bd);
+  for (size_t k = 0; k < 6 * (size_t)nz; ++k) Bd[k] = -Bd[k];
+
+  /* V_z, A_u, A_z: only their legs' rows are nonzero */
+  memset(Vz, 0, 3 * (size_t)nq * nz * sizeof(double));
+  times_B(Gvq, 6, Bd, nz, S6);
+  minus_dependent_solve(d, S6, nz, S6);
+  for (int j = 0; j < nz; ++j)
+    for (int c = 0; c < F3R_Q_LEG_JOINTS; ++c) Vz[c + nq * j] = S6[c + 6 * j];
+  times_B(gv, 6, Bd, nz, S6);
+  minus_dependent_solve(d, S6, nz, S6);
+  for (int j = 0; j < nz; ++j)
+    for (int c = 0; c < F3R_Q_LEG_JOINTS; ++c) Au[c + nq * j] = S6[c + 6 * j];
+  times_B(Caq, 6, Bd, nz, S6);
+  for (int j = 0; j < nz; ++j) /* + dgamma/dv V_z */
+    for (int r = 0; r < 6; ++r)
+      for (int c = 0; c < F3R_Q_LEG_JOINTS; ++c) S6[r + 6 * j] += gv[r + 6 * c] * Vz[c + nq * j];
+  minus_dependent_solve(d, S6, nz, S6);
+  for (int j = 0; j < nz; ++j)
+    for (int c = 0; c < F3R_Q_LEG_JOINTS; ++c) Az[c + nq * j] = S6[c + 6 * j];
+
+  /* dF_u/dz = B^T (Z B + H V_z + M A_z) */
+  times_B(Z, nq, Bd, nz, T);
+  double Mx[F3R_MAX_Q];
+  for (int j = 0; j < nz; ++j) {
+    for (int r = 0; r < nq; ++r)
+      for (int c = 0; c < F3R_Q_LEG_JOINTS; ++c) T[r + nq * j] += H[r + nq * c] * Vz[c + nq * j];
+    f3r_data_mass_times(m, d, Az + (size_t)nq * j, Mx);
+    for (int r = 0; r < nq; ++r) T[r + nq * j] += Mx[r];
+  }
+  add_B_transpose_times(Bd, T, nq, nz, 1.0, &F3R_AT(J, ld, nz, 0), ld);
+  /* dF_u/du = B^T (H B + M A_u) */
+  times_B(H, nq, Bd, nz, T);
+  for (int j = 0; j < nz; ++j) {
+    f3r_data_mass_times(m, d, Au + (size_t)nq * j, Mx);
+    for (int r = 0; r < nq; ++r) T[r + nq * j] += Mx[r];
+  }
+  add_B_transpose_times(Bd, T, nq, nz, 1.0, &F3R_AT(J, ld, nz, nz), ld);
+  /* cj dF/dy': identity for z and W, B^T M B for u, tau for the lag states; F_z = z' - u */
+  for (int j = 0; j < nz; ++j) {
+    F3R_AT(J, ld, j, j) += cj;
+    F3R_AT(J, ld, j, nz + j) -= 1.0;
+  }
   reduced_mass_blocks(m, ws);
   add_reduced_mass(m, ws, cj, &F3R_AT(J, ld, nz, nz), ld);
+  for (int i = 0; i < m->n_lag; ++i) {
+    F3R_AT(J, ld, lag_at + i, lag_at + i) += 1.0 + cj * m->lag_time_constant;
+    for (int r = 0; r < nz; ++r) F3R_AT(J, ld, nz + r, lag_at + i) -= Bd[F3R_Q_RHO + i + 6 * r];
+    F3R_AT(J, ld, w_at, lag_at + i) -= v[F3R_Q_RHO + i];
+  }
+  /* F_W = W' - Q . v */
+  double wq[F3R_MAX_Q], wv[F3R_MAX_Q]; /* v^T dQ/dq and v^T dQ/dv + Q^T, as rows */
+  for (int c = 0; c < nq; ++c) {
+    double sq = 0.0, sv = d->Q[c];
+    for (int r = 0; r < nq; ++r) sq += v[r] * Qq[r + nq * c], sv += v[r] * Qv[r + nq * c];
+    wq[c] = sq, wv[c] = sv;
+  }
+  for (int j = 0; j < nz; ++j) {
+    double dz = wq[F3R_Q_INDEPENDENT + j], du = wv[F3R_Q_INDEPENDENT + j];
+    for (int c = 0; c < F3R_Q_LEG_JOINTS; ++c)
+      dz += wq[c] * Bd[c + 6 * j] + wv[c] * Vz[c + nq * j], du += wv[c] * Bd[c + 6 * j];
+    F3R_AT(J, ld, w_at, j) -= dz;
+    F3R_AT(J, ld, w_at, nz + j) -= du;
+  }
+  F3R_AT(J, ld, w_at, w_at) += cj;
   return F3R_OK;
 }

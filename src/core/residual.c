@@ -15,9 +15,11 @@ f3r_workspace* f3r_workspace_create(const f3r_model* m) {
   ws->solve_work = calloc(f3r_solve_accelerations_work_size(m), sizeof(double));
   ws->y_perturbed = calloc((size_t)ny_dae, sizeof(double));
   ws->res_base = calloc((size_t)ny_dae, sizeof(double));
-  ws->res_perturbed = calloc((size_t)ny_dae, sizeof(double));
   ws->dQ = calloc(2 * (size_t)m->nq * (size_t)m->nq, sizeof(double));
-  if (!ws->solve_work || !ws->y_perturbed || !ws->res_base || !ws->res_perturbed || !ws->dQ) {
+  const size_t nq = (size_t)m->nq, nz = (size_t)ws->nz;
+  ws->jac_work = calloc(2 * nq * nq + 18 * nq + 4 * nq * nz + 12 * nz, sizeof(double));
+  if (!ws->solve_work || !ws->y_perturbed || !ws->res_base || !ws->dQ ||
+      !ws->jac_work) {
     f3r_workspace_destroy(ws);
     return NULL;
   }
@@ -27,9 +29,9 @@ f3r_workspace* f3r_workspace_create(const f3r_model* m) {
 void f3r_workspace_destroy(f3r_workspace* ws) {
   if (!ws) return;
   free(ws->solve_work);
+  free(ws->jac_work);
   free(ws->y_perturbed);
   free(ws->res_base);
-  free(ws->res_perturbed);
   free(ws->dQ);
   free(ws);
 }

@@ -11,14 +11,14 @@ struct f3r_workspace {
   double q[F3R_MAX_Q], v[F3R_MAX_Q]; /* its full coordinates (the minimal formulation's expansion) */
   double tmp[F3R_MAX_Q];
   double* solve_work; /* f3r_solve_accelerations_work_size */
-  double* y_perturbed;/* ny */
+  double* y_perturbed;/* ny: the zero rate of the explicit right-hand side */
   double* res_base;   /* ny */
-  double* res_perturbed; /* ny */
   /* the minimal formulation's reduced mass B^T M B in its arrow blocks (form_minimal.c) */
   double mass_pp[9];                                   /* platform, 3 x 3 */
   double mass_pe[3][3 * F3R_MAX_MODES];                /* link i's modes with the platform, 3 x r_i */
   double mass_ee[3][F3R_MAX_MODES * F3R_MAX_MODES];    /* link i's modes, r_i x r_i */
   double arrow_w[3][4 * F3R_MAX_MODES];                /* the arrow solve's D_i^{-1} [K_Pe_i^T | b_i] */
+  double* jac_work;   /* the minimal Jacobian's products: 2 nq^2 + 18 nq + 4 nq nz + 12 nz */
   double* dQ;         /* 2 nq x nq: dQ/dq and dQ/dv of the effects */
 };
 
