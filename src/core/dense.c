@@ -72,3 +72,40 @@ void f3r_cholesky_solve(const double* L, int n, double* b) {
     b[i] = s / F3R_AT(L, n, i, i);
   }
 }
+
+/* Cholesky L L^T of the small symmetric positive definite n x n A (column-major, lower triangle
+ * overwritten), keeping 1 / L_jj in inv: the solves then multiply instead of divide, which is
+ * what a few 3 x 3 systems cost. Returns 1 when A is not numerically positive definite. */
+int f3r_cholesky_factor_inv(double* A, int n, double* inv) {
+  for (int j = 0; j < n; ++j) {
+    double d = A[j + n * j];
+    for (int k = 0; k < j; ++k) d -= A[j + n * k] * A[j + n * k];
+    if (!(d > 0.0) || !isfinite(d)) return 1;
+    const double l = sqrt(d);
+    A[j + n * j] = l;
+    inv[j] = 1.0 / l;
+    for (int i = j + 1; i < n; ++i) {
+      double s = A[i + n * j];
+      for (int k = 0; k < j; ++k) s -= A[i + n * k] * A[j + n * k];
+      A[i + n * j] = s * inv[j];
+    }
+  }
+  return 0;
+}
+
+/* X = A^{-1} X for the nrhs columns of X (leading dimension n), A factored by f3r_cholesky_factor_inv. */
+void f3r_cholesky_solve_inv(const double* L, int n, const double* inv, double* X, int nrhs) {
+  for (int c = 0; c < nrhs; ++c) {
+    double* x = X + n * c;
+    for (int i = 0; i < n; ++i) {
+      double s = x[i];
+      for (int k = 0; k < i; ++k) s -= L[i + n * k] * x[k];
+      x[i] = s * inv[i];
+    }
+    for (int i = n - 1; i >= 0; --i) {
+      double s = x[i];
+      for (int k = i + 1; k < n; ++k) s -= L[k + n * i] * x[k];
+      x[i] = s * inv[i];
+    }
+  }
+}

@@ -16,5 +16,9 @@ void f3r_lu_solve(const double* A, int n, const int* piv, double* b);
 int f3r_cholesky_factor(double* A, int n);
 /* Solves L L^T x = b with the factor of f3r_cholesky_factor; b is overwritten with x. */
 void f3r_cholesky_solve(const double* L, int n, double* b);
+/* The same factorisation keeping 1 / L_jj in inv[n], and its solve for nrhs columns of X
+ * (leading dimension n): multiplications instead of divisions, for many small systems. */
+int f3r_cholesky_factor_inv(double* A, int n, double* inv);
+void f3r_cholesky_solve_inv(const double* L, int n, const double* inv, double* X, int nrhs);
 
 #endif

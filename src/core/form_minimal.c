@@ -154,43 +154,6 @@ static void add_reduced_mass(const f3r_model* m, const f3r_workspace* ws, double
   }
 }
 
-/* Cholesky L L^T of the small symmetric positive definite n x n A (column-major, lower triangle
- * overwritten), keeping 1 / L_jj in inv: the solves then multiply instead of divide, which is
- * what a few 3 x 3 systems cost. Returns 1 when A is not numerically positive definite. */
-static int small_cholesky(double* A, int n, double* inv) {
-  for (int j = 0; j < n; ++j) {
-    double d = A[j + n * j];
-    for (int k = 0; k < j; ++k) d -= A[j + n * k] * A[j + n * k];
-    if (!(d > 0.0) || !isfinite(d)) return 1;
-    const double l = sqrt(d);
-    A[j + n * j] = l;
-    inv[j] = 1.0 / l;
-    for (int i = j + 1; i < n; ++i) {
-      double s = A[i + n * j];
-      for (int k = 0; k < j; ++k) s -= A[i + n * k] * A[j + n * k];
-      A[i + n * j] = s * inv[j];
-    }
-  }
-  return 0;
-}
-
-/* X = A^{-1} X for the nrhs columns of X (leading dimension n), A factored by small_cholesky. */
-static void small_solve(const double* L, int n, const double* inv, double* X, int nrhs) {
-  for (int c = 0; c < nrhs; ++c) {
-    double* x = X + n * c;
-    for (int i = 0; i < n; ++i) {
-      double s = x[i];
-      for (int k = 0; k < i; ++k) s -= L[i + n * k] * x[k];
-      x[i] = s * inv[i];
-    }
-    for (int i = n - 1; i >= 0; --i) {
-      double s = x[i];
-      for (int k = i + 1; k < n; ++k) s -= L[k + n * i] * x[k];
-      x[i] = s * inv[i];
-    }
-  }
-}
-
 /* Solves K x = b (b overwritten) by the arrow structure: each link's modal block D_i is
  * factored alone, the platform's Schur complement S = K_PP - sum K_Pe_i D_i^{-1} K_Pe_i^T is
  * 3 x 3, and the modes follow from the pose: x_i = D_i^{-1} (b_i - K_Pe_i^T x_P). */
@@ -204,13 +167,13 @@ static f3r_status arrow_solve(const f3r_model* m, f3r_workspace* ws, double* b) 
     double* D = ws->mass_ee[i]; /* factored in place: the blocks are rebuilt every call */
     const double* C = ws->mass_pe[i];
     double* W = ws->arrow_w[i]; /* [D^{-1} K_Pe^T | D^{-1} b_i], r x 4 */
-    if (small_cholesky(D, r, inv)) return F3R_ERR_SINGULAR;
+    if (f3r_cholesky_factor_inv(D, r, inv)) return F3R_ERR_SINGULAR;
     double* bi = b + modal_z(m, i);
     for (int j = 0; j < r; ++j) {
       for (int c = 0; c < 3; ++c) W[j + r * c] = C[c + 3 * j];
       W[j + r * 3] = bi[j];
     }
-    small_solve(D, r, inv, W, 4);
+    f3r_cholesky_solve_inv(D, r, inv, W, 4);
     for (int j = 0; j < r; ++j) bi[j] = W[j + r * 3]; /* bi = D^{-1} b_i */
     for (int c = 0; c < 3; ++c) {
       for (int e = 0; e < 3; ++e) {
@@ -223,8 +186,8 @@ static f3r_status arrow_solve(const f3r_model* m, f3r_workspace* ws, double* b) 
       bp[c] -= sum;
     }
   }
-  if (small_cholesky(S, 3, inv)) return F3R_ERR_SINGULAR;
-  small_solve(S, 3, inv, bp, 1);
+  if (f3r_cholesky_factor_inv(S, 3, inv)) return F3R_ERR_SINGULAR;
+  f3r_cholesky_solve_inv(S, 3, inv, bp, 1);
   for (int i = 0; i < 3; ++i) {
     const int r = m->link[i].modes;
     double* bi = b + modal_z(m, i);
