@@ -23,7 +23,8 @@ TEST_P(ResidualJacobianTest, MatchesFiniteDifferencesOfTheResidual) {
                                ? ScenePath(c.scene)
                                : std::string(F3R_SOURCE_DIR) + "/" + c.scene;
   auto loaded = LoadModel(path, &scene);
-  scene.formulation = c.form;
+  // a scene names what a simulation integrates; index3 is for external solvers only
+  scene.formulation = c.form == F3R_FORMULATION_INDEX3 ? F3R_FORMULATION_DAE : c.form;
   scene.exact_kinematics = c.exact;
   auto m = MakeModel(scene);
   // A generic state that closes the loops: moved, turned, deflected and moving.
@@ -91,7 +92,51 @@ INSTANTIATE_TEST_SUITE_P(
                       Case{"test/scenes/all_effects.yaml", F3R_FORMULATION_DAE, true, 1e-6},
                       Case{"test/scenes/all_effects.yaml", F3R_FORMULATION_MINIMAL, false, 1e-6},
                       Case{"paper_sim3_fixed_free.yaml", F3R_FORMULATION_MINIMAL, true, 1e-6},
-                      Case{"test/scenes/all_effects.yaml", F3R_FORMULATION_MINIMAL, true, 1e-6}));
+                      Case{"test/scenes/all_effects.yaml", F3R_FORMULATION_MINIMAL, true, 1e-6},
+                      Case{"paper_sim3_fixed_free.yaml", F3R_FORMULATION_INDEX3, false, 1e-6},
+                      Case{"test/scenes/all_effects.yaml", F3R_FORMULATION_INDEX3, true, 1e-6}));
+
+// The peers' index-3 form: a state made consistent by the constrained solve (LU of
+// [M -G^T; G 0]) zeroes every row, and the variables are counted by index as MEBDFI wants them.
+TEST(Residual, IndexThreeFormVanishesOnAConsistentStateAndCountsItsVariables) {
+  for (const char* name : {"paper_sim3_fixed_free.yaml", "test/scenes/all_effects.yaml"}) {
+    f3r_scene scene;
+    const std::string path = std::string(name).find('/') == std::string::npos
+                                 ? ScenePath(name)
+                                 : std::string(F3R_SOURCE_DIR) + "/" + name;
+    auto loaded = LoadModel(path, &scene);
+    auto m = MakeModel(scene);
+    const int nq = m->nq, ny = f3r_state_size(m.get(), F3R_FORMULATION_INDEX3);
+    EXPECT_EQ(ny, 2 * nq + 6 + m->n_lag + 1) << name;
+    std::vector<double> q(F3R_MAX_Q, 0.0), v(F3R_MAX_Q, 0.0), y(ny), yp(ny), res(ny), id(ny);
+    ASSERT_EQ(f3r_model_initial_state(m.get(), q.data(), v.data()), F3R_OK);
+    for (int k = 9; k < nq; ++k) v[k] = 1e-2 * std::cos(5.0 * k);
+    v[6] = 0.2;
+    f3r_model_close_loop_rates(m.get(), q.data(), v.data());
+    WorkspacePtr ws(f3r_workspace_create(m.get()));
+    const double lag[3] = {1.5, -2.0, 0.7};
+    ASSERT_EQ(f3r_consistent_state(m.get(), F3R_FORMULATION_INDEX3, 0.02, q.data(), v.data(),
+                                   nullptr, lag, 0.25, y.data(), yp.data(), nullptr, ws.get()),
+              F3R_OK);
+    ASSERT_EQ(f3r_residual(m.get(), F3R_FORMULATION_INDEX3, 0.02, y.data(), yp.data(), nullptr,
+                           res.data(), ws.get()),
+              F3R_OK);
+    for (int i = 0; i < ny; ++i) EXPECT_NEAR(res[i], 0.0, 1e-9) << name << " row " << i;
+    int index_of[F3R_MAX_Q * 2 + 16], counts[3] = {0, 0, 0};
+    f3r_index3_variable_indices(m.get(), index_of, counts);
+    EXPECT_EQ(counts[0], nq + m->n_lag + 1);
+    EXPECT_EQ(counts[1], nq);
+    EXPECT_EQ(counts[2], 6);
+    f3r_state_kinds(m.get(), F3R_FORMULATION_INDEX3, id.data());
+    int seen[3] = {0, 0, 0};
+    for (int i = 0; i < ny; ++i) {
+      ++seen[index_of[i] - 1];
+      EXPECT_EQ(id[i] == 0.0, index_of[i] == 3) << "only the multipliers are algebraic";
+    }
+    for (int k = 0; k < 3; ++k) EXPECT_EQ(seen[k], counts[k]);
+    EXPECT_EQ(y[ny - 1], 0.25);
+  }
+}
 
 TEST(Residual, StateLayoutHoldsOnlyWhatTheLinksCallFor) {
   const f3r_link_model models[3] = {F3R_LINK_RIGID, F3R_LINK_FIXED_PINNED, F3R_LINK_FIXED_FREE};

@@ -299,4 +299,16 @@ TEST(Simulation, NonFiniteForcesAreRejectedAndChangeNothing) {
   EXPECT_EQ(f3r_sim_outputs(sim.get())->forces[2], 0.0);
 }
 
+TEST(Simulation, RefusesTheIndexThreeFormWhichIsForExternalSolvers) {
+  f3r_scene s = Scene("paper_sim1.yaml");
+  auto m = MakeModel(s);
+  f3r_solver_settings settings = f3r_solver_settings_from_scene(&s);
+  settings.formulation = F3R_FORMULATION_INDEX3;
+  f3r_sim* raw = nullptr;
+  f3r_error err{};
+  EXPECT_EQ(f3r_sim_create(m.get(), &settings, &raw, &err), F3R_ERR_ARGUMENT);
+  EXPECT_EQ(raw, nullptr);
+  EXPECT_NE(std::string(err.message).find("index3"), std::string::npos) << err.message;
+}
+
 }  // namespace

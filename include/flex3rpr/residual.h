@@ -1,4 +1,4 @@
-/* The model as a residual F(t, y, y') = 0 in one of two formulations, with its Jacobian
+/* The model as a residual F(t, y, y') = 0 in one of three formulations, with its Jacobian
  * dF/dy + cj dF/dy'. Public so that any DAE or ODE solver can integrate the same model.
  *
  * dae (stabilised index 2, Gear-Gupta-Leimkuhler), ny = 2 nq + 13:
@@ -9,6 +9,14 @@
  *         G v
  *         W' - Q . v ]
  *   lambda and mu are algebraic (mu = 0 along exact solutions); q, v and W are differential.
+ * index3 (the paper's form, for external solvers such as MEBDFI), ny = 2 nq + 7:
+ *   y = [q (nq) | v (nq) | lambda (6) | W (1)],
+ *   F = [ q' - v
+ *         M v' + h + k - Q - G^T lambda
+ *         g(q)
+ *         W' - Q . v ]
+ *   q and W are index-1 variables, v index 2, lambda index 3 (f3r_index3_variable_indices).
+ *   IDA cannot integrate it (f3r_sim_create refuses it): its error test needs the index-2 form.
  * minimal (independent coordinates z = q[6..nq) = (X_p, Y_p, phi_p, eta)), ny = 2 nz + 1:
  *   y = [z (nz) | u (nz) | W (1)],  rho and theta from the closed-form loop closure,
  *   F = [ z' - u
@@ -43,8 +51,12 @@ long f3r_workspace_sincos_pairs(const f3r_workspace* ws);
 static inline int f3r_lag_index(const f3r_model* model, f3r_formulation form) {
   return f3r_state_size(model, form) - 1 - model->n_lag;
 }
-/* 1 for differential components of y, 0 for algebraic ones (lambda and mu of dae). */
+/* 1 for differential components of y, 0 for algebraic ones (lambda, mu of dae; lambda of index3). */
 void f3r_state_kinds(const f3r_model* model, f3r_formulation form, double* id);
+/* The index3 form's variables by differentiation index, as MEBDFI and RADAU5 want them:
+ * index_of[n] in {1, 2, 3} for each component (ny values, or NULL) and counts[k - 1] of each
+ * index (q, lag and W: 1; v: 2; lambda: 3). */
+void f3r_index3_variable_indices(const f3r_model* model, int* index_of, int counts[3]);
 
 /* held: the caller's generalized forces (nq), or NULL. Returns F3R_OK, F3R_ERR_SINGULAR for a
  * configuration the loop closure cannot reach, or F3R_ERR_NONFINITE. */

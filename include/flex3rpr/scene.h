@@ -21,7 +21,9 @@ typedef enum {
 
 typedef enum {
   F3R_FORMULATION_DAE = 0,    /* redundant coordinates + multipliers, GGL index-2 */
-  F3R_FORMULATION_MINIMAL = 1 /* platform pose + modal coordinates, implicit ODE */
+  F3R_FORMULATION_MINIMAL = 1, /* platform pose + modal coordinates, implicit ODE */
+  F3R_FORMULATION_INDEX3 = 2   /* redundant coordinates + multipliers, plain index 3: for external
+                                * solvers (MEBDFI, RADAU5); a simulation rejects it */
 } f3r_formulation;
 
 typedef enum {

@@ -4,10 +4,13 @@
  *
  * Handle API (any number of handles; y, yp, res and J are in the handle's component order):
  *   int  f3r_peer_create(const char* scene_path, int formulation, int algebraic_last,
- *                        f3r_peer** out);    formulation 0 dae, 1 minimal. algebraic_last
- *        reorders dae's y as [q | v | lag | W | lambda | mu]: the index-2 variables last, as
- *        deSolve's daspk wants them (argument nind). Returns an f3r_status; the message of a
- *        failure is f3r_peer_last_error().
+ *                        f3r_peer** out);    formulation 0 dae, 1 minimal, 2 index3.
+ *        algebraic_last reorders y by differentiation index, as deSolve's daspk and
+ *        deTestSet's mebdfi want it (argument nind): dae as [q | v | lag | W | lambda | mu]
+ *        (the index-2 multipliers last), index3 as [q | lag | W | v | lambda] (index 1, 2, 3).
+ *        Returns an f3r_status; the message of a failure is f3r_peer_last_error().
+ *   void f3r_peer_index_counts(const f3r_peer*, int* counts)  counts[3]: variables of index
+ *        1, 2, 3 (index3: nq + lag + 1, nq, 6; the others: differential, algebraic, 0)
  *   void f3r_peer_destroy(f3r_peer*)
  *   int  f3r_peer_state_size(const f3r_peer*)       ny
  *   int  f3r_peer_algebraic_count(const f3r_peer*)  12 for dae, 0 for minimal
@@ -41,6 +44,7 @@
  *   f3r_peer_r_open(char** path, int* formulation, int* ny, int* nalg, double* duration,
  *                   int* n_breakpoints, int* status)   opens (closing any open handle),
  *                   algebraic components last
+ *   f3r_peer_r_index_counts(int* counts)               f3r_peer_index_counts of the handle
  *   f3r_peer_r_close(void)
  *   f3r_peer_r_initial(double* y, double* yp, int* status)
  *   f3r_peer_r_restart(double* t, double* y, double* yp, int* status)
@@ -76,6 +80,7 @@ typedef struct f3r_peer {
   f3r_formulation form;
   f3r_workspace* ws;
   int ny, nalg;
+  int index_counts[3];
   int* perm;        /* perm[k]: natural index of the handle's component k */
   double *y, *yp, *res, *J, *ydot; /* natural-order scratch (ny; J ny x ny) */
   double* y_perturbed;
@@ -112,13 +117,18 @@ F3R_PEER_EXPORT int f3r_peer_create(const char* scene_path, int formulation, int
                                     f3r_peer** out) {
   if (!scene_path || !out) return fail(F3R_ERR_ARGUMENT, "f3r_peer_create: NULL argument");
   *out = NULL;
-  if (formulation != F3R_FORMULATION_DAE && formulation != F3R_FORMULATION_MINIMAL)
-    return fail(F3R_ERR_ARGUMENT, "formulation %d: 0 (dae) or 1 (minimal)", formulation);
+  if (formulation != F3R_FORMULATION_DAE && formulation != F3R_FORMULATION_MINIMAL &&
+      formulation != F3R_FORMULATION_INDEX3)
+    return fail(F3R_ERR_ARGUMENT, "formulation %d: 0 (dae), 1 (minimal) or 2 (index3)",
+                formulation);
   f3r_scene scene;
   f3r_error err = {0};
   f3r_status st = f3r_scene_load(scene_path, &scene, &err);
   if (st != F3R_OK) return fail(st, "%s", err.message);
-  scene.formulation = (f3r_formulation)formulation;
+  /* the model does not depend on the formulation; a scene names only those a simulation runs */
+  scene.formulation = formulation == F3R_FORMULATION_MINIMAL ? F3R_FORMULATION_MINIMAL
+                                                             : F3R_FORMULATION_DAE;
+  if (scene.integrator == F3R_INTEGRATOR_ERK) scene.integrator = F3R_INTEGRATOR_IDA;
   f3r_peer* p = calloc(1, sizeof *p);
   if (!p) return fail(F3R_ERR_MEMORY, "f3r_peer_create: out of memory");
   st = f3r_model_create(&scene, &p->model, &err);
@@ -141,23 +151,33 @@ F3R_PEER_EXPORT int f3r_peer_create(const char* scene_path, int formulation, int
     f3r_peer_destroy(p);
     return fail(F3R_ERR_MEMORY, "f3r_peer_create: out of memory");
   }
+  /* each component's class: its differentiation index less one (index3), or 1 for the
+   * algebraic components of the other forms; algebraic_last sorts y by class, stably */
+  int* cls = p->perm; /* borrowed: the classes move to y before perm is written */
   f3r_state_kinds(p->model, p->form, p->y); /* borrow y for the kinds */
-  int k = 0;
   for (int i = 0; i < p->ny; ++i) p->nalg += p->y[i] == 0.0;
-  if (algebraic_last) {
-    for (int i = 0; i < p->ny; ++i)
-      if (p->y[i] != 0.0) p->perm[k++] = i;
-    for (int i = 0; i < p->ny; ++i)
-      if (p->y[i] == 0.0) p->perm[k++] = i;
+  if (p->form == F3R_FORMULATION_INDEX3) {
+    f3r_index3_variable_indices(p->model, cls, p->index_counts);
+    for (int i = 0; i < p->ny; ++i) p->y[i] = cls[i] - 1;
   } else {
-    for (int i = 0; i < p->ny; ++i) p->perm[i] = i;
+    p->index_counts[0] = p->ny - p->nalg;
+    p->index_counts[1] = p->nalg;
+    for (int i = 0; i < p->ny; ++i) p->y[i] = p->y[i] == 0.0;
   }
+  int k = 0;
+  for (int c = 0; c < 3; ++c)
+    for (int i = 0; i < p->ny; ++i)
+      if (algebraic_last ? p->y[i] == c : c == 0) p->perm[k++] = i;
+  memset(p->y, 0, n * sizeof(double));
   *out = p;
   return F3R_OK;
 }
 
 F3R_PEER_EXPORT int f3r_peer_state_size(const f3r_peer* p) { return p->ny; }
 F3R_PEER_EXPORT int f3r_peer_algebraic_count(const f3r_peer* p) { return p->nalg; }
+F3R_PEER_EXPORT void f3r_peer_index_counts(const f3r_peer* p, int* counts) {
+  for (int k = 0; k < 3; ++k) counts[k] = p->index_counts[k];
+}
 F3R_PEER_EXPORT double f3r_peer_duration(const f3r_peer* p) { return p->model->scene.duration; }
 F3R_PEER_EXPORT int f3r_peer_end_stops(const f3r_peer* p) { return p->model->scene.end_stops; }
 
@@ -322,6 +342,10 @@ F3R_PEER_EXPORT void f3r_peer_r_open(char** path, int* formulation, int* ny, int
   *status = r_handle->model->scene.end_stops
                 ? fail(F3R_ERR_ARGUMENT, "end stops (impacts) are not supported by the peers")
                 : F3R_OK;
+}
+
+F3R_PEER_EXPORT void f3r_peer_r_index_counts(int* counts) {
+  for (int k = 0; k < 3; ++k) counts[k] = r_handle ? r_handle->index_counts[k] : 0;
 }
 
 F3R_PEER_EXPORT void f3r_peer_r_initial(double* y, double* yp, int* status) {

@@ -1,31 +1,37 @@
-/* The stabilised index-2 (Gear-Gupta-Leimkuhler) residual and its exact Jacobian, in named
- * blocks read from one forward pass (data.h). Layout and equations: include/flex3rpr/residual.h. */
+/* The redundant-coordinate residuals and their exact Jacobians, in named blocks read from one
+ * forward pass (data.h): the stabilised index-2 (Gear-Gupta-Leimkuhler) form `dae` and the plain
+ * index-3 form `index3` (no mu, no velocity constraint) that the paper's MEBDFI integrates.
+ * Layouts and equations: include/flex3rpr/residual.h. */
 #include "dense.h"
 #include "workspace.h"
 
 /* The forward pass at the state y: position, velocity and force stages. */
-static void forward(const f3r_model* m, double t, const double* y, const double* held,
-                    f3r_data* d) {
+static void forward(const f3r_model* m, f3r_formulation form, double t, const double* y,
+                    const double* held, f3r_data* d) {
   const int nq = m->nq;
   const double *q = y, *v = y + nq;
   f3r_fwd_position(m, q, d);
   f3r_fwd_velocity(m, q, v, d);
-  f3r_fwd_forces(m, t, held, q, v, m->n_lag ? y + f3r_lag_index(m, F3R_FORMULATION_DAE) : 0, d);
+  f3r_fwd_forces(m, t, held, q, v, m->n_lag ? y + f3r_lag_index(m, form) : 0, d);
 }
 
-f3r_status f3r_dae_residual(const f3r_model* m, double t, const double* y, const double* yp,
-                            const double* held, double* res, f3r_workspace* ws) {
-  const int nq = m->nq;
+f3r_status f3r_dae_residual(const f3r_model* m, f3r_formulation form, double t, const double* y,
+                            const double* yp, const double* held, double* res,
+                            f3r_workspace* ws) {
+  const int nq = m->nq, ggl = form == F3R_FORMULATION_DAE;
   const double *v = y + nq, *lambda = y + 2 * nq, *mu = lambda + F3R_NCON;
   const double *qd = yp, *vd = yp + nq;
-  const int lag_at = f3r_lag_index(m, F3R_FORMULATION_DAE), w_at = lag_at + m->n_lag;
+  const int lag_at = f3r_lag_index(m, form), w_at = lag_at + m->n_lag;
   f3r_data* d = &ws->data;
   double* tmp = ws->tmp;
-  forward(m, t, y, held, d);
+  forward(m, form, t, y, held, d);
 
-  /* kinematic rows: q' - v + G^T mu */
-  f3r_data_constraint_transpose_times(m, d, mu, tmp);
-  for (int n = 0; n < nq; ++n) res[n] = qd[n] - v[n] + tmp[n];
+  /* kinematic rows: q' - v (+ G^T mu) */
+  for (int n = 0; n < nq; ++n) res[n] = qd[n] - v[n];
+  if (ggl) {
+    f3r_data_constraint_transpose_times(m, d, mu, tmp);
+    for (int n = 0; n < nq; ++n) res[n] += tmp[n];
+  }
 
   /* dynamic rows: M v' + h + k - Q - G^T lambda */
   double* dyn = res + nq;
@@ -34,9 +40,9 @@ f3r_status f3r_dae_residual(const f3r_model* m, double t, const double* y, const
   for (int n = 0; n < nq; ++n) dyn[n] += d->h[n] + d->k[n] - d->Q[n] - tmp[n];
   for (int c = 0; c < F3R_NCON; ++c) d->lambda[c] = lambda[c];
 
-  /* position and velocity constraints: g(q), G v */
+  /* position (and velocity) constraints: g(q) (, G v) */
   for (int c = 0; c < F3R_NCON; ++c) res[2 * nq + c] = d->g[c];
-  f3r_data_constraint_times(m, d, v, res + 2 * nq + F3R_NCON);
+  if (ggl) f3r_data_constraint_times(m, d, v, res + 2 * nq + F3R_NCON);
 
   /* actuator lag and work */
   for (int i = 0; i < m->n_lag; ++i)
@@ -45,26 +51,28 @@ f3r_status f3r_dae_residual(const f3r_model* m, double t, const double* y, const
   return F3R_OK;
 }
 
-f3r_status f3r_dae_jacobian(const f3r_model* m, double t, double cj, const double* y,
-                            const double* yp, const double* held, double* J, int ld,
-                            f3r_workspace* ws) {
-  const int nq = m->nq;
+f3r_status f3r_dae_jacobian(const f3r_model* m, f3r_formulation form, double t, double cj,
+                            const double* y, const double* yp, const double* held, double* J,
+                            int ld, f3r_workspace* ws) {
+  const int nq = m->nq, ggl = form == F3R_FORMULATION_DAE;
   const int row_v = nq, row_g = 2 * nq, row_gv = 2 * nq + F3R_NCON;
-  const int row_lag = 2 * nq + 2 * F3R_NCON, row_w = row_lag + m->n_lag;
+  const int row_lag = f3r_lag_index(m, form), row_w = row_lag + m->n_lag;
   const int col_v = nq, col_lambda = 2 * nq, col_mu = 2 * nq + F3R_NCON, col_w = row_w;
   const double *q = y, *v = y + nq, *lambda = y + 2 * nq, *mu = lambda + F3R_NCON;
   const double* vd = yp + nq;
   f3r_data* d = &ws->data;
-  forward(m, t, y, held, d);
+  forward(m, form, t, y, held, d);
 #define BLOCK(row, col) (J + (size_t)(col) * (size_t)ld + (row))
 
-  /* q' - v + G^T mu */
+  /* q' - v (+ G^T mu) */
   for (int n = 0; n < nq; ++n) {
     F3R_AT(J, ld, n, n) += cj;
     F3R_AT(J, ld, n, col_v + n) -= 1.0;
   }
-  f3r_data_add_constraint_transpose_times_dq(m, d, mu, 1.0, BLOCK(0, 0), ld);
-  f3r_data_add_constraint_jacobian_transpose(m, d, 1.0, BLOCK(0, col_mu), ld);
+  if (ggl) {
+    f3r_data_add_constraint_transpose_times_dq(m, d, mu, 1.0, BLOCK(0, 0), ld);
+    f3r_data_add_constraint_jacobian_transpose(m, d, 1.0, BLOCK(0, col_mu), ld);
+  }
 
   /* M v' + h + k - Q - G^T lambda */
   f3r_add_mass_times_dq(m, q, vd, 1.0, BLOCK(row_v, 0), ld);
@@ -75,10 +83,12 @@ f3r_status f3r_dae_jacobian(const f3r_model* m, double t, double cj, const doubl
   f3r_data_add_velocity_forces_dv(m, d, q, 1.0, BLOCK(row_v, col_v), ld);
   f3r_data_add_constraint_jacobian_transpose(m, d, -1.0, BLOCK(row_v, col_lambda), ld);
 
-  /* g(q) and G v */
+  /* g(q) (and G v) */
   f3r_data_add_constraint_jacobian(m, d, 1.0, BLOCK(row_g, 0), ld);
-  f3r_data_add_constraint_times_dq(m, d, v, 1.0, BLOCK(row_gv, 0), ld);
-  f3r_data_add_constraint_jacobian(m, d, 1.0, BLOCK(row_gv, col_v), ld);
+  if (ggl) {
+    f3r_data_add_constraint_times_dq(m, d, v, 1.0, BLOCK(row_gv, 0), ld);
+    f3r_data_add_constraint_jacobian(m, d, 1.0, BLOCK(row_gv, col_v), ld);
+  }
 
   /* -dQ/dq, -dQ/dv of the effects; W' - Q . v: d/dv = -Q - (dQ/dv)^T v, d/dq = -(dQ/dq)^T v */
   for (int n = 0; n < nq; ++n) F3R_AT(J, ld, row_w, col_v + n) -= d->Q[n];

@@ -38,16 +38,34 @@ void f3r_workspace_destroy(f3r_workspace* ws) {
 
 long f3r_workspace_sincos_pairs(const f3r_workspace* ws) { return ws->data.sincos_pairs; }
 
+/* The number of multipliers a redundant form carries after q and v: lambda and mu (dae),
+ * lambda (index3), none (minimal). */
+static int multipliers(f3r_formulation form) {
+  return form == F3R_FORMULATION_DAE ? 2 * F3R_NCON : form == F3R_FORMULATION_INDEX3 ? F3R_NCON : 0;
+}
+
 int f3r_state_size(const f3r_model* m, f3r_formulation form) {
-  return (form == F3R_FORMULATION_DAE ? 2 * m->nq + 2 * F3R_NCON : 2 * m->n_independent) +
+  return (form == F3R_FORMULATION_MINIMAL ? 2 * m->n_independent : 2 * m->nq + multipliers(form)) +
          m->n_lag + 1;
 }
 
 void f3r_state_kinds(const f3r_model* m, f3r_formulation form, double* id) {
   const int ny = f3r_state_size(m, form);
   for (int n = 0; n < ny; ++n) id[n] = 1.0;
-  if (form == F3R_FORMULATION_DAE)
-    for (int c = 0; c < 2 * F3R_NCON; ++c) id[2 * m->nq + c] = 0.0;
+  for (int c = 0; c < multipliers(form); ++c) id[2 * m->nq + c] = 0.0;
+}
+
+void f3r_index3_variable_indices(const f3r_model* m, int* index_of, int counts[3]) {
+  const int nq = m->nq, ny = f3r_state_size(m, F3R_FORMULATION_INDEX3);
+  for (int n = 0; n < ny; ++n) {
+    const int k = n < nq ? 1 : n < 2 * nq ? 2 : n < 2 * nq + F3R_NCON ? 3 : 1; /* lag, W: 1 */
+    if (index_of) index_of[n] = k;
+  }
+  if (counts) {
+    counts[0] = nq + m->n_lag + 1;
+    counts[1] = nq;
+    counts[2] = F3R_NCON;
+  }
 }
 
 static f3r_status check_finite(const double* x, int n) {
@@ -58,9 +76,9 @@ static f3r_status check_finite(const double* x, int n) {
 
 f3r_status f3r_residual(const f3r_model* m, f3r_formulation form, double t, const double* y,
                         const double* yp, const double* held, double* res, f3r_workspace* ws) {
-  const f3r_status st = form == F3R_FORMULATION_DAE
-                            ? f3r_dae_residual(m, t, y, yp, held, res, ws)
-                            : f3r_minimal_residual(m, t, y, yp, held, res, ws);
+  const f3r_status st = form == F3R_FORMULATION_MINIMAL
+                            ? f3r_minimal_residual(m, t, y, yp, held, res, ws)
+                            : f3r_dae_residual(m, form, t, y, yp, held, res, ws);
   if (st != F3R_OK) return st;
   return check_finite(res, f3r_state_size(m, form));
 }
@@ -70,8 +88,9 @@ f3r_status f3r_residual_jacobian(const f3r_model* m, f3r_formulation form, doubl
                                  double* J, int ld, f3r_workspace* ws) {
   const int ny = f3r_state_size(m, form);
   for (int j = 0; j < ny; ++j) memset(J + (size_t)j * (size_t)ld, 0, (size_t)ny * sizeof(double));
-  return form == F3R_FORMULATION_DAE ? f3r_dae_jacobian(m, t, cj, y, yp, held, J, ld, ws)
-                                     : f3r_minimal_jacobian(m, t, cj, y, yp, held, J, ld, ws);
+  return form == F3R_FORMULATION_MINIMAL
+             ? f3r_minimal_jacobian(m, t, cj, y, yp, held, J, ld, ws)
+             : f3r_dae_jacobian(m, form, t, cj, y, yp, held, J, ld, ws);
 }
 
 f3r_status f3r_explicit_rhs(const f3r_model* m, double t, const double* y, const double* held,
@@ -92,7 +111,7 @@ f3r_status f3r_explicit_rhs_solver(const f3r_model* m, int arrow, double t, cons
 f3r_status f3r_state_to_full(const f3r_model* m, f3r_formulation form, const double* y,
                              double* q, double* v) {
   const int nq = m->nq, nz = m->n_independent;
-  if (form == F3R_FORMULATION_DAE) {
+  if (form != F3R_FORMULATION_MINIMAL) {
     memcpy(q, y, (size_t)nq * sizeof(double));
     memcpy(v, y + nq, (size_t)nq * sizeof(double));
     return F3R_OK;
@@ -117,7 +136,7 @@ f3r_status f3r_consistent_state(const f3r_model* m, f3r_formulation form, double
   const f3r_status st = f3r_solve_accelerations(m, q, v, d->Q, d->a, d->lambda, ws->solve_work);
   if (st != F3R_OK) return st;
   if (lambda_out) memcpy(lambda_out, d->lambda, sizeof d->lambda);
-  if (form == F3R_FORMULATION_DAE) {
+  if (form != F3R_FORMULATION_MINIMAL) { /* mu = 0 (dae) */
     memset(y, 0, (size_t)ny * sizeof(double));
     memset(yp, 0, (size_t)ny * sizeof(double));
     memcpy(y, q, (size_t)nq * sizeof(double));

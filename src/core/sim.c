@@ -80,6 +80,13 @@ f3r_status f3r_sim_create(const f3r_model* model, const f3r_solver_settings* set
   stp->held = s->held;
   f3r_status st = F3R_OK;
   double q[F3R_MAX_Q], v[F3R_MAX_Q];
+  if (s->settings.formulation != F3R_FORMULATION_DAE &&
+      s->settings.formulation != F3R_FORMULATION_MINIMAL) {
+    st = f3r_error_set(err, F3R_ERR_ARGUMENT,
+                       "formulation %d: a simulation integrates dae or minimal (index3 is for "
+                       "external solvers)", (int)s->settings.formulation);
+    goto fail;
+  }
   if (!(s->settings.rtol > 0.0) || !(s->settings.atol > 0.0)) {
     st = f3r_error_set(err, F3R_ERR_ARGUMENT, "rtol %g and atol %g must be positive",
                        s->settings.rtol, s->settings.atol);

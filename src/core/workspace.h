@@ -24,11 +24,13 @@ struct f3r_workspace {
   double* dQ;         /* 2 nq x nq: dQ/dq and dQ/dv of the effects */
 };
 
-f3r_status f3r_dae_residual(const f3r_model* m, double t, const double* y, const double* yp,
-                            const double* held, double* res, f3r_workspace* ws);
-f3r_status f3r_dae_jacobian(const f3r_model* m, double t, double cj, const double* y,
-                            const double* yp, const double* held, double* J, int ld,
+/* form: F3R_FORMULATION_DAE or F3R_FORMULATION_INDEX3 (form_dae.c serves both) */
+f3r_status f3r_dae_residual(const f3r_model* m, f3r_formulation form, double t, const double* y,
+                            const double* yp, const double* held, double* res,
                             f3r_workspace* ws);
+f3r_status f3r_dae_jacobian(const f3r_model* m, f3r_formulation form, double t, double cj,
+                            const double* y, const double* yp, const double* held, double* J,
+                            int ld, f3r_workspace* ws);
 f3r_status f3r_minimal_residual(const f3r_model* m, double t, const double* y, const double* yp,
                                 const double* held, double* res, f3r_workspace* ws);
 f3r_status f3r_minimal_jacobian(const f3r_model* m, double t, double cj, const double* y,
