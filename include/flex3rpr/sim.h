@@ -21,6 +21,8 @@ typedef struct {
   int max_order;          /* IDA: highest BDF order, 1..5 */
   int analytic_jacobian;  /* 1: f3r_residual_jacobian; 0: IDA's difference quotients */
   int stop_at_outputs;    /* 1: never step past the requested output time (for live input) */
+  int dense_linear_solver;/* IDA: 1 forces SUNDIALS' dense LU; 0 (default) uses the minimal
+                           * formulation's Schur complement when the Jacobian is analytic */
 } f3r_solver_settings;
 
 /* The scene's solver settings, analytic Jacobian, interpolated outputs. */

@@ -1,6 +1,8 @@
 /* Nanoseconds per residual, per Jacobian and per explicit right-hand side (minimal) of both
  * formulations, for r = 1, 3, 8 and 20 fixed-free modes per link, at a generic moving state, and
- * the sin/cos pairs of one residual. Prints a Markdown table.
+ * the sin/cos pairs of one residual; then IDA's linear solver on the minimal formulation's
+ * iteration matrix, SUNDIALS' dense LU against the Schur complement (linsol_schur.h): ns per
+ * setup (factorisation) and per solve. Prints two Markdown tables.
  *   f3r_microbench [repetitions]
  * The source also links against a core without the sin/cos counter (an older build, for a
  * before/after comparison in one run): that column then says n/a. */
@@ -9,6 +11,11 @@
 #include <stdlib.h>
 #include <time.h>
 
+#include <nvector/nvector_serial.h>
+#include <sunlinsol/sunlinsol_dense.h>
+#include <sunmatrix/sunmatrix_dense.h>
+
+#include "../core/linsol_schur.h"
 #include "flex3rpr/residual.h"
 #include "flex3rpr/stages.h"
 
@@ -22,6 +29,79 @@ static double now(void) {
   struct timespec ts;
   clock_gettime(CLOCK_MONOTONIC, &ts);
   return ts.tv_sec + 1e-9 * ts.tv_nsec;
+}
+
+/* ns per setup and per solve of one linear solver on the iteration matrix J0 (ny x ny). */
+static void time_linear_solver(SUNLinearSolver ls, SUNMatrix J, const double* J0, int ny,
+                               N_Vector b, N_Vector x, long reps, double* setup_ns,
+                               double* solve_ns) {
+  SUNLinSolInitialize(ls);
+  const long sreps = reps / 20 + 1;
+  double t0 = now();
+  for (long r = 0; r < sreps; ++r) {
+    for (long k = 0; k < (long)ny * ny; ++k) SM_DATA_D(J)[k] = J0[k];
+    SUNLinSolSetup(ls, J);
+  }
+  const double copy0 = now();
+  for (long r = 0; r < sreps; ++r)
+    for (long k = 0; k < (long)ny * ny; ++k) SM_DATA_D(J)[k] = J0[k] + 1e-300 * r;
+  const double copy_s = now() - copy0; /* the matrix copy is not the solver's: subtract it */
+  *setup_ns = (now() - t0 - 2 * copy_s) / sreps * 1e9;
+  for (long k = 0; k < (long)ny * ny; ++k) SM_DATA_D(J)[k] = J0[k];
+  SUNLinSolSetup(ls, J);
+  double* bb = N_VGetArrayPointer(b);
+  t0 = now();
+  for (long r = 0; r < reps; ++r) {
+    bb[r % ny] += 1e-3;
+    SUNLinSolSolve(ls, J, x, b, 0.0);
+  }
+  *solve_ns = (now() - t0) / reps * 1e9;
+}
+
+static void linear_solver_table(long reps) {
+  const int modes[] = {1, 3, 8, 20};
+  printf("\n| modes per link (minimal) | state size | dense LU setup / solve (ns) | Schur setup / solve (ns) |\n");
+  printf("|---|---:|---:|---:|\n");
+  SUNContext ctx = NULL;
+  if (SUNContext_Create(NULL, &ctx) != 0) return;
+  for (int k = 0; k < 4; ++k) {
+    f3r_scene s = f3r_default_scene();
+    for (int i = 0; i < 3; ++i) {
+      s.links[i].model = F3R_LINK_FIXED_FREE;
+      s.links[i].modes = modes[k];
+    }
+    s.platform_velocity0[0] = 0.3;
+    f3r_model* m = NULL;
+    f3r_error err;
+    if (f3r_model_create(&s, &m, &err) != F3R_OK) continue;
+    const int ny = f3r_state_size(m, F3R_FORMULATION_MINIMAL);
+    double q[F3R_MAX_Q] = {0}, v[F3R_MAX_Q] = {0};
+    f3r_model_initial_state(m, q, v);
+    f3r_workspace* ws = f3r_workspace_create(m);
+    double* y = calloc((size_t)ny, sizeof(double));
+    double* yp = calloc((size_t)ny, sizeof(double));
+    double* J0 = calloc((size_t)ny * ny, sizeof(double));
+    f3r_consistent_state(m, F3R_FORMULATION_MINIMAL, 0.0, q, v, NULL, NULL, 0.0, y, yp, NULL, ws);
+    f3r_residual_jacobian(m, F3R_FORMULATION_MINIMAL, 0.0, 3e4, y, yp, NULL, J0, ny, ws);
+    SUNMatrix J = SUNDenseMatrix(ny, ny, ctx);
+    N_Vector b = N_VNew_Serial(ny, ctx), x = N_VNew_Serial(ny, ctx);
+    N_VConst(1.0, b);
+    SUNLinearSolver dense = SUNLinSol_Dense(b, J, ctx);
+    SUNLinearSolver schur = f3r_schur_linsol_create(ctx, m->n_independent, ny);
+    double ns[4];
+    time_linear_solver(dense, J, J0, ny, b, x, reps, &ns[0], &ns[1]);
+    time_linear_solver(schur, J, J0, ny, b, x, reps, &ns[2], &ns[3]);
+    printf("| r = %d | %d | %.0f / %.0f | %.0f / %.0f |\n", modes[k], ny, ns[0], ns[1], ns[2], ns[3]);
+    SUNLinSolFree(dense);
+    SUNLinSolFree(schur);
+    N_VDestroy(b);
+    N_VDestroy(x);
+    SUNMatDestroy(J);
+    free(y), free(yp), free(J0);
+    f3r_workspace_destroy(ws);
+    f3r_model_destroy(m);
+  }
+  SUNContext_Free(&ctx);
 }
 
 int main(int argc, char** argv) {
@@ -111,5 +191,6 @@ int main(int argc, char** argv) {
     }
     f3r_model_destroy(m);
   }
+  linear_solver_table(reps);
   return 0;
 }

@@ -27,6 +27,7 @@ typedef struct {
   const char* out_path;
   int modal;
   int fd_jacobian;
+  int dense_linear_solver;
   int exact_kinematics;
   const char* formulation;
   double rtol, atol, max_order, output_step, duration;
@@ -40,7 +41,7 @@ static void usage(FILE* to) {
   fprintf(to,
           "usage: flex3rpr_sim SCENE.yaml [--out FILE.csv] [--formulation dae|minimal]\n"
           "                    [--rtol R] [--atol A] [--max-order K] [--output-step DT] [--duration T]\n"
-          "                    [--fd-jacobian] [--exact-kinematics] [--erk]\n"
+          "                    [--fd-jacobian] [--dense-linear-solver] [--exact-kinematics] [--erk]\n"
           "                    [--stop-at-outputs] [--hold T:INDEX:VALUE ...]\n"
           "       flex3rpr_sim --modal SCENE.yaml\n");
 }
@@ -64,6 +65,7 @@ static int parse_args(int argc, char** argv, cli_options* o) {
     const char* next = k + 1 < argc ? argv[k + 1] : NULL;
     if (!strcmp(a, "--modal")) o->modal = 1;
     else if (!strcmp(a, "--fd-jacobian")) o->fd_jacobian = 1;
+    else if (!strcmp(a, "--dense-linear-solver")) o->dense_linear_solver = 1;
     else if (!strcmp(a, "--exact-kinematics")) o->exact_kinematics = 1;
     else if (!strcmp(a, "--stop-at-outputs")) o->stop_at_outputs = 1;
     else if (!strcmp(a, "--erk")) o->integrator_erk = 1;
@@ -189,6 +191,7 @@ int main(int argc, char** argv) {
   }
   f3r_solver_settings settings = f3r_solver_settings_from_scene(&scene);
   settings.analytic_jacobian = !o.fd_jacobian;
+  settings.dense_linear_solver = o.dense_linear_solver;
   settings.stop_at_outputs = o.stop_at_outputs;
   double held[F3R_MAX_Q] = {0};
   for (int h = 0; h < o.n_holds; ++h)

@@ -38,6 +38,7 @@ f3r_solver_settings f3r_solver_settings_from_scene(const f3r_scene* scene) {
   st.max_order = scene->max_order;
   st.analytic_jacobian = 1;
   st.stop_at_outputs = 0;
+  st.dense_linear_solver = 0;
   return st;
 }
 
