@@ -65,6 +65,7 @@ TEST(Allocation, NoHeapAllocationWhileStepping) {
   } cases[] = {{"paper_sim3_fixed_free.yaml", F3R_FORMULATION_DAE, F3R_INTEGRATOR_IDA},
                {"paper_sim3_fixed_free.yaml", F3R_FORMULATION_MINIMAL, F3R_INTEGRATOR_IDA},
                {"paper_sim3_fixed_free.yaml", F3R_FORMULATION_MINIMAL, F3R_INTEGRATOR_ERK},
+               {"paper_sim3_fixed_free.yaml", F3R_FORMULATION_MINIMAL, F3R_INTEGRATOR_DIRK},
                {"end_stop_impact.yaml", F3R_FORMULATION_MINIMAL, F3R_INTEGRATOR_IDA}};
   for (const auto& c : cases) {
     long steps = 0;

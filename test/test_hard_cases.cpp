@@ -362,7 +362,8 @@ TEST_P(LegCollapse, StopsWithASpecificErrorAndAGoodState) {
 INSTANTIATE_TEST_SUITE_P(Formulations, LegCollapse,
                          ::testing::Values(std::make_tuple(F3R_FORMULATION_MINIMAL, F3R_INTEGRATOR_IDA),
                                            std::make_tuple(F3R_FORMULATION_DAE, F3R_INTEGRATOR_IDA),
-                                           std::make_tuple(F3R_FORMULATION_MINIMAL, F3R_INTEGRATOR_ERK)));
+                                           std::make_tuple(F3R_FORMULATION_MINIMAL, F3R_INTEGRATOR_ERK),
+                                           std::make_tuple(F3R_FORMULATION_MINIMAL, F3R_INTEGRATOR_DIRK)));
 
 TEST(SingularPose, WithEndStopsTheLegBouncesInstead) {
   f3r_scene scene = SceneFromText("links: {model: fixed_free, modes: 2}\ninputs: {rho_1: {offset: -20.0}}\n"

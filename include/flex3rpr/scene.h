@@ -28,7 +28,8 @@ typedef enum {
 
 typedef enum {
   F3R_INTEGRATOR_IDA = 0, /* SUNDIALS IDA: variable-order BDF, implicit (both formulations) */
-  F3R_INTEGRATOR_ERK = 1  /* SUNDIALS ARKODE ERKStep, Fehlberg 7(8), explicit (minimal only) */
+  F3R_INTEGRATOR_ERK = 1, /* SUNDIALS ARKODE ERKStep, explicit Runge-Kutta (minimal only) */
+  F3R_INTEGRATOR_DIRK = 2 /* SUNDIALS ARKODE ARKStep, diagonally implicit RK (minimal only) */
 } f3r_integrator;
 
 /* A scripted generalized force f(t). Breakpoints (step times, ramp and chirp ends, table

@@ -32,7 +32,8 @@ typedef struct {
   const char* formulation;
   double rtol, atol, max_order, output_step, duration;
   int stop_at_outputs;
-  int integrator_erk;
+  int integrator_erk, integrator_dirk;
+  const char* table;
   int n_holds;
   hold_event holds[MAX_HOLDS];
 } cli_options;
@@ -41,7 +42,8 @@ static void usage(FILE* to) {
   fprintf(to,
           "usage: flex3rpr_sim SCENE.yaml [--out FILE.csv] [--formulation dae|minimal]\n"
           "                    [--rtol R] [--atol A] [--max-order K] [--output-step DT] [--duration T]\n"
-          "                    [--fd-jacobian] [--dense-linear-solver] [--exact-kinematics] [--erk]\n"
+          "                    [--fd-jacobian] [--dense-linear-solver] [--exact-kinematics]\n"
+          "                    [--erk | --dirk] [--table NAME]\n"
           "                    [--stop-at-outputs] [--hold T:INDEX:VALUE ...]\n"
           "       flex3rpr_sim --modal SCENE.yaml\n");
 }
@@ -69,6 +71,8 @@ static int parse_args(int argc, char** argv, cli_options* o) {
     else if (!strcmp(a, "--exact-kinematics")) o->exact_kinematics = 1;
     else if (!strcmp(a, "--stop-at-outputs")) o->stop_at_outputs = 1;
     else if (!strcmp(a, "--erk")) o->integrator_erk = 1;
+    else if (!strcmp(a, "--dirk")) o->integrator_dirk = 1;
+    else if (!strcmp(a, "--table") && next) { o->table = next; ++k; }
     else if (!strcmp(a, "--hold") && next) {
       hold_event* h = &o->holds[o->n_holds];
       if (o->n_holds >= MAX_HOLDS || sscanf(next, "%lf:%d:%lf", &h->t, &h->index, &h->value) != 3 ||
@@ -173,8 +177,8 @@ int main(int argc, char** argv) {
   if (o.output_step > 0) scene.output_step = o.output_step;
   if (o.duration > 0) scene.duration = o.duration;
   if (o.exact_kinematics) scene.exact_kinematics = 1;
-  if (o.integrator_erk) {
-    scene.integrator = F3R_INTEGRATOR_ERK;
+  if (o.integrator_erk || o.integrator_dirk) {
+    scene.integrator = o.integrator_erk ? F3R_INTEGRATOR_ERK : F3R_INTEGRATOR_DIRK;
     scene.formulation = F3R_FORMULATION_MINIMAL;
   }
   f3r_model* model = NULL;
@@ -192,6 +196,7 @@ int main(int argc, char** argv) {
   f3r_solver_settings settings = f3r_solver_settings_from_scene(&scene);
   settings.analytic_jacobian = !o.fd_jacobian;
   settings.dense_linear_solver = o.dense_linear_solver;
+  if (o.table) settings.rk_table = o.table;
   settings.stop_at_outputs = o.stop_at_outputs;
   double held[F3R_MAX_Q] = {0};
   for (int h = 0; h < o.n_holds; ++h)
@@ -259,9 +264,12 @@ int main(int argc, char** argv) {
   printf("scene               %s\n", o.scene_path);
   printf("formulation         %s, rtol %g, atol %g, %s\n",
          scene.formulation == F3R_FORMULATION_DAE ? "dae" : "minimal", scene.rtol, scene.atol,
-         scene.integrator == F3R_INTEGRATOR_ERK ? "explicit Fehlberg 7(8)"
-         : o.fd_jacobian                        ? "IDA, difference-quotient Jacobian"
-                                                : "IDA, analytic Jacobian");
+         scene.integrator == F3R_INTEGRATOR_ERK    ? "ARKODE ERKStep"
+         : scene.integrator == F3R_INTEGRATOR_DIRK ? "ARKODE ARKStep, DIRK"
+         : o.fd_jacobian                           ? "IDA, difference-quotient Jacobian"
+                                                   : "IDA, analytic Jacobian");
+  if (scene.integrator != F3R_INTEGRATOR_IDA)
+    printf("butcher table       %s\n", o.table ? o.table : "default");
   if (scene.integrator == F3R_INTEGRATOR_IDA) printf("max BDF order       %d\n", scene.max_order);
   printf("sundials            %s, %s\n", SUNDIALS_VERSION, F3R_SUNDIALS_BUILD);
   printf("state dimension     %d (nq %d)\n", f3r_state_size(model, scene.formulation), model->nq);

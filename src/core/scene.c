@@ -278,12 +278,14 @@ f3r_status f3r_scene_validate(const f3r_scene* s, f3r_error* err) {
   if (s->formulation != F3R_FORMULATION_DAE && s->formulation != F3R_FORMULATION_MINIMAL)
     return f3r_scene_error(err, "solver.formulation", NULL, "%d is not one of dae, minimal",
                            (int)s->formulation);
-  if (s->integrator != F3R_INTEGRATOR_IDA && s->integrator != F3R_INTEGRATOR_ERK)
-    return f3r_scene_error(err, "solver.integrator", NULL, "%d is not one of ida, erk",
+  if (s->integrator != F3R_INTEGRATOR_IDA && s->integrator != F3R_INTEGRATOR_ERK &&
+      s->integrator != F3R_INTEGRATOR_DIRK)
+    return f3r_scene_error(err, "solver.integrator", NULL, "%d is not one of ida, erk, dirk",
                            (int)s->integrator);
-  if (s->integrator == F3R_INTEGRATOR_ERK && s->formulation != F3R_FORMULATION_MINIMAL)
+  if (s->integrator != F3R_INTEGRATOR_IDA && s->formulation != F3R_FORMULATION_MINIMAL)
     return f3r_scene_error(err, "solver.integrator", NULL,
-                           "erk integrates the minimal formulation only");
+                           "%s integrates the minimal formulation only",
+                           s->integrator == F3R_INTEGRATOR_ERK ? "erk" : "dirk");
   CHECK_RANGE("solver.rtol", s->rtol, 1e-14, 1e-1);
   CHECK_RANGE("solver.atol", s->atol, 1e-16, 1e-1);
   CHECK_RANGE("solver.max_step", s->max_step, 0.0, 1e3);

@@ -39,6 +39,7 @@ f3r_solver_settings f3r_solver_settings_from_scene(const f3r_scene* scene) {
   st.analytic_jacobian = 1;
   st.stop_at_outputs = 0;
   st.dense_linear_solver = 0;
+  st.rk_table = NULL;
   return st;
 }
 
@@ -58,6 +59,7 @@ static f3r_status consistent(f3r_sim* s, const double* q, const double* v, const
   const f3r_status st = f3r_consistent_state(s->model, s->settings.formulation, t_forces, q, v,
                                              s->held, lag, work, N_VGetArrayPointer(s->y),
                                              N_VGetArrayPointer(s->yp), NULL, s->stepper.ws);
+  s->stepper.yp_stale = 0;
   if (st != F3R_OK)
     return f3r_error_set(err, st, "no consistent state at t = %.9g: %s", s->t,
                          st == F3R_ERR_SINGULAR ? "the constrained mass matrix is singular"
@@ -73,7 +75,9 @@ f3r_status f3r_sim_create(const f3r_model* model, const f3r_solver_settings* set
   if (!s) return f3r_error_set(err, F3R_ERR_MEMORY, "f3r_sim_create: out of memory");
   s->model = model;
   s->settings = settings ? *settings : f3r_solver_settings_from_scene(&model->scene);
-  s->ops = s->settings.integrator == F3R_INTEGRATOR_ERK ? &f3r_erk_stepper : &f3r_ida_stepper;
+  s->ops = s->settings.integrator == F3R_INTEGRATOR_ERK    ? &f3r_erk_stepper
+           : s->settings.integrator == F3R_INTEGRATOR_DIRK ? &f3r_dirk_stepper
+                                                           : &f3r_ida_stepper;
   s->ny = f3r_state_size(model, s->settings.formulation);
   f3r_stepper* stp = &s->stepper;
   stp->model = model;
@@ -248,6 +252,11 @@ const f3r_outputs* f3r_sim_outputs(f3r_sim* s) {
   f3r_data* d = &s->out_ws->data;
   o->t = s->t;
   if (f3r_state_to_full(m, s->settings.formulation, y, o->q, o->v) != F3R_OK) return o;
+  if (s->stepper.yp_stale) { /* an explicit stepper's y' at the state: one right-hand side */
+    if (f3r_explicit_rhs(m, s->t, y, s->held, N_VGetArrayPointer(s->yp), s->out_ws) != F3R_OK)
+      return o;
+    s->stepper.yp_stale = 0;
+  }
   double lag[3];
   f3r_fwd_position(m, o->q, d);
   f3r_fwd_velocity(m, o->q, o->v, d);

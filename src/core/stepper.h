@@ -1,9 +1,13 @@
-/* The integrators behind f3r_sim: one interface, two SUNDIALS back ends. Private.
+/* The integrators behind f3r_sim: one interface, three SUNDIALS back ends. Private.
  *   IDA (variable-order BDF, implicit; both formulations)
- *   ARKODE ERKStep (explicit Fehlberg 7(8), eighth order; minimal formulation only) */
+ *   ARKODE ERKStep (explicit Runge-Kutta, Fehlberg 7(8) by default; minimal formulation only)
+ *   ARKODE ARKStep (diagonally implicit Runge-Kutta, ESDIRK; minimal formulation only) */
 #ifndef FLEX3RPR_STEPPER_H
 #define FLEX3RPR_STEPPER_H
 
+#include <stdio.h> /* arkode_butcher.h uses FILE without including it */
+
+#include <arkode/arkode_butcher.h>
 #include <nvector/nvector_serial.h>
 #include <sundials/sundials_context.h>
 #include <sunlinsol/sunlinsol_dense.h>
@@ -21,12 +25,15 @@ typedef struct {
   SUNContext ctx;
   void* mem;              /* IDA or ERKStep memory */
   N_Vector id, atol;      /* IDA only */
-  SUNMatrix J;            /* IDA only */
-  SUNLinearSolver ls;     /* IDA only */
+  SUNMatrix J;            /* IDA, DIRK */
+  SUNLinearSolver ls;     /* IDA, DIRK */
   f3r_sim_stats base;     /* statistics accumulated before the last restart */
   int root_info[F3R_NROOTS];/* -1 where a root was found: 2i, 2i+1 end stops of leg i (min, max);
                             * F3R_COLLAPSE_ROOT + i: leg i reached the collapse guard */
   long recoverable;       /* right-hand side calls that asked for a smaller step */
+  long jacobian_rhs_evals;/* DIRK: right-hand sides of its difference-quotient Jacobian */
+  int yp_stale;           /* 1: advance left y' unset (an explicit method needs no y'); the
+                           * simulation evaluates it only when outputs ask for it */
   char message[256];      /* the solver's last error message: the core never prints */
 } f3r_stepper;
 
@@ -35,7 +42,8 @@ typedef struct {
   f3r_status (*setup)(f3r_stepper* st, N_Vector y, N_Vector yp, double t0, f3r_error* err);
   /* Restarts at t from a consistent y, y' (after a jump in the forces). */
   f3r_status (*restart)(f3r_stepper* st, N_Vector y, N_Vector yp, double t, f3r_error* err);
-  /* Integrates to tout; y (and y') receive the state there, or the last good one on failure.
+  /* Integrates to tout; y (and y', unless it sets yp_stale) receive the state there, or the
+   * last good one on failure.
    * exact: never step past tout (a force changes there). *event = 1 when it stopped early at an
    * end stop (root_info says which). */
   f3r_status (*advance)(f3r_stepper* st, double tout, int exact, N_Vector y, N_Vector yp,
@@ -49,11 +57,15 @@ extern const f3r_stepper_ops f3r_ida_stepper;
 /* 1 when IDA solves with the Schur complement (linsol_schur.h) under these settings. */
 int f3r_ida_uses_schur(const f3r_solver_settings* settings);
 extern const f3r_stepper_ops f3r_erk_stepper;
+extern const f3r_stepper_ops f3r_dirk_stepper;
 
 /* Both back ends (stepper.c): the SUNDIALS error handler, which stores the message in the
  * stepper (its user data) since the core never prints, and the root functions (events.c) at y. */
 void f3r_stepper_error_handler(int code, const char* module, const char* function, char* msg,
                                void* user);
 int f3r_stepper_roots(const f3r_stepper* st, const double* y, double* g);
+/* A Butcher table by name (ARKODE's, e.g. ARKODE_FEHLBERG_13_7_8), explicit or diagonally
+ * implicit; NULL when there is none by that name. The caller frees it. */
+ARKodeButcherTable f3r_stepper_load_table(int implicit, const char* name);
 
 #endif
