@@ -8,8 +8,13 @@
 #include "flex3rpr/stages.h"
 
 int f3r_event_roots(const f3r_model* m, f3r_formulation form, const double* y, double* g) {
-  double q[F3R_MAX_Q], v[F3R_MAX_Q];
-  if (f3r_state_to_full(m, form, y, q, v) != F3R_OK) return 1;
+  double q[F3R_MAX_Q]; /* positions only: the roots need the leg strokes, not their rates */
+  if (form == F3R_FORMULATION_MINIMAL) {
+    memcpy(q + F3R_Q_INDEPENDENT, y, (size_t)m->n_independent * sizeof(double));
+    if (f3r_model_close_loops(m, q) != F3R_OK) return 1;
+  } else {
+    memcpy(q, y, (size_t)m->nq * sizeof(double));
+  }
   for (int i = 0; i < 3; ++i) {
     g[2 * i] = m->end_stops ? q[i] - m->stroke_min : 1.0;
     g[2 * i + 1] = m->end_stops ? m->stroke_max - q[i] : 1.0;
