@@ -2,23 +2,28 @@
 
 Imported by scripts/bench (plain /usr/bin/python3, Debian's numpy and scipy):
   ensure_installed()                      apt-get installs r-cran-desolve and python3-scipy if missing
+                                          (not deTestSet: without it run_mebdfi fails, the rest runs)
   build_library()                         path of libf3r_peer.so (src/bench/f3r_peer.c): the CMake
                                           target's if built, else compiled here with gcc into build/peer/
   run_daspk(scene, rtol, atol, formulation="dae"|"minimal", jacobian=True)
                                           DASPK of R's deSolve calling the core's residual F(t, y, y')
                                           (and its Jacobian dF/dy + cj dF/dy') as compiled code
+  run_mebdfi(scene, rtol, atol, jacobian=True)  MEBDFI of R's deTestSet (the paper's solver) on the
+                                          plain index-3 residual (formulation index3) and its Jacobian,
+                                          compiled; deTestSet is not in Debian: have_mebdfi() says
+                                          whether it loads (R's library paths plus build/rlib)
   run_lsoda(scene, rtol, atol, jacobian=True)   scipy.integrate.solve_ivp, LSODA, on the minimal
   run_radau(scene, rtol, atol, jacobian=True)   formulation's explicit RHS f3r_explicit_rhs via ctypes
 
 Each run_* returns None on failure, else a dict:
   traj            [(t, x_p, y_p)] at every output step (1 ms) from 0 to the scene's duration,
                   the rows of the CLI's --output-step 1e-3 CSV
-  cpu_s           CPU time of the integration only (R: proc.time around daspk() inside R, not R's
+  cpu_s           CPU time of the integration only (R: proc.time around daspk() or mebdfi() inside R, not R's
                   start; scipy: time.process_time around solve_ivp)
   steps           accepted steps
-  residual_evals  evaluations of the model's residual (DASPK) or explicit RHS (scipy) counted in the
+  residual_evals  evaluations of the model's residual (DASPK, MEBDFI) or explicit RHS (scipy) counted in the
                   library, including difference-quotient Jacobian columns the solver asks for
-                  (scipy's with jacobian=False, DASPK's with jacobian=False, and those of the C
+                  (scipy's with jacobian=False, DASPK's and MEBDFI's with jacobian=False, and those of the C
                   Jacobian of the explicit RHS, jacobian=True); not the difference quotients inside
                   the core's own minimal-formulation Jacobian (as the CLI does not count them)
   jacobian_evals  Jacobian evaluations
@@ -50,9 +55,11 @@ ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 CMAKE_LIB = os.path.join(ROOT, "build/ws/devel/lib/libf3r_peer.so")
 LOCAL_LIB = os.path.join(ROOT, "build/peer/libf3r_peer.so")
 PEER_SOURCE = os.path.join(ROOT, "src/bench/f3r_peer.c")
-CORE_SOURCES = ["beam_modes", "constraints", "dense", "dynamics", "effects", "form_dae", "form_minimal",
+CORE_SOURCES = ["beam_modes", "constraints", "dense", "dynamics", "effects", "form_dae", "form_minimal", "forward",
                 "impact", "modal", "model", "residual", "scene", "scene_yaml", "status"]
 R_SCRIPT = os.path.join(ROOT, "scripts/bench_daspk.R")
+MEBDFI_SCRIPT = os.path.join(ROOT, "scripts/bench_mebdfi.R")
+R_LOCAL_LIBRARY = os.path.join(ROOT, "build/rlib")  # where a deTestSet built here is installed
 OUTPUT_STEP = 1e-3
 TIME_LIMIT_S = 600.0  # one run is abandoned (None) past this much CPU time
 FORMULATIONS = {"dae": 0, "minimal": 1}
@@ -72,6 +79,17 @@ def _have_desolve():
     if not shutil.which("Rscript"):
         return False
     p = subprocess.run(["Rscript", "-e", "suppressPackageStartupMessages(library(deSolve))"],
+                       capture_output=True, text=True)
+    return p.returncode == 0
+
+
+def have_mebdfi():
+    """Whether R's deTestSet (MEBDFI) loads, from R's library paths or build/rlib."""
+    if not shutil.which("Rscript"):
+        return False
+    p = subprocess.run(["Rscript", "--vanilla", "-e",
+                        f".libPaths(c(.libPaths(), {R_LOCAL_LIBRARY!r})); "
+                        "suppressPackageStartupMessages(library(deTestSet))"],
                        capture_output=True, text=True)
     return p.returncode == 0
 
@@ -340,32 +358,30 @@ def run_radau(scene_path, rtol, atol, jacobian=True, time_limit=TIME_LIMIT_S):
 
 # --- DASPK (R deSolve) ---------------------------------------------------------------------------
 
-def run_daspk(scene_path, rtol, atol, formulation="dae", jacobian=True, time_limit=TIME_LIMIT_S):
-    """DASPK of R's deSolve on the core's residual in `formulation` (dae: GGL index 2 with the
-    multipliers as index-2 variables; minimal: an implicit ODE). Runs scripts/bench_daspk.R."""
-    if formulation not in FORMULATIONS:
-        raise ValueError(f"formulation {formulation!r}: dae or minimal")
+def _run_r(script, tag, name, scene_path, formulation, rtol, atol, jacobian, time_limit):
+    """Runs an R peer script (LIB SCENE FORMULATION RTOL ATOL OUT_CSV JACOBIAN OUTPUT_STEP) and
+    reads its summary line `tag ok=1 ...` and its CSV into run_*'s dict (None on failure)."""
     if not shutil.which("Rscript"):
         return _fail("Rscript not found (ensure_installed())")
     try:
         lib = build_library()
     except RuntimeError as e:
         return _fail(str(e))
-    fd, csv_path = tempfile.mkstemp(prefix="f3r_daspk_", suffix=".csv")
+    fd, csv_path = tempfile.mkstemp(prefix=f"f3r_{name.lower()}_", suffix=".csv")
     os.close(fd)
     try:
-        cmd = ["Rscript", "--vanilla", R_SCRIPT, lib, os.path.abspath(scene_path), formulation,
+        cmd = ["Rscript", "--vanilla", script, lib, os.path.abspath(scene_path), formulation,
                repr(_tol(rtol)), repr(_tol(atol)), csv_path, "1" if jacobian else "0", repr(OUTPUT_STEP)]
         try:
             p = subprocess.run(cmd, capture_output=True, text=True, timeout=time_limit + 30)
         except subprocess.TimeoutExpired:
-            return _fail(f"DASPK: more than {time_limit:g} s")
-        line = next((l for l in p.stdout.splitlines() if l.startswith("F3R_DASPK ")), None)
+            return _fail(f"{name}: more than {time_limit:g} s")
+        line = next((l for l in p.stdout.splitlines() if l.startswith(tag + " ")), None)
         if line is None:
-            return _fail("DASPK: " + (p.stderr.strip() or p.stdout.strip())[-300:])
+            return _fail(f"{name}: " + (p.stderr.strip() or p.stdout.strip())[-300:])
         fields = dict(kv.split("=", 1) for kv in line.split()[1:] if "=" in kv)
         if p.returncode != 0 or fields.get("ok") != "1":
-            return _fail("DASPK: " + line.split("error=", 1)[-1])
+            return _fail(f"{name}: " + line.split("error=", 1)[-1])
         traj = []
         with open(csv_path) as f:
             next(f)
@@ -375,17 +391,36 @@ def run_daspk(scene_path, rtol, atol, formulation="dae", jacobian=True, time_lim
     finally:
         os.unlink(csv_path)
     if not traj or not all(math.isfinite(v) for r in traj for v in r):
-        return _fail("DASPK: non-finite output")
+        return _fail(f"{name}: non-finite output")
     return {"traj": traj, "cpu_s": float(fields["cpu_s"]), "steps": int(fields["steps"]),
             "residual_evals": int(float(fields["residual_evals"])), "jacobian_evals": int(float(fields["jacobian_evals"])),
             "solver_nfev": int(fields["nre"]), "error": None}
+
+
+def run_daspk(scene_path, rtol, atol, formulation="dae", jacobian=True, time_limit=TIME_LIMIT_S):
+    """DASPK of R's deSolve on the core's residual in `formulation` (dae: GGL index 2 with the
+    multipliers as index-2 variables; minimal: an implicit ODE). Runs scripts/bench_daspk.R."""
+    if formulation not in FORMULATIONS:
+        raise ValueError(f"formulation {formulation!r}: dae or minimal")
+    return _run_r(R_SCRIPT, "F3R_DASPK", "DASPK", scene_path, formulation, rtol, atol, jacobian, time_limit)
+
+
+# --- MEBDFI (R deTestSet) ------------------------------------------------------------------------
+
+def run_mebdfi(scene_path, rtol, atol, jacobian=True, time_limit=TIME_LIMIT_S):
+    """MEBDFI of R's deTestSet, the paper's solver, on the core's plain index-3 residual (q, W index
+    1; v index 2; lambda index 3, MEBDFI's nind) with the core's Jacobian (jacobian=True) or
+    MEBDFI's difference quotients. Runs scripts/bench_mebdfi.R; None with last_error "deTestSet is
+    not installed ..." when deTestSet does not load (see have_mebdfi())."""
+    return _run_r(MEBDFI_SCRIPT, "F3R_MEBDFI", "MEBDFI", scene_path, "index3", rtol, atol, jacobian, time_limit)
 
 
 if __name__ == "__main__":  # a quick look: python3 scripts/bench_peers.py SCENE RTOL
     scene = sys.argv[1] if len(sys.argv) > 1 else os.path.join(ROOT, "config/scenes/paper_sim3_fixed_free.yaml")
     rtol = float(sys.argv[2]) if len(sys.argv) > 2 else 1e-6
     ensure_installed()
-    for name, fn in (("DASPK dae", lambda: run_daspk(scene, rtol, rtol * 1e-2, formulation="dae")),
+    for name, fn in (("MEBDFI index3", lambda: run_mebdfi(scene, rtol, rtol * 1e-2)),
+                     ("DASPK dae", lambda: run_daspk(scene, rtol, rtol * 1e-2, formulation="dae")),
                      ("DASPK minimal", lambda: run_daspk(scene, rtol, rtol * 1e-2, formulation="minimal")),
                      ("LSODA", lambda: run_lsoda(scene, rtol, rtol * 1e-2)),
                      ("Radau", lambda: run_radau(scene, rtol, rtol * 1e-2))):

@@ -60,6 +60,16 @@
  *   f3r_peer_desolve_jac(double* t, double* y, double* yprime, double* pd, double* cj,
  *                        double* rpar, int* ipar)    DASPK's JAC (dense, leading dimension ny)
  *
+ * deTestSet's mebdfi (R) calls compiled code with deSolve's DASPK argument lists, so its
+ * residual is f3r_peer_desolve_res (the 6th argument is MEBDFI's IERR: nonzero makes it halve
+ * the step), but the scalar its Jacobian gets is MEBDFI's CON = h * beta_0, the reciprocal of
+ * DASPK's cj: it wants dF/dy + (1/CON) dF/dy' (see PSET in deTestSet's mebdfi.f, whose
+ * difference quotients perturb y' by r/CON). Hence
+ *   f3r_peer_mebdfi_jac(double* t, double* y, double* yprime, double* pd, double* con,
+ *                       double* rpar, int* ipar)    mebdfi(res = "f3r_peer_desolve_res",
+ *                       jacres = "f3r_peer_mebdfi_jac", jactype = "fullusr", ...):
+ *                       f3r_peer_desolve_jac with cj = 1 / con
+ *
  * Nothing here prints; every failure is returned. Not thread-safe (the deSolve handle and the
  * last error are static). */
 #include <math.h>
@@ -405,4 +415,10 @@ F3R_PEER_EXPORT void f3r_peer_desolve_jac(double* t, double* y, double* yprime, 
   if (f3r_peer_jacobian(r_handle, *t, *cj, y, yprime, pd) != F3R_OK)
     /* a zero matrix is singular: DASPK then cuts the step, as for a failed residual */
     memset(pd, 0, (size_t)r_handle->ny * (size_t)r_handle->ny * sizeof(double));
+}
+
+F3R_PEER_EXPORT void f3r_peer_mebdfi_jac(double* t, double* y, double* yprime, double* pd,
+                                         double* con, double* rpar, int* ipar) {
+  double cj = 1.0 / *con;
+  f3r_peer_desolve_jac(t, y, yprime, pd, &cj, rpar, ipar);
 }
