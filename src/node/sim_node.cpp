@@ -1,5 +1,7 @@
 #include "sim_node.hpp"
 
+#include <algorithm>
+
 #include <ros/package.h>
 
 #include <fstream>
@@ -63,6 +65,23 @@ bool SimNode::Init() {
            params_.settings.formulation == F3R_FORMULATION_DAE ? "dae" : "minimal",
            params_.settings.rtol, params_.publish_rate, params_.realtime_factor);
   return true;
+}
+
+// Paced runs only: how far the simulation lags its schedule (paced_sim simulated seconds since
+// pace_wall), into ~status, and a throttled warning with the achieved factor while it is late.
+void SimNode::ReportLag(const ros::WallTime& now, const ros::WallTime& pace_wall, double paced_sim) {
+  info_.lag = 0.0;
+  info_.behind = false;
+  if (params_.realtime_factor <= 0.0 || control_.paused) return;
+  const ros::WallTime due = pace_wall + ros::WallDuration(paced_sim / params_.realtime_factor);
+  info_.lag = std::max(0.0, (now - due).toSec());
+  info_.behind = info_.lag > kBehindSeconds;
+  if (info_.behind)
+    ROS_WARN_THROTTLE(5.0,
+                      "flex3rpr_node: behind the wall clock by %.2f s: achieved real-time factor %.3g of "
+                      "the requested %g (a looser solver.rtol, fewer modes or a lower ~realtime_factor "
+                      "would keep up)",
+                      info_.lag, info_.realtime_factor, params_.realtime_factor);
 }
 
 // Handles callbacks for `seconds` of wall time; returns the wall time that passed.
@@ -174,6 +193,8 @@ int SimNode::Run() {
       info_.realtime_factor = out.t / info_.wall_time;
     }
     info_.rejected_commands = inputs_->rejected();
+    info_.requested_realtime_factor = params_.realtime_factor;
+    ReportLag(now, pace_wall, out.t - pace_sim);
     outputs_->Publish(out, info_);
     if (grace_pending) {
       grace_pending = false;

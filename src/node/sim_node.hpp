@@ -29,7 +29,11 @@ class SimNode {
   int Run();
 
  private:
+  // Late by more than this much wall time, a paced run says it is behind (~status, ROS_WARN).
+  static constexpr double kBehindSeconds = 0.1;
+
   bool Step(double period);
+  void ReportLag(const ros::WallTime& now, const ros::WallTime& pace_wall, double paced_sim);
 
   ros::NodeHandle nh_, pnh_;
   NodeParams params_;

@@ -200,6 +200,9 @@ void StateOutputs::PublishStatus(const f3r_outputs& out, const RunInfo& info) {
   status_.sim_time = out.t;
   status_.wall_time = info.wall_time;
   status_.realtime_factor = info.realtime_factor;
+  status_.requested_realtime_factor = info.requested_realtime_factor;
+  status_.behind = info.behind;
+  status_.lag = info.lag;
   status_.paused = info.paused;
   status_.steps = static_cast<uint64_t>(out.stats.steps);
   status_.residual_evals = static_cast<uint64_t>(out.stats.residual_evals);

@@ -21,6 +21,9 @@ namespace flex3rpr {
 struct RunInfo {
   double wall_time = 0.0;
   double realtime_factor = 0.0;
+  double requested_realtime_factor = 0.0;  // ~realtime_factor
+  bool behind = false;                     // paced and more than kBehindSeconds late
+  double lag = 0.0;                        // wall s behind the paced schedule
   bool paused = false;
   uint64_t rejected_commands = 0;
   std::string last_error;

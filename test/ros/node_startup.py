@@ -63,6 +63,32 @@ class NodeStartup(unittest.TestCase):
         self.assertTrue(alive, "the node keeps running; it said:\n" + out[-3000:])
         self.assertIn("no robot_description parameter", out)
 
+    def test_a_run_that_cannot_keep_its_factor_says_it_is_behind(self):
+        """Paper sim. 3 asked for at 1000x real time: no machine keeps that, so ~status must say
+        behind, with a growing lag, and the node must warn with the achieved factor."""
+        from flex3rpr.msg import SimStatus
+        seen = []
+        sub = rospy.Subscriber("/behind/status", SimStatus, seen.append, queue_size=1000)
+        proc = subprocess.Popen(["stdbuf", "-oL", "rosrun", "flex3rpr", "flex3rpr_node", "__name:=behind",
+                                 "_scene:=" + PKG + "/config/scenes/paper_sim3_fixed_free.yaml",
+                                 "_realtime_factor:=1000.0", "_publish_rate:=100.0"],
+                                stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
+        try:
+            end = time.time() + 600
+            while time.time() < end and not any(m.behind and m.lag > 0.2 for m in seen):
+                time.sleep(0.1)
+        finally:
+            proc.terminate()
+            out, _ = proc.communicate(timeout=120)
+            sub.unregister()
+        late = [m for m in seen if m.behind]
+        self.assertTrue(late, "no ~status said behind; the node said:\n" + out[-3000:])
+        self.assertEqual(late[-1].requested_realtime_factor, 1000.0)
+        self.assertGreater(late[-1].lag, 0.1)
+        self.assertGreater(late[-1].realtime_factor, 0.0)
+        self.assertIn("behind the wall clock", out)
+        self.assertIn("of the requested 1000", out)
+        self.assertFalse(any(m.behind for m in seen if m.lag <= 0.1), "behind means more than 0.1 s late")
 
 if __name__ == "__main__":
     rospy.init_node("node_startup", anonymous=True)
