@@ -214,8 +214,9 @@ static f3r_status minimal_rhs(const f3r_model* m, double t, const double* y, con
     double* K = ws->solve_work; /* nz x nz fits in the (nq + 6)^2 of the acceleration solver */
     memset(K, 0, (size_t)nz * (size_t)nz * sizeof(double));
     add_reduced_mass(m, ws, 1.0, K, nz);
-    if (f3r_cholesky_factor(K, nz)) return F3R_ERR_SINGULAR; /* K is positive definite */
-    f3r_cholesky_solve(K, nz, rate);
+    double inv[F3R_MAX_Q];                   /* 1 / L_jj: multiplications, not divisions */
+    if (f3r_cholesky_factor_inv(K, nz, inv)) return F3R_ERR_SINGULAR; /* K is positive definite */
+    f3r_cholesky_solve_inv(K, nz, inv, rate, 1);
   } else if ((st = arrow_solve(m, ws, rate)) != F3R_OK) {
     return st;
   }
