@@ -2,6 +2,9 @@
 // agreement of the two formulations, paper simulation 1's geometry, and limiting cases.
 #include <gtest/gtest.h>
 
+#include <cstring>
+#include <map>
+
 #include "flex3rpr/modal.h"
 #include "flex3rpr/stages.h"
 #include "test_support.h"
@@ -309,7 +312,7 @@ TEST(Simulation, EveryIntegratorAndTableFollowsTheSamePath) {
   auto run = [&](f3r_integrator integrator, const char* table, double rtol, f3r_sim_stats* stats) {
     f3r_solver_settings set = f3r_solver_settings_from_scene(&scene);
     set.integrator = integrator;
-    set.rk_table = table;
+    std::snprintf(set.rk_table, sizeof set.rk_table, "%s", table ? table : "");
     set.rtol = rtol;
     set.atol = rtol * 1e-2;
     f3r_sim* raw = nullptr;
@@ -333,11 +336,23 @@ TEST(Simulation, EveryIntegratorAndTableFollowsTheSamePath) {
     const char* table;
     int stages;
     double rtol, tolerance;  // m
-  } cases[] = {{F3R_INTEGRATOR_ERK, nullptr, 13, 1e-8, 1e-9},
-               {F3R_INTEGRATOR_ERK, "ARKODE_FEHLBERG_13_7_8", 13, 1e-8, 1e-9},
-               {F3R_INTEGRATOR_ERK, "ARKODE_DORMAND_PRINCE_7_4_5", 7, 1e-8, 1e-8},
-               {F3R_INTEGRATOR_DIRK, nullptr, 7, 1e-7, 1e-7},
-               {F3R_INTEGRATOR_DIRK, "ARKODE_ARK548L2SA_DIRK_8_4_5", 8, 1e-7, 1e-7}};
+  };
+  std::vector<Case> cases = {{F3R_INTEGRATOR_ERK, nullptr, 13, 1e-8, 1e-9},
+                             {F3R_INTEGRATOR_DIRK, nullptr, 7, 1e-7, 1e-7}};
+  // every table a scene may name (f3r_rk_tables), with its stage count
+  const std::map<std::string, int> stages = {
+      {"ARKODE_FEHLBERG_13_7_8", 13}, {"ARKODE_DORMAND_PRINCE_7_4_5", 7}, {"ARKODE_VERNER_8_5_6", 8},
+      {"dormand_prince_8_5", 12},     {"verner_8_7", 13},                 {"verner_9_8", 16},
+      {"ARKODE_KVAERNO_7_4_5", 7},    {"ARKODE_ARK548L2SA_DIRK_8_4_5", 8}, {"ARKODE_SDIRK_5_3_4", 5}};
+  for (f3r_integrator integrator : {F3R_INTEGRATOR_ERK, F3R_INTEGRATOR_DIRK})
+    for (const char* const* t = f3r_rk_tables(integrator); *t; ++t) {
+      ASSERT_TRUE(stages.count(*t)) << *t;
+      const bool erk = integrator == F3R_INTEGRATOR_ERK;
+      const bool sixth = !strcmp(*t, "ARKODE_VERNER_8_5_6") || !strcmp(*t, "ARKODE_DORMAND_PRINCE_7_4_5");
+      cases.push_back({integrator, *t, stages.at(*t), erk ? (sixth ? 1e-9 : 1e-8) : 1e-7,
+                       erk ? (sixth ? 1e-8 : 1e-9) : 1e-7});
+    }
+  EXPECT_EQ(cases.size(), 2 + stages.size());
   for (const Case& c : cases) {
     f3r_sim_stats stats{};
     const std::vector<double> path = run(c.integrator, c.table, c.rtol, &stats);
@@ -355,7 +370,7 @@ TEST(Simulation, UnknownButcherTableIsAnErrorNamingIt) {
   auto m = MakeModel(s);
   f3r_solver_settings settings = f3r_solver_settings_from_scene(&s);
   settings.integrator = F3R_INTEGRATOR_ERK;
-  settings.rk_table = "NO_SUCH_TABLE";
+  std::snprintf(settings.rk_table, sizeof settings.rk_table, "NO_SUCH_TABLE");
   f3r_sim* raw = nullptr;
   f3r_error err{};
   EXPECT_NE(f3r_sim_create(m.get(), &settings, &raw, &err), F3R_OK);

@@ -124,6 +124,8 @@ typedef struct {
   double max_step;             /* s; 0 means no limit */
   int max_order;               /* IDA's highest BDF order, 1..5 (2: A-stable, steps over undamped
                                 * modes that nothing excites) */
+  char table[48];              /* erk, dirk: the Butcher table by name; "" for the integrator's
+                                * default (f3r_rk_tables) */
 
   /* run */
   double duration;    /* s, default 0.5 */
@@ -137,6 +139,12 @@ f3r_scene f3r_default_scene(void);
 /* Checks every field against its allowed range. The message names the field, the value and the
  * range, e.g. "links[1].modes: 25 is out of range 1..20". */
 f3r_status f3r_scene_validate(const f3r_scene* scene, f3r_error* err);
+
+/* The Butcher tables an integrator offers by name (those the benchmark measures), NULL-ended:
+ * erk: ARKODE's FEHLBERG_13_7_8 (default), DORMAND_PRINCE_7_4_5, VERNER_8_5_6 and the pairs of
+ * src/core/erk_tables.c; dirk: ARKODE's KVAERNO_7_4_5 (default), ARK548L2SA_DIRK_8_4_5,
+ * SDIRK_5_3_4. NULL for ida. */
+const char* const* f3r_rk_tables(f3r_integrator integrator);
 
 /* Reads a scene YAML file over the defaults, then validates it. Errors start with "path:line: ". */
 f3r_status f3r_scene_load(const char* path, f3r_scene* scene, f3r_error* err);

@@ -21,7 +21,7 @@ typedef struct {
   int max_order;          /* IDA: highest BDF order, 1..5 */
   int analytic_jacobian;  /* 1: f3r_residual_jacobian; 0: IDA's difference quotients */
   int stop_at_outputs;    /* 1: never step past the requested output time (for live input) */
-  const char* rk_table;   /* erk, dirk: the Butcher table by name (f3r_sim_rk_tables); NULL:
+  char rk_table[48];      /* erk, dirk: the Butcher table by name (f3r_rk_table_known); "":
                            * the integrator's default (Fehlberg 7(8); Kvaerno 7(4,5)) */
   int dense_linear_solver;/* IDA: 1 forces SUNDIALS' dense LU; 0 (default) uses the minimal
                            * formulation's Schur complement when the Jacobian is analytic */

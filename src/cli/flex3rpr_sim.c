@@ -206,7 +206,7 @@ int main(int argc, char** argv) {
   f3r_solver_settings settings = f3r_solver_settings_from_scene(&scene);
   settings.analytic_jacobian = !o.fd_jacobian;
   settings.dense_linear_solver = o.dense_linear_solver;
-  if (o.table) settings.rk_table = o.table;
+  if (o.table) snprintf(settings.rk_table, sizeof settings.rk_table, "%s", o.table);
   settings.stop_at_outputs = o.stop_at_outputs;
   double held[F3R_MAX_Q] = {0};
   for (int h = 0; h < o.n_holds; ++h)

@@ -184,6 +184,26 @@ static f3r_status validate_input_shape(const f3r_input* in, const char* name, f3
   return F3R_OK;
 }
 
+static const char* const explicit_tables[] = {
+    "ARKODE_FEHLBERG_13_7_8", "ARKODE_DORMAND_PRINCE_7_4_5", "ARKODE_VERNER_8_5_6",
+    "dormand_prince_8_5",     "verner_8_7",                  "verner_9_8",          NULL};
+static const char* const implicit_tables[] = {"ARKODE_KVAERNO_7_4_5",
+                                              "ARKODE_ARK548L2SA_DIRK_8_4_5",
+                                              "ARKODE_SDIRK_5_3_4", NULL};
+
+const char* const* f3r_rk_tables(f3r_integrator integrator) {
+  return integrator == F3R_INTEGRATOR_ERK    ? explicit_tables
+         : integrator == F3R_INTEGRATOR_DIRK ? implicit_tables
+                                             : NULL;
+}
+
+static int table_known(f3r_integrator integrator, const char* name) {
+  const char* const* t = f3r_rk_tables(integrator);
+  for (; t && *t; ++t)
+    if (!strcmp(*t, name)) return 1;
+  return 0;
+}
+
 f3r_status f3r_scene_validate(const f3r_scene* s, f3r_error* err) {
   char name[64];
   CHECK_POSITIVE("geometry.base_side", s->base_side);
@@ -286,6 +306,15 @@ f3r_status f3r_scene_validate(const f3r_scene* s, f3r_error* err) {
     return f3r_scene_error(err, "solver.integrator", NULL,
                            "%s integrates the minimal formulation only",
                            s->integrator == F3R_INTEGRATOR_ERK ? "erk" : "dirk");
+  if (s->table[0] && s->integrator == F3R_INTEGRATOR_IDA)
+    return f3r_scene_error(err, "solver.table", NULL, "a Butcher table needs integrator erk or dirk");
+  if (s->table[0] && !table_known(s->integrator, s->table)) {
+    char allowed[512] = "";
+    for (const char* const* t = f3r_rk_tables(s->integrator); *t; ++t)
+      snprintf(allowed + strlen(allowed), sizeof allowed - strlen(allowed), "%s%s",
+               allowed[0] ? ", " : "", *t);
+    return f3r_scene_error(err, "solver.table", NULL, "'%s' is not one of %s", s->table, allowed);
+  }
   CHECK_RANGE("solver.rtol", s->rtol, 1e-14, 1e-1);
   CHECK_RANGE("solver.atol", s->atol, 1e-16, 1e-1);
   CHECK_RANGE("solver.max_step", s->max_step, 0.0, 1e3);

@@ -362,7 +362,15 @@ static f3r_status read_solver(loader* L, const yaml_node_t* map) {
       const char* v = scalar(value);
       if (v && !strcmp(v, "ida")) s->integrator = F3R_INTEGRATOR_IDA;
       else if (v && !strcmp(v, "erk")) s->integrator = F3R_INTEGRATOR_ERK;
-      else return fail(L, value, name, "'%s' is not one of ida, erk", v ? v : "?");
+      else if (v && !strcmp(v, "dirk")) s->integrator = F3R_INTEGRATOR_DIRK;
+      else return fail(L, value, name, "'%s' is not one of ida, erk, dirk", v ? v : "?");
+      remember(L, name, value);
+    } else if (!strcmp(key, "table")) {
+      const char* v = scalar(value);
+      if (!v || !*v || strlen(v) >= sizeof s->table)
+        return fail(L, value, name, "needs a Butcher table's name (at most %d characters)",
+                    (int)sizeof s->table - 1);
+      snprintf(s->table, sizeof s->table, "%s", v);
       remember(L, name, value);
     } else if (!strcmp(key, "rtol")) { st = read_number(L, value, name, &s->rtol);
     } else if (!strcmp(key, "atol")) { st = read_number(L, value, name, &s->atol);
@@ -374,7 +382,7 @@ static f3r_status read_solver(loader* L, const yaml_node_t* map) {
         return fail(L, value, name, "%g is out of range 1..5 (an integer)", order);
       s->max_order = (int)order;
     } else {
-      return fail(L, value, name, "unknown key (allowed: formulation, integrator, rtol, atol, max_step, max_order)");
+      return fail(L, value, name, "unknown key (allowed: formulation, integrator, table, rtol, atol, max_step, max_order)");
     }
     if (st != F3R_OK) return st;
   }

@@ -1,6 +1,7 @@
 /* The run API: initial state, held forces with clean restarts, outputs. The integration itself
  * is a stepper's (stepper_ida.c, stepper_erk.c). Nothing is allocated after f3r_sim_create. */
 #include <math.h>
+#include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -39,7 +40,7 @@ f3r_solver_settings f3r_solver_settings_from_scene(const f3r_scene* scene) {
   st.analytic_jacobian = 1;
   st.stop_at_outputs = 0;
   st.dense_linear_solver = 0;
-  st.rk_table = NULL;
+  snprintf(st.rk_table, sizeof st.rk_table, "%s", scene->table);
   return st;
 }
 

@@ -5,6 +5,8 @@
 #include <arkode/arkode_butcher_erk.h>
 #include <stdio.h>
 
+#include "erk_tables.h"
+
 void f3r_stepper_error_handler(int code, const char* module, const char* function, char* msg,
                                void* user) {
   f3r_stepper* st = user;
@@ -18,5 +20,10 @@ int f3r_stepper_roots(const f3r_stepper* st, const double* y, double* g) {
 
 ARKodeButcherTable f3r_stepper_load_table(int implicit, const char* name) {
   if (!name) return NULL;
-  return implicit ? ARKodeButcherTable_LoadDIRKByName(name) : ARKodeButcherTable_LoadERKByName(name);
+  if (implicit) return ARKodeButcherTable_LoadDIRKByName(name);
+  const f3r_erk_table* own = f3r_erk_table_find(name);
+  if (!own) return ARKodeButcherTable_LoadERKByName(name);
+  /* ARKODE copies the arrays; it only takes them non-const */
+  return ARKodeButcherTable_Create(own->stages, own->order, own->embedded_order, (double*)own->c,
+                                   (double*)own->A, (double*)own->b, (double*)own->b_embedded);
 }

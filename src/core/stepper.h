@@ -64,8 +64,8 @@ extern const f3r_stepper_ops f3r_dirk_stepper;
 void f3r_stepper_error_handler(int code, const char* module, const char* function, char* msg,
                                void* user);
 int f3r_stepper_roots(const f3r_stepper* st, const double* y, double* g);
-/* A Butcher table by name (ARKODE's, e.g. ARKODE_FEHLBERG_13_7_8), explicit or diagonally
- * implicit; NULL when there is none by that name. The caller frees it. */
+/* A Butcher table by name (ARKODE's, e.g. ARKODE_FEHLBERG_13_7_8, or erk_tables.c's), explicit
+ * or diagonally implicit; NULL when there is none by that name. The caller frees it. */
 ARKodeButcherTable f3r_stepper_load_table(int implicit, const char* name);
 
 #endif

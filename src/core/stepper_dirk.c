@@ -73,7 +73,7 @@ static f3r_status dirk_setup(f3r_stepper* st, N_Vector y, N_Vector yp, double t0
   if (st->settings.formulation != F3R_FORMULATION_MINIMAL)
     return f3r_error_set(err, F3R_ERR_ARGUMENT,
                          "solver.integrator: dirk needs the minimal formulation, not dae");
-  const char* name = st->settings.rk_table ? st->settings.rk_table : F3R_DIRK_DEFAULT_TABLE;
+  const char* name = st->settings.rk_table[0] ? st->settings.rk_table : F3R_DIRK_DEFAULT_TABLE;
   ARKodeButcherTable table = f3r_stepper_load_table(1, name);
   if (!table)
     return f3r_error_set(err, F3R_ERR_ARGUMENT,

@@ -42,7 +42,7 @@ static f3r_status erk_setup(f3r_stepper* st, N_Vector y, N_Vector yp, double t0,
   st->mem = ERKStepCreate(rhs_fn, t0, y, st->ctx);
   if (!st->mem) return f3r_error_set(err, F3R_ERR_SOLVER, "ERKStepCreate failed");
   CHECK(ERKStepSetErrHandlerFn(st->mem, f3r_stepper_error_handler, st));
-  const char* name = st->settings.rk_table ? st->settings.rk_table : F3R_ERK_DEFAULT_TABLE;
+  const char* name = st->settings.rk_table[0] ? st->settings.rk_table : F3R_ERK_DEFAULT_TABLE;
   ARKodeButcherTable table = f3r_stepper_load_table(0, name);
   if (!table)
     return f3r_error_set(err, F3R_ERR_ARGUMENT, "solver.table: '%s' is not an explicit table",
