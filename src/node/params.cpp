@@ -1,5 +1,7 @@
 #include "params.hpp"
 
+#include <cstdio>
+
 #include <ros/package.h>
 
 #include <cmath>
@@ -53,11 +55,15 @@ bool LoadParams(const ros::NodeHandle& pnh, NodeParams* p, std::string* error) {
   if (pnh.getParam("integrator", integrator)) {
     if (integrator == "ida") p->scene.integrator = F3R_INTEGRATOR_IDA;
     else if (integrator == "erk") p->scene.integrator = F3R_INTEGRATOR_ERK;
+    else if (integrator == "dirk") p->scene.integrator = F3R_INTEGRATOR_DIRK;
     else {
-      *error = "parameter ~integrator: '" + integrator + "' is not one of ida, erk";
+      *error = "parameter ~integrator: '" + integrator + "' is not one of ida, erk, dirk";
       return false;
     }
   }
+  std::string table;
+  if (pnh.getParam("table", table))  // checked with the scene below (solver.table)
+    std::snprintf(p->scene.table, sizeof p->scene.table, "%s", table.c_str());
   pnh.getParam("rtol", p->scene.rtol);
   pnh.getParam("atol", p->scene.atol);
   if (f3r_scene_validate(&p->scene, &err) != F3R_OK) {
