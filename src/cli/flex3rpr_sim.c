@@ -1,6 +1,7 @@
 /* flex3rpr_sim: runs a scene headless, writes a CSV of the trajectory and prints a summary.
  *   flex3rpr_sim SCENE.yaml [--out FILE.csv] [--formulation dae|minimal] [--rtol R] [--atol A]
- *                [--output-step DT] [--duration T] [--fd-jacobian] [--exact-kinematics]
+ *                [--output-step DT] [--duration T] [--fd-jacobian] [--dense-linear-solver]
+ *                [--exact-kinematics] [--ida | --erk | --dirk] [--table NAME] ...
  *   flex3rpr_sim --modal SCENE.yaml */
 #include <math.h>
 #include <stdio.h>
@@ -32,7 +33,7 @@ typedef struct {
   const char* formulation;
   double rtol, atol, max_order, output_step, duration;
   int stop_at_outputs;
-  int integrator_erk, integrator_dirk;
+  int integrator_ida, integrator_erk, integrator_dirk;
   const char* table;
   int n_holds;
   hold_event holds[MAX_HOLDS];
@@ -43,7 +44,7 @@ static void usage(FILE* to) {
           "usage: flex3rpr_sim SCENE.yaml [--out FILE.csv] [--formulation dae|minimal]\n"
           "                    [--rtol R] [--atol A] [--max-order K] [--output-step DT] [--duration T]\n"
           "                    [--fd-jacobian] [--dense-linear-solver] [--exact-kinematics]\n"
-          "                    [--erk | --dirk] [--table NAME]\n"
+          "                    [--ida | --erk | --dirk] [--table NAME]\n"
           "                    [--stop-at-outputs] [--hold T:INDEX:VALUE ...]\n"
           "       flex3rpr_sim --modal SCENE.yaml\n");
 }
@@ -70,6 +71,7 @@ static int parse_args(int argc, char** argv, cli_options* o) {
     else if (!strcmp(a, "--dense-linear-solver")) o->dense_linear_solver = 1;
     else if (!strcmp(a, "--exact-kinematics")) o->exact_kinematics = 1;
     else if (!strcmp(a, "--stop-at-outputs")) o->stop_at_outputs = 1;
+    else if (!strcmp(a, "--ida")) o->integrator_ida = 1;
     else if (!strcmp(a, "--erk")) o->integrator_erk = 1;
     else if (!strcmp(a, "--dirk")) o->integrator_dirk = 1;
     else if (!strcmp(a, "--table") && next) { o->table = next; ++k; }
@@ -99,6 +101,10 @@ static int parse_args(int argc, char** argv, cli_options* o) {
   }
   if (!o->scene_path) {
     fprintf(stderr, "flex3rpr_sim: no scene given\n");
+    return 0;
+  }
+  if (o->integrator_ida + o->integrator_erk + o->integrator_dirk > 1) {
+    fprintf(stderr, "flex3rpr_sim: give one of --ida, --erk, --dirk\n");
     return 0;
   }
   if (o->formulation && strcmp(o->formulation, "dae") && strcmp(o->formulation, "minimal")) {
@@ -187,6 +193,7 @@ int main(int argc, char** argv) {
   if (o.output_step > 0) scene.output_step = o.output_step;
   if (o.duration > 0) scene.duration = o.duration;
   if (o.exact_kinematics) scene.exact_kinematics = 1;
+  if (o.integrator_ida) scene.integrator = F3R_INTEGRATOR_IDA;
   if (o.integrator_erk || o.integrator_dirk) {
     scene.integrator = o.integrator_erk ? F3R_INTEGRATOR_ERK : F3R_INTEGRATOR_DIRK;
     scene.formulation = F3R_FORMULATION_MINIMAL;
