@@ -5,6 +5,7 @@
 #ifndef FLEX3RPR_STEPPER_H
 #define FLEX3RPR_STEPPER_H
 
+#include <math.h>
 #include <stdio.h> /* arkode_butcher.h uses FILE without including it */
 
 #include <arkode/arkode_butcher.h>
@@ -32,6 +33,10 @@ typedef struct {
                             * F3R_COLLAPSE_ROOT + i: leg i reached the collapse guard */
   long recoverable;       /* right-hand side calls that asked for a smaller step */
   long jacobian_rhs_evals;/* DIRK: right-hand sides of its difference-quotient Jacobian */
+  double t_segment;       /* the last (re)start. An explicit stage at exactly this time takes
+                           * the forces' right limit (f3r_stepper_force_time), as the consistent
+                           * state there did: a held force that jumps at a breakpoint belongs to
+                           * the segment after it */
   int yp_stale;           /* 1: advance left y' unset (an explicit method needs no y'); the
                            * simulation evaluates it only when outputs ask for it */
   char message[256];      /* the solver's last error message: the core never prints */
@@ -64,6 +69,10 @@ extern const f3r_stepper_ops f3r_dirk_stepper;
 void f3r_stepper_error_handler(int code, const char* module, const char* function, char* msg,
                                void* user);
 int f3r_stepper_roots(const f3r_stepper* st, const double* y, double* g);
+/* The time at which the right-hand side evaluates the forces for a stage at t. */
+static inline double f3r_stepper_force_time(const f3r_stepper* st, double t) {
+  return t <= st->t_segment ? nextafter(st->t_segment, INFINITY) : t;
+}
 /* A Butcher table by name (ARKODE's, e.g. ARKODE_FEHLBERG_13_7_8, or erk_tables.c's), explicit
  * or diagonally implicit; NULL when there is none by that name. The caller frees it. */
 ARKodeButcherTable f3r_stepper_load_table(int implicit, const char* name);

@@ -16,7 +16,8 @@
 
 static int rhs_fn(realtype t, N_Vector y, N_Vector ydot, void* user) {
   f3r_stepper* st = user;
-  const f3r_status s = f3r_explicit_rhs(st->model, t, N_VGetArrayPointer(y), st->held,
+  const f3r_status s = f3r_explicit_rhs(st->model, f3r_stepper_force_time(st, t),
+                                        N_VGetArrayPointer(y), st->held,
                                         N_VGetArrayPointer(ydot), st->ws);
   if (s == F3R_OK) return 0;
   st->recoverable++;
@@ -38,7 +39,8 @@ static int jacobian_fn(realtype t, N_Vector y, N_Vector fy, SUNMatrix J, void* u
     const double h = root_eps * fmax(fabs(y0[j]), st->settings.atol / st->settings.rtol);
     yy[j] = y0[j] + h;
     double* col = SM_COLUMN_D(J, j);
-    const f3r_status s = f3r_explicit_rhs(st->model, t, yy, st->held, col, st->ws);
+    const f3r_status s =
+        f3r_explicit_rhs(st->model, f3r_stepper_force_time(st, t), yy, st->held, col, st->ws);
     st->jacobian_rhs_evals++;
     if (s != F3R_OK) {
       st->recoverable++;
@@ -70,6 +72,7 @@ static f3r_status failed(f3r_stepper* st, f3r_error* err, const char* call, int 
 static f3r_status dirk_setup(f3r_stepper* st, N_Vector y, N_Vector yp, double t0,
                              f3r_error* err) {
   (void)yp;
+  st->t_segment = t0;
   if (st->settings.formulation != F3R_FORMULATION_MINIMAL)
     return f3r_error_set(err, F3R_ERR_ARGUMENT,
                          "solver.integrator: dirk needs the minimal formulation, not dae");
@@ -136,6 +139,7 @@ static f3r_status dirk_restart(f3r_stepper* st, N_Vector y, N_Vector yp, double 
   st->jacobian_rhs_evals = 0; /* now in base */
   st->base.restarts++;
   CHECK(ARKStepReset(st->mem, t, y));
+  st->t_segment = t;
   return F3R_OK;
 }
 

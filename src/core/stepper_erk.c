@@ -11,7 +11,8 @@
 
 static int rhs_fn(realtype t, N_Vector y, N_Vector ydot, void* user) {
   f3r_stepper* st = user;
-  const f3r_status s = f3r_explicit_rhs(st->model, t, N_VGetArrayPointer(y), st->held,
+  const f3r_status s = f3r_explicit_rhs(st->model, f3r_stepper_force_time(st, t),
+                                        N_VGetArrayPointer(y), st->held,
                                         N_VGetArrayPointer(ydot), st->ws);
   if (s == F3R_OK) return 0;
   st->recoverable++;
@@ -36,6 +37,7 @@ static f3r_status failed(f3r_stepper* st, f3r_error* err, const char* call, int 
 
 static f3r_status erk_setup(f3r_stepper* st, N_Vector y, N_Vector yp, double t0, f3r_error* err) {
   (void)yp;
+  st->t_segment = t0;
   if (st->settings.formulation != F3R_FORMULATION_MINIMAL)
     return f3r_error_set(err, F3R_ERR_ARGUMENT,
                          "solver.integrator: erk needs the minimal formulation, not dae");
@@ -91,6 +93,7 @@ static f3r_status erk_restart(f3r_stepper* st, N_Vector y, N_Vector yp, double t
   erk_stats(st, &st->base);
   st->base.restarts++;
   CHECK(ERKStepReset(st->mem, t, y));
+  st->t_segment = t;
   return F3R_OK;
 }
 
