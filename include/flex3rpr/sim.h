@@ -23,8 +23,8 @@ typedef struct {
   int stop_at_outputs;    /* 1: never step past the requested output time (for live input) */
   char rk_table[48];      /* erk, dirk: the Butcher table by name (f3r_rk_table_known); "":
                            * the integrator's default (Fehlberg 7(8); Kvaerno 7(4,5)) */
-  int dense_linear_solver;/* IDA: 1 forces SUNDIALS' dense LU; 0 (default) uses the minimal
-                           * formulation's Schur complement when the Jacobian is analytic */
+  int dense_linear_solver;/* IDA: 1 forces SUNDIALS' dense LU; 0 (default) uses the Schur
+                           * complement on the kinematic rows when the Jacobian is analytic */
 } f3r_solver_settings;
 
 /* The scene's solver settings, analytic Jacobian, interpolated outputs. */

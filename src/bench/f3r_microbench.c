@@ -87,7 +87,8 @@ static void linear_solver_table(long reps) {
     N_Vector b = N_VNew_Serial(ny, ctx), x = N_VNew_Serial(ny, ctx);
     N_VConst(1.0, b);
     SUNLinearSolver dense = SUNLinSol_Dense(b, J, ctx);
-    SUNLinearSolver schur = f3r_schur_linsol_create(ctx, m->n_independent, ny);
+    const double cj = 3e4;
+    SUNLinearSolver schur = f3r_schur_linsol_create(ctx, m->n_independent, ny, &cj);
     double ns[4];
     time_linear_solver(dense, J, J0, ny, b, x, reps, &ns[0], &ns[1]);
     time_linear_solver(schur, J, J0, ny, b, x, reps, &ns[2], &ns[3]);

@@ -1,4 +1,4 @@
-/* The minimal formulation's Schur-complement linear solver for IDA (linsol_schur.h). */
+/* The Schur-complement linear solver for IDA (linsol_schur.h). */
 #include "linsol_schur.h"
 
 #include <stdlib.h>
@@ -11,7 +11,9 @@
 
 typedef struct {
   int nz, nr;      /* kinematic rows; the rest (nr = ny - nz) */
+  const double* cj_source; /* where the stepper keeps the current cj */
   double cj;       /* of the last setup */
+  int* kr_nonzero; /* nr: 1 where J_kr's column has a nonzero (rates, mu) */
   double* S;       /* nr x nr, the factored Schur complement */
   int* piv;        /* nr */
   double* bz;      /* nz: b_z kept, since IDA may pass x == b */
@@ -35,29 +37,33 @@ static int schur_initialize(SUNLinearSolver LS) {
   return SUNLS_SUCCESS;
 }
 
-/* S = J_rr + J_rz E / cj, factored. */
+/* S = J_rr - J_rk J_kr / cj, factored. */
 static int schur_setup(SUNLinearSolver LS, SUNMatrix A) {
   schur_content* c = CONTENT(LS);
   const int nz = c->nz, nr = c->nr;
   const int ld = (int)SM_LDATA_D(A) / (int)SM_COLUMNS_D(A);
   const double* J = SM_DATA_D(A);
-  c->cj = F3R_AT(J, ld, 0, 0);
+  c->cj = *c->cj_source;
   if (!(c->cj != 0.0)) return c->last_flag = SUNLS_PACKAGE_FAIL_UNREC;
   const double inv_cj = 1.0 / c->cj;
   for (int j = 0; j < nr; ++j) {
-    const double* col = J + (size_t)(nz + j) * (size_t)ld + nz;
+    const double* col = J + (size_t)(nz + j) * (size_t)ld; /* column r_j: J_kr above J_rr */
     double* s = c->S + (size_t)j * (size_t)nr;
-    memcpy(s, col, (size_t)nr * sizeof(double));
-    if (j < nz) { /* column u_j: x_z = (b_z + x_u) / cj feeds J_rz's column z_j */
-      const double* jz = J + (size_t)j * (size_t)ld + nz;
-      for (int i = 0; i < nr; ++i) s[i] += jz[i] * inv_cj;
+    memcpy(s, col + nz, (size_t)nr * sizeof(double));
+    c->kr_nonzero[j] = 0;
+    for (int k = 0; k < nz; ++k) {
+      const double a = col[k] * inv_cj;
+      if (a == 0.0) continue;
+      c->kr_nonzero[j] = 1;
+      const double* jrk = J + (size_t)k * (size_t)ld + nz; /* column k of J_rk */
+      for (int i = 0; i < nr; ++i) s[i] -= jrk[i] * a;
     }
   }
   /* a zero pivot is recoverable: IDA retries with a smaller step */
   return c->last_flag = f3r_lu_factor(c->S, nr, c->piv) ? SUNLS_LUFACT_FAIL : SUNLS_SUCCESS;
 }
 
-/* x_r = S^{-1} (b_r - J_rz b_z / cj), then x_z = (b_z + x_u) / cj. */
+/* x_r = S^{-1} (b_r - J_rk b_k / cj), then x_k = (b_k - J_kr x_r) / cj. */
 static int schur_solve(SUNLinearSolver LS, SUNMatrix A, N_Vector x, N_Vector b, realtype tol) {
   (void)tol;
   schur_content* c = CONTENT(LS);
@@ -68,17 +74,23 @@ static int schur_solve(SUNLinearSolver LS, SUNMatrix A, N_Vector x, N_Vector b, 
   double* xx = N_VGetArrayPointer(x);
   const double inv_cj = 1.0 / c->cj;
   double* xr = xx + nz;
-  double* keep = c->bz;
+  double* keep = c->bz; /* b and x may be the same vector: keep b_k */
   memcpy(keep, bb, (size_t)nz * sizeof(double));
   if (xr != bb + nz) memcpy(xr, bb + nz, (size_t)nr * sizeof(double));
-  for (int j = 0; j < nz; ++j) {
-    const double f = keep[j] * inv_cj;
+  for (int k = 0; k < nz; ++k) {
+    const double f = keep[k] * inv_cj;
     if (f == 0.0) continue;
-    const double* jz = J + (size_t)j * (size_t)ld + nz;
-    for (int i = 0; i < nr; ++i) xr[i] -= jz[i] * f;
+    const double* jrk = J + (size_t)k * (size_t)ld + nz;
+    for (int i = 0; i < nr; ++i) xr[i] -= jrk[i] * f;
   }
   f3r_lu_solve(c->S, nr, c->piv, xr);
-  for (int j = 0; j < nz; ++j) xx[j] = (keep[j] + xr[j]) * inv_cj;
+  for (int k = 0; k < nz; ++k) xx[k] = keep[k];
+  for (int j = 0; j < nr; ++j) {
+    if (!c->kr_nonzero[j] || xr[j] == 0.0) continue;
+    const double* col = J + (size_t)(nz + j) * (size_t)ld;
+    for (int k = 0; k < nz; ++k) xx[k] -= col[k] * xr[j];
+  }
+  for (int k = 0; k < nz; ++k) xx[k] *= inv_cj;
   return c->last_flag = SUNLS_SUCCESS;
 }
 
@@ -97,6 +109,7 @@ static int schur_free(SUNLinearSolver LS) {
     free(CONTENT(LS)->S);
     free(CONTENT(LS)->piv);
     free(CONTENT(LS)->bz);
+    free(CONTENT(LS)->kr_nonzero);
     free(LS->content);
     LS->content = NULL;
   }
@@ -104,8 +117,8 @@ static int schur_free(SUNLinearSolver LS) {
   return SUNLS_SUCCESS;
 }
 
-SUNLinearSolver f3r_schur_linsol_create(SUNContext ctx, int nz, int ny) {
-  if (nz <= 0 || ny <= 2 * nz) return NULL;
+SUNLinearSolver f3r_schur_linsol_create(SUNContext ctx, int nz, int ny, const double* cj) {
+  if (nz <= 0 || ny <= nz || !cj) return NULL;
   SUNLinearSolver LS = SUNLinSolNewEmpty(ctx);
   if (!LS) return NULL;
   LS->ops->gettype = schur_type;
@@ -124,10 +137,12 @@ SUNLinearSolver f3r_schur_linsol_create(SUNContext ctx, int nz, int ny) {
   }
   c->nz = nz;
   c->nr = ny - nz;
+  c->cj_source = cj;
   c->S = calloc((size_t)c->nr * (size_t)c->nr, sizeof(double));
   c->piv = calloc((size_t)c->nr, sizeof(int));
   c->bz = calloc((size_t)nz, sizeof(double));
-  if (!c->S || !c->piv || !c->bz) {
+  c->kr_nonzero = calloc((size_t)c->nr, sizeof(int));
+  if (!c->S || !c->piv || !c->bz || !c->kr_nonzero) {
     schur_free(LS);
     return NULL;
   }

@@ -33,6 +33,7 @@ typedef struct {
                             * F3R_COLLAPSE_ROOT + i: leg i reached the collapse guard */
   long recoverable;       /* right-hand side calls that asked for a smaller step */
   long jacobian_rhs_evals;/* DIRK: right-hand sides of its difference-quotient Jacobian */
+  double jacobian_cj;     /* IDA: cj of the last Jacobian, for the Schur solver's setup */
   double t_segment;       /* the last (re)start. An explicit stage at exactly this time takes
                            * the forces' right limit (f3r_stepper_force_time), as the consistent
                            * state there did: a held force that jumps at a breakpoint belongs to

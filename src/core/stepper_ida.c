@@ -1,6 +1,6 @@
 /* IDA back end: analytic (or difference-quotient) Jacobian, algebraic unknowns marked and
- * suppressed from the error test. The linear solver is the minimal formulation's Schur
- * complement (linsol_schur.h) with the analytic Jacobian, else SUNDIALS' dense LU. Every SUNDIALS
+ * suppressed from the error test. The linear solver is the Schur complement on the kinematic
+ * rows (linsol_schur.h) with the analytic Jacobian, else SUNDIALS' dense LU. Every SUNDIALS
  * call is checked. */
 #include <ida/ida.h>
 #include <math.h>
@@ -22,8 +22,8 @@
 #define F3R_INITIAL_STEP 1e-7
 
 int f3r_ida_uses_schur(const f3r_solver_settings* s) {
-  return s->formulation == F3R_FORMULATION_MINIMAL && s->analytic_jacobian &&
-         !s->dense_linear_solver;
+  return (s->formulation == F3R_FORMULATION_MINIMAL || s->formulation == F3R_FORMULATION_DAE) &&
+         s->analytic_jacobian && !s->dense_linear_solver;
 }
 
 static int residual_fn(realtype t, N_Vector y, N_Vector yp, N_Vector res, void* user) {
@@ -40,6 +40,7 @@ static int jacobian_fn(realtype t, realtype cj, N_Vector y, N_Vector yp, N_Vecto
                        void* user, N_Vector t1, N_Vector t2, N_Vector t3) {
   (void)r, (void)t1, (void)t2, (void)t3;
   f3r_stepper* st = user;
+  st->jacobian_cj = cj;
   const f3r_status s = f3r_residual_jacobian(
       st->model, st->settings.formulation, t, cj, N_VGetArrayPointer(y), N_VGetArrayPointer(yp),
       st->held, SM_DATA_D(J), (int)SM_ROWS_D(J), st->ws);
@@ -91,8 +92,11 @@ static f3r_status ida_setup(f3r_stepper* st, N_Vector y, N_Vector yp, double t0,
   CHECK(IDASetInitStep(st->mem, F3R_INITIAL_STEP));
   st->J = SUNDenseMatrix(ny, ny, st->ctx);
   if (!st->J) return f3r_error_set(err, F3R_ERR_MEMORY, "SUNDenseMatrix failed");
-  st->ls = f3r_ida_uses_schur(&st->settings) ? f3r_schur_linsol_create(st->ctx, m->n_independent, ny)
-                                             : SUNLinSol_Dense(y, st->J, st->ctx);
+  const int kinematic_rows =
+      st->settings.formulation == F3R_FORMULATION_MINIMAL ? m->n_independent : m->nq;
+  st->ls = f3r_ida_uses_schur(&st->settings)
+               ? f3r_schur_linsol_create(st->ctx, kinematic_rows, ny, &st->jacobian_cj)
+               : SUNLinSol_Dense(y, st->J, st->ctx);
   if (!st->ls) return f3r_error_set(err, F3R_ERR_MEMORY, "linear solver creation failed");
   CHECK(IDASetLinearSolver(st->mem, st->ls, st->J));
   if (st->settings.analytic_jacobian) CHECK(IDASetJacFn(st->mem, jacobian_fn));
