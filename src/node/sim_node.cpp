@@ -1,6 +1,7 @@
 #include "sim_node.hpp"
 
 #include <algorithm>
+#include <cmath>
 
 #include <ros/package.h>
 
@@ -105,7 +106,10 @@ bool SimNode::Step(double period) {
   ++periods_;
   if (f3r_sim_advance(sim_.get(), periods_ * period, &err) != F3R_OK) {
     info_.last_error = err.message;
-    ROS_ERROR("flex3rpr_node: integration stopped: %s", err.message);
+    ROS_ERROR("flex3rpr_node: integration stopped at t = %.6g s: %s; paused at the last good state "
+              "(~reset starts over, ~resume tries again)",
+              f3r_sim_time(sim_.get()), err.message);
+    periods_ = static_cast<long>(std::floor(f3r_sim_time(sim_.get()) / period + 1e-9));  // stay on the grid
     return false;
   }
   return true;
@@ -175,10 +179,19 @@ int SimNode::Run() {
       pace_sim = f3r_sim_time(sim_.get());
     }
     was_running = !control_.paused;
-    if (!Step(period)) {
-      exit_code = 2;
+    if (!Step(period)) {  // the node outlives its physics: it pauses and keeps serving
+      if (params_.duration > 0.0) {  // a scripted run (a recording) ends instead of waiting
+        exit_code = 2;
+        outputs_->Publish(*f3r_sim_outputs(sim_.get()), info_);
+        break;
+      }
+      control_.paused = true;
+      control_.pending_steps = 0;
+      info_.paused = true;
+      was_running = false;
+      info_.rejected_commands = inputs_->rejected();
       outputs_->Publish(*f3r_sim_outputs(sim_.get()), info_);
-      break;
+      continue;
     }
     const f3r_outputs& out = *f3r_sim_outputs(sim_.get());
     phi_p_ = out.q[F3R_Q_PHI];

@@ -89,6 +89,48 @@ class NodeStartup(unittest.TestCase):
         self.assertIn("behind the wall clock", out)
         self.assertIn("of the requested 1000", out)
         self.assertFalse(any(m.behind for m in seen if m.lag <= 0.1), "behind means more than 0.1 s late")
+    def test_b_a_collapsed_leg_pauses_the_node_which_resets_and_runs_on(self):
+        """A held command drives leg 1 into the collapse guard: the node pauses at the last good
+        state with the error in ~status, keeps serving, and ~reset and ~resume run it on."""
+        from flex3rpr.msg import EffortCommand, SimStatus
+        from std_srvs.srv import Empty, Trigger
+        seen = []
+        sub = rospy.Subscriber("/survivor/status", SimStatus, seen.append, queue_size=100000)
+        pub = rospy.Publisher("/survivor/command", EffortCommand, queue_size=10)
+        proc = subprocess.Popen(["stdbuf", "-oL", "rosrun", "flex3rpr", "flex3rpr_node", "__name:=survivor",
+                                 "_scene:=" + PKG + "/test/scenes/idle_rigid.yaml", "_realtime_factor:=0.0",
+                                 "_publish_rate:=100.0"],
+                                stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
+        try:
+            end = time.time() + 600
+            while time.time() < end and not any(m.paused and "collapsed" in m.last_error for m in seen):
+                pub.publish(EffortCommand(leg_force=[-200.0, 0.0, 0.0]))
+                time.sleep(0.1)
+            stopped = [m for m in seen if m.paused and "collapsed" in m.last_error]
+            self.assertTrue(stopped, "no ~status reported the collapse")
+            self.assertIsNone(proc.poll(), "the node died of its physics")
+            t_stop = stopped[-1].sim_time
+            pub.unregister()
+            time.sleep(0.5)
+            self.assertTrue(all(m.paused and m.sim_time == t_stop for m in seen[-3:]),
+                            "paused at the last good state, still publishing ~status")
+            rospy.wait_for_service("/survivor/reset", timeout=120)
+            self.assertTrue(rospy.ServiceProxy("/survivor/reset", Trigger)().success)
+            rospy.ServiceProxy("/survivor/resume", Empty)()
+            end = time.time() + 600
+            while time.time() < end and not any(
+                    not m.paused and m.sim_time > t_stop + 0.5 and not m.last_error for m in seen):
+                time.sleep(0.1)
+            self.assertTrue(any(not m.paused and m.sim_time > t_stop + 0.5 and not m.last_error for m in seen),
+                            "after ~reset and ~resume the simulation runs on without an error")
+            self.assertIsNone(proc.poll())
+        finally:
+            sub.unregister()
+            proc.terminate()
+            out, _ = proc.communicate(timeout=120)
+        self.assertIn("leg 1 collapsed", out)
+        self.assertIn("paused at the last good state", out)
+
 
 if __name__ == "__main__":
     rospy.init_node("node_startup", anonymous=True)
