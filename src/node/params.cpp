@@ -6,8 +6,31 @@
 
 #include <cmath>
 #include <sstream>
+#include <type_traits>
 
 namespace flex3rpr {
+
+namespace {
+const char* TypeName(double) { return "a number"; }
+const char* TypeName(int) { return "an integer"; }
+const char* TypeName(const std::string&) { return "a string"; }
+}  // namespace
+
+// A parameter, or fallback when it is not set. Set with the wrong type (roscpp's param() would
+// silently take the default), it is an error naming it.
+template <typename T>
+static bool Read(const ros::NodeHandle& pnh, const char* name, const T& fallback, T* out,
+                 std::string* error) {
+  *out = fallback;
+  if (!pnh.hasParam(name)) return true;
+  XmlRpc::XmlRpcValue value;
+  pnh.getParam(name, value);
+  // roscpp would truncate 2.5 to an integer: an integer parameter must be one
+  const bool integer_ok = !std::is_same<T, int>::value || value.getType() == XmlRpc::XmlRpcValue::TypeInt;
+  if (integer_ok && pnh.getParam(name, *out)) return true;
+  *error = std::string("parameter ~") + name + ": not " + TypeName(fallback);
+  return false;
+}
 
 std::string DefaultScenePath() {
   return ros::package::getPath("flex3rpr") + "/config/scenes/paper_sim3_fixed_free.yaml";
@@ -64,8 +87,9 @@ bool LoadParams(const ros::NodeHandle& pnh, NodeParams* p, std::string* error) {
   std::string table;
   if (pnh.getParam("table", table))  // checked with the scene below (solver.table)
     std::snprintf(p->scene.table, sizeof p->scene.table, "%s", table.c_str());
-  pnh.getParam("rtol", p->scene.rtol);
-  pnh.getParam("atol", p->scene.atol);
+  if (!Read(pnh, "rtol", p->scene.rtol, &p->scene.rtol, error) ||
+      !Read(pnh, "atol", p->scene.atol, &p->scene.atol, error))
+    return false;
   if (f3r_scene_validate(&p->scene, &err) != F3R_OK) {
     *error = std::string("parameters override the scene badly: ") + err.message;
     return false;
@@ -73,23 +97,25 @@ bool LoadParams(const ros::NodeHandle& pnh, NodeParams* p, std::string* error) {
   p->settings = f3r_solver_settings_from_scene(&p->scene);
   p->settings.stop_at_outputs = 1;  // commands take effect exactly at publish times
 
-  p->publish_rate = pnh.param("publish_rate", 1000.0);
-  p->beam_points = pnh.param("beam_points", p->scene.beam_points);
-  p->realtime_factor = pnh.param("realtime_factor", 1.0);
-  p->world_frame = pnh.param<std::string>("world_frame", "world");
-  p->base_frame = pnh.param<std::string>("base_frame", "base");
-  p->command_timeout = pnh.param("command_timeout", 0.0);
-  p->duration = pnh.param("duration", 0.0);
+  const bool read =
+      Read(pnh, "publish_rate", 1000.0, &p->publish_rate, error) &&
+      Read(pnh, "beam_points", p->scene.beam_points, &p->beam_points, error) &&
+      Read(pnh, "realtime_factor", 1.0, &p->realtime_factor, error) &&
+      Read(pnh, "world_frame", std::string("world"), &p->world_frame, error) &&
+      Read(pnh, "base_frame", std::string("base"), &p->base_frame, error) &&
+      Read(pnh, "command_timeout", 0.0, &p->command_timeout, error) &&
+      Read(pnh, "duration", 0.0, &p->duration, error) &&
+      Read(pnh, "wait_for_subscribers", 0, &p->wait_for_subscribers, error) &&
+      Read(pnh, "subscriber_timeout", 30.0, &p->subscriber_timeout, error) &&
+      Read(pnh, "subscriber_grace", 0.5, &p->subscriber_grace, error) &&
+      Read(pnh, "queue_size", 10, &p->queue_size, error) &&
+      Read(pnh, "command_queue_size", 1000, &p->command_queue_size, error) &&
+      Read(pnh, "beam_marker_exaggeration", 1.0, &p->beam_marker_exaggeration, error) &&
+      Read(pnh, "max_force", p->limits.force, &p->limits.force, error) &&
+      Read(pnh, "max_torque", p->limits.torque, &p->limits.torque, error) &&
+      Read(pnh, "max_modal_force", p->limits.modal, &p->limits.modal, error);
+  if (!read) return false;
   if (p->duration < 0.0) p->duration = p->scene.duration;  // the scene's run.duration
-  p->wait_for_subscribers = pnh.param("wait_for_subscribers", 0);
-  p->subscriber_timeout = pnh.param("subscriber_timeout", 30.0);
-  p->subscriber_grace = pnh.param("subscriber_grace", 0.5);
-  p->queue_size = pnh.param("queue_size", 10);
-  p->command_queue_size = pnh.param("command_queue_size", 1000);
-  p->beam_marker_exaggeration = pnh.param("beam_marker_exaggeration", 1.0);
-  p->limits.force = pnh.param("max_force", p->limits.force);
-  p->limits.torque = pnh.param("max_torque", p->limits.torque);
-  p->limits.modal = pnh.param("max_modal_force", p->limits.modal);
   if (!Positive("publish_rate", p->publish_rate, error) ||
       !Positive("beam_points", p->beam_points, error) ||
       !NonNegative("realtime_factor", p->realtime_factor, error) ||

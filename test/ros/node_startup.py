@@ -32,6 +32,13 @@ class NodeStartup(unittest.TestCase):
         self.assertNotEqual(code, 0)
         self.assertIn("~publish_rate", out)
 
+    def test_parameters_of_the_wrong_type_are_named(self):
+        for name, value, kind in (("realtime_factor", "abc", "a number"), ("beam_points", "2.5", "an integer"),
+                                  ("rtol", "tight", "a number")):
+            code, out = run_node("__name:=bad_type_" + name, "_%s:=%s" % (name, value))
+            self.assertNotEqual(code, 0, out[-2000:])
+            self.assertIn("parameter ~%s: not %s" % (name, kind), out)
+
     def test_mismatching_urdf_exits_with_the_joint_named(self):
         tree = ET.parse(PKG + "/urdf/flex3rpr.urdf")
         for joint in tree.getroot().iter("joint"):
