@@ -27,3 +27,18 @@ ARKodeButcherTable f3r_stepper_load_table(int implicit, const char* name) {
   return ARKodeButcherTable_Create(own->stages, own->order, own->embedded_order, (double*)own->c,
                                    (double*)own->A, (double*)own->b, (double*)own->b_embedded);
 }
+
+int f3r_stepper_explicit_rhs(realtype t, N_Vector y, N_Vector ydot, void* user) {
+  f3r_stepper* st = user;
+  const f3r_status s = f3r_explicit_rhs(st->model, f3r_stepper_force_time(st, t),
+                                        N_VGetArrayPointer(y), st->held,
+                                        N_VGetArrayPointer(ydot), st->ws);
+  if (s == F3R_OK) return 0;
+  st->recoverable++;
+  return 1; /* recoverable: ARKODE retries with a smaller step */
+}
+
+int f3r_stepper_explicit_roots(realtype t, N_Vector y, realtype* g, void* user) {
+  (void)t;
+  return f3r_stepper_roots(user, N_VGetArrayPointer(y), g);
+}

@@ -70,6 +70,10 @@ extern const f3r_stepper_ops f3r_dirk_stepper;
 void f3r_stepper_error_handler(int code, const char* module, const char* function, char* msg,
                                void* user);
 int f3r_stepper_roots(const f3r_stepper* st, const double* y, double* g);
+/* The ARKODE back ends' (ERKStep, ARKStep) right-hand side and root functions: the minimal
+ * formulation's explicit ODE, forces at their right limit at a restart; user is the stepper. */
+int f3r_stepper_explicit_rhs(realtype t, N_Vector y, N_Vector ydot, void* user);
+int f3r_stepper_explicit_roots(realtype t, N_Vector y, realtype* g, void* user);
 /* The time at which the right-hand side evaluates the forces for a stage at t. */
 static inline double f3r_stepper_force_time(const f3r_stepper* st, double t) {
   return t <= st->t_segment ? nextafter(st->t_segment, INFINITY) : t;

@@ -14,16 +14,6 @@
 
 #define F3R_DIRK_DEFAULT_TABLE "ARKODE_KVAERNO_7_4_5"
 
-static int rhs_fn(realtype t, N_Vector y, N_Vector ydot, void* user) {
-  f3r_stepper* st = user;
-  const f3r_status s = f3r_explicit_rhs(st->model, f3r_stepper_force_time(st, t),
-                                        N_VGetArrayPointer(y), st->held,
-                                        N_VGetArrayPointer(ydot), st->ws);
-  if (s == F3R_OK) return 0;
-  st->recoverable++;
-  return 1; /* recoverable: ARKODE retries with a smaller step */
-}
-
 /* df/dy by forward differences, column j into J's column j: ny right-hand sides. */
 static int jacobian_fn(realtype t, N_Vector y, N_Vector fy, SUNMatrix J, void* user, N_Vector t1,
                        N_Vector t2, N_Vector t3) {
@@ -53,11 +43,6 @@ static int jacobian_fn(realtype t, N_Vector y, N_Vector fy, SUNMatrix J, void* u
   return 0;
 }
 
-static int root_fn(realtype t, N_Vector y, realtype* g, void* user) {
-  (void)t;
-  return f3r_stepper_roots(user, N_VGetArrayPointer(y), g);
-}
-
 static f3r_status failed(f3r_stepper* st, f3r_error* err, const char* call, int flag) {
   return f3r_error_set(err, F3R_ERR_SOLVER, "%s failed: %s (%s)", call,
                        ARKStepGetReturnFlagName(flag), st->message);
@@ -81,7 +66,7 @@ static f3r_status dirk_setup(f3r_stepper* st, N_Vector y, N_Vector yp, double t0
   if (!table)
     return f3r_error_set(err, F3R_ERR_ARGUMENT,
                          "solver.table: '%s' is not a diagonally implicit table", name);
-  st->mem = ARKStepCreate(NULL, rhs_fn, t0, y, st->ctx);
+  st->mem = ARKStepCreate(NULL, f3r_stepper_explicit_rhs, t0, y, st->ctx);
   if (!st->mem) {
     ARKodeButcherTable_Free(table);
     return f3r_error_set(err, F3R_ERR_SOLVER, "ARKStepCreate failed");
@@ -105,7 +90,7 @@ static f3r_status dirk_setup(f3r_stepper* st, N_Vector y, N_Vector yp, double t0
   CHECK(ARKStepSetJacFn(st->mem, jacobian_fn));
   int directions[F3R_NROOTS];
   for (int k = 0; k < F3R_NROOTS; ++k) directions[k] = -1;
-  CHECK(ARKStepRootInit(st->mem, F3R_NROOTS, root_fn));
+  CHECK(ARKStepRootInit(st->mem, F3R_NROOTS, f3r_stepper_explicit_roots));
   CHECK(ARKStepSetRootDirection(st->mem, directions));
   return F3R_OK;
 }

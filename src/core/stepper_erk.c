@@ -9,21 +9,6 @@
 
 #define F3R_ERK_DEFAULT_TABLE "ARKODE_FEHLBERG_13_7_8"
 
-static int rhs_fn(realtype t, N_Vector y, N_Vector ydot, void* user) {
-  f3r_stepper* st = user;
-  const f3r_status s = f3r_explicit_rhs(st->model, f3r_stepper_force_time(st, t),
-                                        N_VGetArrayPointer(y), st->held,
-                                        N_VGetArrayPointer(ydot), st->ws);
-  if (s == F3R_OK) return 0;
-  st->recoverable++;
-  return 1; /* recoverable: ARKODE retries with a smaller step */
-}
-
-static int root_fn(realtype t, N_Vector y, realtype* g, void* user) {
-  (void)t;
-  return f3r_stepper_roots(user, N_VGetArrayPointer(y), g);
-}
-
 static f3r_status failed(f3r_stepper* st, f3r_error* err, const char* call, int flag) {
   return f3r_error_set(err, F3R_ERR_SOLVER, "%s failed: %s (%s)", call,
                        ERKStepGetReturnFlagName(flag), st->message);
@@ -41,7 +26,7 @@ static f3r_status erk_setup(f3r_stepper* st, N_Vector y, N_Vector yp, double t0,
   if (st->settings.formulation != F3R_FORMULATION_MINIMAL)
     return f3r_error_set(err, F3R_ERR_ARGUMENT,
                          "solver.integrator: erk needs the minimal formulation, not dae");
-  st->mem = ERKStepCreate(rhs_fn, t0, y, st->ctx);
+  st->mem = ERKStepCreate(f3r_stepper_explicit_rhs, t0, y, st->ctx);
   if (!st->mem) return f3r_error_set(err, F3R_ERR_SOLVER, "ERKStepCreate failed");
   CHECK(ERKStepSetErrHandlerFn(st->mem, f3r_stepper_error_handler, st));
   const char* name = st->settings.rk_table[0] ? st->settings.rk_table : F3R_ERK_DEFAULT_TABLE;
@@ -65,7 +50,7 @@ static f3r_status erk_setup(f3r_stepper* st, N_Vector y, N_Vector yp, double t0,
   if (st->settings.max_step > 0.0) CHECK(ERKStepSetMaxStep(st->mem, st->settings.max_step));
   int directions[F3R_NROOTS];
   for (int k = 0; k < F3R_NROOTS; ++k) directions[k] = -1;
-  CHECK(ERKStepRootInit(st->mem, F3R_NROOTS, root_fn));
+  CHECK(ERKStepRootInit(st->mem, F3R_NROOTS, f3r_stepper_explicit_roots));
   CHECK(ERKStepSetRootDirection(st->mem, directions));
   return F3R_OK;
 }
