@@ -60,8 +60,7 @@ typedef struct {
 } f3r_stepper_ops;
 
 extern const f3r_stepper_ops f3r_ida_stepper;
-/* 1 when IDA solves with the Schur complement (linsol_schur.h) under these settings. */
-int f3r_ida_uses_schur(const f3r_solver_settings* settings);
+
 extern const f3r_stepper_ops f3r_erk_stepper;
 extern const f3r_stepper_ops f3r_dirk_stepper;
 

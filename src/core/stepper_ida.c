@@ -21,7 +21,8 @@
 /* The first step is given explicitly: IDA's own estimate assumes an index-1 start. */
 #define F3R_INITIAL_STEP 1e-7
 
-int f3r_ida_uses_schur(const f3r_solver_settings* s) {
+/* 1 when IDA solves with the Schur complement (linsol_schur.h) under these settings. */
+static int uses_schur(const f3r_solver_settings* s) {
   return (s->formulation == F3R_FORMULATION_MINIMAL || s->formulation == F3R_FORMULATION_DAE) &&
          s->analytic_jacobian && !s->dense_linear_solver;
 }
@@ -94,7 +95,7 @@ static f3r_status ida_setup(f3r_stepper* st, N_Vector y, N_Vector yp, double t0,
   if (!st->J) return f3r_error_set(err, F3R_ERR_MEMORY, "SUNDenseMatrix failed");
   const int kinematic_rows =
       st->settings.formulation == F3R_FORMULATION_MINIMAL ? m->n_independent : m->nq;
-  st->ls = f3r_ida_uses_schur(&st->settings)
+  st->ls = uses_schur(&st->settings)
                ? f3r_schur_linsol_create(st->ctx, kinematic_rows, ny, &st->jacobian_cj)
                : SUNLinSol_Dense(y, st->J, st->ctx);
   if (!st->ls) return f3r_error_set(err, F3R_ERR_MEMORY, "linear solver creation failed");
