@@ -1,33 +1,52 @@
 #!/usr/bin/env python3
-"""Writes the flex3rpr URDF (plain URDF: Debian 12 has no xacro).
+"""Writes the flex3rpr URDF for a scene (plain URDF: Debian 12 has no xacro).
 
-usage: make_urdf.py [--beam-points N] [--out FILE]
+usage: make_urdf.py [--scene SCENE.yaml] [--beam-points N] [--prefix P] [--out FILE]
 
-Geometry and inertia follow Table I and ../shared/MODEL.md. URDF cannot describe the closed
-loops: the tree is base -> leg_i_cylinder (revolute, theta_i) -> leg_i_piston (prismatic, rho_i);
-the platform and the beam stations hang from base on floating joints, and flex3rpr_node
-broadcasts their frames itself. The joints leg_i_revolute (A_i), leg_i_tip_nominal (l) and
-platform_c<i> (r_PC) carry the geometry the node checks against its scene."""
+The geometry, the masses and the stroke limits come from the scene through
+`flex3rpr_sim --geometry SCENE`, the same model the node builds, so the URDF and the simulation
+cannot disagree. sim.launch runs this for the node's own scene, beam_points and tf_prefix.
+
+URDF cannot describe the closed loops, so the URDF is the node's TF tree, frame for frame:
+- base -> leg_i_cylinder (revolute theta_i at A_i) -> leg_i_piston (prismatic rho_i, limited to
+  the scene's stroke) -> leg_i_tip_nominal (fixed, at l) and leg_i_beam_0 (fixed: the clamped
+  root of the beam);
+- base -> leg_i_beam_k, k >= 1, and base -> platform: floating joints whose poses the node
+  computes (the deflected beam, the closed loop) -> platform_c<i> (fixed, at r_PC).
+Every link below a moving joint has an inertial: the beam's mass is lumped onto its stations
+(trapezoid weights; the root's share on the piston), so the URDF's total mass is the model's.
+Frame (link) names carry --prefix; joint names do not (they live in the robot's namespace on
+joint_states)."""
 import argparse
+import json
 import math
+import os
+import shutil
+import subprocess
 import sys
-
-R_A = 0.66 / math.sqrt(3.0)
-B = 0.1
-R_PC = B / math.sqrt(3.0)
-PHI = (-math.pi / 6, math.pi / 2, 7 * math.pi / 6)
-L = 0.2
-D = 0.010
-RHO = 2270.0
-LINK_MASS = RHO * math.pi * D * D / 4 * L
-CYL_L, CYL_RI, CYL_RO = 0.2, 0.007, 0.008
-CYL_MASS = RHO * math.pi * (CYL_RO ** 2 - CYL_RI ** 2) * CYL_L
-PLATFORM_MASS = 0.2
-PLATFORM_I = PLATFORM_MASS * B * B / 12
 
 
 def f(x):
     return "%.15g" % x
+
+
+def cli_command():
+    """flex3rpr_sim: beside this script when installed, $F3R_CLI, or through rosrun."""
+    here = os.path.join(os.path.dirname(os.path.abspath(__file__)), "flex3rpr_sim")
+    if os.access(here, os.X_OK):
+        return [here]
+    if os.environ.get("F3R_CLI"):
+        return [os.environ["F3R_CLI"]]
+    if shutil.which("rosrun"):
+        return ["rosrun", "flex3rpr", "flex3rpr_sim"]
+    sys.exit("make_urdf.py: cannot find flex3rpr_sim (set F3R_CLI)")
+
+
+def geometry(scene):
+    p = subprocess.run(cli_command() + ["--geometry", scene], capture_output=True, text=True)
+    if p.returncode != 0:
+        sys.exit("make_urdf.py: " + (p.stderr.strip() or p.stdout.strip()))
+    return json.loads(p.stdout)
 
 
 def inertial(mass, ixx, iyy, izz, x=0.0):
@@ -42,83 +61,112 @@ def rod(length, radius, colour, x0=0.0):
             f'<material name="{colour}"/></visual>\n')
 
 
-def triangle(radius, width, colour):
-    """Three boxes along the sides of the equilateral triangle with circumradius radius."""
+def sphere(radius, colour):
+    return f'    <visual><geometry><sphere radius="{f(radius)}"/></geometry><material name="{colour}"/></visual>\n'
+
+
+def triangle(corners, width, colour):
+    """Boxes along the sides of the triangle through three corners."""
     out = ""
-    side = radius * math.sqrt(3.0)
     for k in range(3):
-        a, b = PHI[k], PHI[(k + 1) % 3]
-        mx = radius * (math.cos(a) + math.cos(b)) / 2
-        my = radius * (math.sin(a) + math.sin(b)) / 2
-        yaw = math.atan2(math.sin(b) - math.sin(a), math.cos(b) - math.cos(a))
-        out += (f'    <visual><origin xyz="{f(mx)} {f(my)} 0" rpy="0 0 {f(yaw)}"/>'
+        (ax, ay), (bx, by) = corners[k], corners[(k + 1) % 3]
+        side = math.hypot(bx - ax, by - ay)
+        yaw = math.atan2(by - ay, bx - ax)
+        out += (f'    <visual><origin xyz="{f((ax + bx) / 2)} {f((ay + by) / 2)} 0" rpy="0 0 {f(yaw)}"/>'
                 f'<geometry><box size="{f(side)} {f(width)} 0.004"/></geometry>'
                 f'<material name="{colour}"/></visual>\n')
     return out
 
 
-def urdf(points):
+def joint(name, kind, parent, child, xyz=(0.0, 0.0), extra=""):
+    return (f'  <joint name="{name}" type="{kind}"><parent link="{parent}"/><child link="{child}"/>'
+            f'<origin xyz="{f(xyz[0])} {f(xyz[1])} 0" rpy="0 0 0"/>{extra}</joint>\n')
+
+
+def urdf(g, points, prefix):
+    def link(name, body=""):
+        return f'  <link name="{prefix}{name}">\n{body}  </link>\n'
+
+    L, D, m_l = g["link_length"], g["link_diameter"], g["link_mass"]
     seg = L / (points - 1)
+    base = prefix + "base"
     s = ['<?xml version="1.0"?>\n',
-         "<!-- Generated by scripts/make_urdf.py; do not edit. -->\n",
+         "<!-- Generated by scripts/make_urdf.py from a scene; do not edit. -->\n",
          '<robot name="flex3rpr">\n',
          '  <material name="grey"><color rgba="0.6 0.6 0.6 1"/></material>\n',
          '  <material name="blue"><color rgba="0.2 0.4 0.9 1"/></material>\n',
          '  <material name="dark"><color rgba="0.15 0.15 0.15 1"/></material>\n',
          '  <material name="orange"><color rgba="1.0 0.5 0.0 1"/></material>\n',
          '  <material name="green"><color rgba="0.1 0.8 0.1 1"/></material>\n',
-         '  <link name="base">\n', triangle(R_A, 0.01, "grey"), "  </link>\n"]
-    # Cylinder inertia about A_i (MODEL.md) is m_c (L^2/3 + (r_o^2 + r_i^2)/4); about its centre
-    # that is m_c (L^2/12 + (r_o^2 + r_i^2)/4).
-    i_centre = CYL_MASS * (CYL_L ** 2 / 12 + (CYL_RO ** 2 + CYL_RI ** 2) / 4)
-    i_axial = CYL_MASS * (CYL_RO ** 2 + CYL_RI ** 2) / 2
+         link("base", triangle(g["base_joint"], 0.01, "grey"))]
+    # Cylinder inertia about its centre: m_c (L^2/12 + (r_o^2 + r_i^2)/4) (MODEL.md gives it about A_i).
+    m_c, L_c = g["cylinder_mass"], g["cylinder_length"]
+    ro, ri = g["cylinder_outer_diameter"] / 2, g["cylinder_inner_diameter"] / 2
+    i_centre = m_c * (L_c ** 2 / 12 + (ro ** 2 + ri ** 2) / 4)
+    i_axial = m_c * (ro ** 2 + ri ** 2) / 2
+    # Trapezoid lumps of the beam: half a segment at each end, a whole one between.
+    lump = [m_l * (0.5 if k in (0, points - 1) else 1.0) / (points - 1) for k in range(points)]
+
+    def beam_lump(k):
+        length = seg * (0.5 if k in (0, points - 1) else 1.0)
+        m = lump[k]
+        return inertial(m, m * D * D / 8, m * (length ** 2 / 12 + D * D / 16), m * (length ** 2 / 12 + D * D / 16))
+
     for i in range(3):
         n = i + 1
-        ax, ay = R_A * math.cos(PHI[i]), R_A * math.sin(PHI[i])
-        s.append(f'  <link name="leg_{n}_cylinder">\n' + inertial(CYL_MASS, i_axial, i_centre, i_centre, CYL_L / 2)
-                 + rod(CYL_L, CYL_RO, "blue") + "  </link>\n")
-        s.append(f'  <joint name="leg_{n}_revolute" type="revolute"><parent link="base"/>'
-                 f'<child link="leg_{n}_cylinder"/><origin xyz="{f(ax)} {f(ay)} 0" rpy="0 0 0"/>'
-                 f'<axis xyz="0 0 1"/><limit lower="{f(-4 * math.pi)}" upper="{f(4 * math.pi)}" effort="100" velocity="100"/></joint>\n')
-        s.append(f'  <link name="leg_{n}_piston">\n    <visual><geometry><sphere radius="0.009"/></geometry>'
-                 f'<material name="dark"/></visual>\n  </link>\n')
-        s.append(f'  <joint name="leg_{n}_prismatic" type="prismatic"><parent link="leg_{n}_cylinder"/>'
-                 f'<child link="leg_{n}_piston"/><origin xyz="0 0 0"/><axis xyz="1 0 0"/>'
-                 f'<limit lower="-0.2" upper="0.6" effort="1000" velocity="100"/></joint>\n')
-        s.append(f'  <link name="leg_{n}_tip_nominal"/>\n')
-        s.append(f'  <joint name="leg_{n}_tip_nominal" type="fixed"><parent link="leg_{n}_piston"/>'
-                 f'<child link="leg_{n}_tip_nominal"/><origin xyz="{f(L)} 0 0"/></joint>\n')
-        # The beam's mass and inertia are the simulator's (modal); each visual segment carries an
-        # equal share so that the URDF's total mass is right.
+        leg = f"leg_{n}_"
+        s.append(link(leg + "cylinder", inertial(m_c, i_axial, i_centre, i_centre, L_c / 2) + rod(L_c, ro, "blue")))
+        s.append(joint(leg + "revolute", "continuous", base, prefix + leg + "cylinder", g["base_joint"][i],
+                       '<axis xyz="0 0 1"/>'))
+        s.append(link(leg + "piston", beam_lump(0) + sphere(0.009, "dark")))
+        s.append(joint(leg + "prismatic", "prismatic", prefix + leg + "cylinder", prefix + leg + "piston",
+                       extra=f'<axis xyz="1 0 0"/><limit lower="{f(g["stroke_min"])}" upper="{f(g["stroke_max"])}"'
+                             ' effort="1000" velocity="100"/>'))
+        s.append(link(leg + "tip_nominal"))
+        s.append(joint(leg + "tip_nominal_joint", "fixed", prefix + leg + "piston", prefix + leg + "tip_nominal",
+                       (L, 0.0)))
         for k in range(points):
-            body = ""
-            if k < points - 1:
-                m = LINK_MASS / (points - 1)
-                body = inertial(m, m * D * D / 8, m * seg * seg / 12, m * seg * seg / 12, seg / 2) + rod(seg, D / 2, "orange")
-            s.append(f'  <link name="leg_{n}_beam_{k}">\n{body}  </link>\n')
-            s.append(f'  <joint name="leg_{n}_beam_{k}_joint" type="floating"><parent link="base"/>'
-                     f'<child link="leg_{n}_beam_{k}"/></joint>\n')
-    s.append('  <link name="platform">\n' + inertial(PLATFORM_MASS, PLATFORM_I / 2, PLATFORM_I / 2, PLATFORM_I)
-             + triangle(R_PC, 0.012, "green") + "  </link>\n")
-    s.append('  <joint name="platform_joint" type="floating"><parent link="base"/><child link="platform"/></joint>\n')
+            body = rod(seg, D / 2, "orange") if k < points - 1 else ""
+            if k == 0:  # the clamped root: rigidly on the piston; its mass is the piston's inertial
+                s.append(link(f"{leg}beam_0", body))
+                s.append(joint(f"{leg}beam_0_joint", "fixed", prefix + leg + "piston", prefix + leg + "beam_0"))
+            else:
+                s.append(link(f"{leg}beam_{k}", beam_lump(k) + body))
+                s.append(joint(f"{leg}beam_{k}_joint", "floating", base, f"{prefix}{leg}beam_{k}"))
+    corners = [(g["platform_radius"] * math.cos(a), g["platform_radius"] * math.sin(a)) for a in g["platform_angle"]]
+    i_p = g["platform_inertia"]
+    s.append(link("platform", inertial(g["platform_mass"], i_p / 2, i_p / 2, i_p) + triangle(corners, 0.012, "green")))
+    s.append(joint("platform_joint", "floating", base, prefix + "platform"))
     for i in range(3):
         n = i + 1
-        s.append(f'  <link name="platform_c{n}">\n    <visual><geometry><sphere radius="0.007"/></geometry>'
-                 f'<material name="dark"/></visual>\n  </link>\n')
-        s.append(f'  <joint name="platform_c{n}" type="fixed"><parent link="platform"/><child link="platform_c{n}"/>'
-                 f'<origin xyz="{f(R_PC * math.cos(PHI[i]))} {f(R_PC * math.sin(PHI[i]))} 0"/></joint>\n')
+        s.append(link(f"platform_c{n}", sphere(0.007, "dark")))
+        s.append(joint(f"platform_c{n}_joint", "fixed", prefix + "platform", f"{prefix}platform_c{n}", corners[i]))
     s.append("</robot>\n")
     return "".join(s)
 
 
+def default_scene():
+    return os.path.join(os.path.dirname(os.path.dirname(os.path.abspath(__file__))), "config", "scenes",
+                        "rest.yaml")
+
+
 def main():
     p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    p.add_argument("--scene", help="scene file (default: config/scenes/rest.yaml, Table I)")
     p.add_argument("--beam-points", type=int, default=11)
+    p.add_argument("--prefix", default="", help="frame prefix, as the node's ~tf_prefix ('robot1' -> 'robot1/')")
     p.add_argument("--out")
     a = p.parse_args()
     if not 2 <= a.beam_points <= 101:
-        sys.exit("--beam-points must be in 2..101")
-    text = urdf(a.beam_points)
+        sys.exit("make_urdf.py: --beam-points must be in 2..101")
+    scene = a.scene
+    if not scene:
+        scene = default_scene()
+        if not os.path.exists(scene):  # installed: the scenes are in share/flex3rpr
+            import rospkg
+            scene = os.path.join(rospkg.RosPack().get_path("flex3rpr"), "config", "scenes", "rest.yaml")
+    prefix = a.prefix.strip("/")
+    text = urdf(geometry(scene), a.beam_points, prefix + "/" if prefix else "")
     if a.out:
         with open(a.out, "w") as fh:
             fh.write(text)

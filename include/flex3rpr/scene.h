@@ -105,8 +105,9 @@ typedef struct {
   double friction_prismatic[3]; /* viscous, N s/m on rho_i, default 0 */
   double friction_revolute[3];  /* viscous, N m s on theta_i, default 0 */
   double actuator_lag;          /* s: first-order lag of the applied leg forces; 0 is off */
-  int end_stops;                /* 1: stroke limits stroke_min <= rho_i <= stroke_max, impacts */
-  double stroke_min, stroke_max;/* m, default 0 and 0.2 */
+  int end_stops;                /* 1: the stroke is hard: impacts at stroke_min and stroke_max */
+  double stroke_min, stroke_max;/* m, default 0 and 0.2: the range of rho_i (geometry.stroke_min,
+                                 * _max or effects.end_stops.min, max), the URDF's limits */
   double restitution;           /* coefficient of restitution of the stops, default 0.5 */
 
   /* initial state: platform pose (X_p, Y_p, phi_p) and its rate; deflections are in links[] */

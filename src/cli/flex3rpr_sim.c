@@ -2,7 +2,8 @@
  *   flex3rpr_sim SCENE.yaml [--out FILE.csv] [--formulation dae|minimal] [--rtol R] [--atol A]
  *                [--output-step DT] [--duration T] [--fd-jacobian] [--dense-linear-solver]
  *                [--exact-kinematics] [--ida | --erk | --dirk] [--table NAME] ...
- *   flex3rpr_sim --modal SCENE.yaml */
+ *   flex3rpr_sim --modal SCENE.yaml
+ *   flex3rpr_sim --geometry SCENE.yaml   (JSON for scripts/make_urdf.py) */
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -27,6 +28,7 @@ typedef struct {
   const char* scene_path;
   const char* out_path;
   int modal;
+  int geometry;
   int fd_jacobian;
   int dense_linear_solver;
   int exact_kinematics;
@@ -46,7 +48,8 @@ static void usage(FILE* to) {
           "                    [--fd-jacobian] [--dense-linear-solver] [--exact-kinematics]\n"
           "                    [--ida | --erk | --dirk] [--table NAME]\n"
           "                    [--stop-at-outputs] [--hold T:INDEX:VALUE ...]\n"
-          "       flex3rpr_sim --modal SCENE.yaml\n");
+          "       flex3rpr_sim --modal SCENE.yaml\n"
+          "       flex3rpr_sim --geometry SCENE.yaml\n");
 }
 
 static int parse_number(const char* flag, const char* text, double* out) {
@@ -67,6 +70,7 @@ static int parse_args(int argc, char** argv, cli_options* o) {
     const char* a = argv[k];
     const char* next = k + 1 < argc ? argv[k + 1] : NULL;
     if (!strcmp(a, "--modal")) o->modal = 1;
+    else if (!strcmp(a, "--geometry")) o->geometry = 1;
     else if (!strcmp(a, "--fd-jacobian")) o->fd_jacobian = 1;
     else if (!strcmp(a, "--dense-linear-solver")) o->dense_linear_solver = 1;
     else if (!strcmp(a, "--exact-kinematics")) o->exact_kinematics = 1;
@@ -142,6 +146,24 @@ static void write_row(FILE* f, const f3r_model* m, const f3r_outputs* o) {
           o->constraint_residual);
 }
 
+/* The model's geometry, masses and stroke as JSON: the URDF generator (scripts/make_urdf.py)
+ * takes them from here, so that the URDF and the node's model come from one scene. */
+static void print_geometry(const f3r_model* m) {
+  const f3r_scene* s = &m->scene;
+  printf("{\"base_joint\": [[%.17g, %.17g], [%.17g, %.17g], [%.17g, %.17g]],\n", m->base_joint[0][0],
+         m->base_joint[0][1], m->base_joint[1][0], m->base_joint[1][1], m->base_joint[2][0], m->base_joint[2][1]);
+  printf(" \"platform_angle\": [%.17g, %.17g, %.17g], \"platform_radius\": %.17g,\n", m->platform_angle[0],
+         m->platform_angle[1], m->platform_angle[2], m->platform_radius);
+  printf(" \"platform_mass\": %.17g, \"platform_inertia\": %.17g,\n", m->platform_mass, m->platform_inertia);
+  printf(" \"link_length\": %.17g, \"link_diameter\": %.17g, \"link_mass\": %.17g,\n", m->link_length,
+         s->link_diameter, m->link_mass);
+  printf(" \"cylinder_length\": %.17g, \"cylinder_inner_diameter\": %.17g, \"cylinder_outer_diameter\": %.17g,"
+         " \"cylinder_mass\": %.17g,\n", m->cylinder_length, s->cylinder_inner_diameter,
+         s->cylinder_outer_diameter, m->cylinder_mass);
+  printf(" \"stroke_min\": %.17g, \"stroke_max\": %.17g, \"end_stops\": %s}\n", m->stroke_min,
+         m->stroke_max, m->end_stops ? "true" : "false");
+}
+
 static int run_modal(const f3r_model* m) {
   double hz[F3R_MAX_Q];
   int count = 0;
@@ -202,6 +224,11 @@ int main(int argc, char** argv) {
   if (f3r_model_create(&scene, &model, &err) != F3R_OK) {
     fprintf(stderr, "flex3rpr_sim: %s: %s\n", o.scene_path, err.message);
     return 1;
+  }
+  if (o.geometry) {
+    print_geometry(model);
+    f3r_model_destroy(model);
+    return 0;
   }
   for (int i = 0; i < 3; ++i)
     if (model->link[i].modes_reason[0]) printf("%s\n", model->link[i].modes_reason);

@@ -275,10 +275,12 @@ f3r_status f3r_scene_validate(const f3r_scene* s, f3r_error* err) {
   }
   CHECK_RANGE("effects.actuator_lag.time_constant", s->actuator_lag, 0.0, 10.0);
   CHECK_RANGE("effects.end_stops.restitution", s->restitution, 0.0, 1.0);
-  CHECK_RANGE("effects.end_stops.min", s->stroke_min, -s->link_length + 1e-3, 10.0);
+  /* The stroke is the prismatic joints' range (the URDF's limits); end stops make it hard. */
+  CHECK_RANGE(s->end_stops ? "effects.end_stops.min" : "geometry.stroke_min", s->stroke_min,
+              -s->link_length + 1e-3, 10.0);
   if (!(s->stroke_max > s->stroke_min))
-    return f3r_scene_error(err, "effects.end_stops.max", NULL, "%g must exceed min %g",
-                           s->stroke_max, s->stroke_min);
+    return f3r_scene_error(err, s->end_stops ? "effects.end_stops.max" : "geometry.stroke_max", NULL,
+                           "%g must exceed the minimum %g", s->stroke_max, s->stroke_min);
   CHECK_RANGE("effects.payload.mass", s->payload_mass, 0.0, 1e3);
   CHECK_RANGE("effects.payload.inertia", s->payload_inertia, 0.0, 1e3);
   for (int k = 0; k < 3; ++k) {

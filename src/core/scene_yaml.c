@@ -395,8 +395,9 @@ static f3r_status read_root(loader* L, const yaml_node_t* root) {
   if (st != F3R_OK) return st;
   FOR_EACH_PAIR(L, root, key, value) {
     if (!strcmp(key, "geometry")) {
-      const number_field f[] = {{"base_side", &s->base_side}, {"platform_side", &s->platform_side}};
-      st = read_numbers(L, value, "geometry", f, 2);
+      const number_field f[] = {{"base_side", &s->base_side}, {"platform_side", &s->platform_side},
+                                {"stroke_min", &s->stroke_min}, {"stroke_max", &s->stroke_max}};
+      st = read_numbers(L, value, "geometry", f, 4);
     } else if (!strcmp(key, "platform")) {
       const number_field f[] = {{"mass", &s->platform_mass}, {"inertia", &s->platform_inertia}};
       st = read_numbers(L, value, "platform", f, 2);

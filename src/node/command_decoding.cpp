@@ -62,15 +62,13 @@ std::string DecodeEffortGroup(const std_msgs::Float64MultiArray& msg, const f3r_
   return "";
 }
 
-std::string DecodeWrench(const geometry_msgs::WrenchStamped& msg, const std::string& world_frame,
-                         const std::string& platform_frame, double phi_p,
-                         const CommandLimits& limits, const f3r_model& model,
-                         std::vector<double>* forces) {
-  const std::string& frame = msg.header.frame_id;
-  const bool in_world = frame.empty() || frame == world_frame;
-  if (!in_world && frame != platform_frame)
-    return "header.frame_id '" + frame + "' is unknown (use '" + world_frame + "' or '" +
-           platform_frame + "')";
+Rotation YawRotation(double yaw) {
+  const double c = std::cos(yaw), s = std::sin(yaw);
+  return {c, -s, 0.0, s, c, 0.0, 0.0, 0.0, 1.0};
+}
+
+std::string DecodeWrench(const geometry_msgs::WrenchStamped& msg, const Rotation& R,
+                         const CommandLimits& limits, const f3r_model& model, std::vector<double>* forces) {
   const auto& f = msg.wrench.force;
   const auto& m = msg.wrench.torque;
   const std::pair<const char*, double> all[] = {{"force.x", f.x},  {"force.y", f.y},
@@ -81,23 +79,30 @@ std::string DecodeWrench(const geometry_msgs::WrenchStamped& msg, const std::str
     const std::string why = Check(c.first, c.second, torque ? limits.torque : limits.force);
     if (!why.empty()) return why;
   }
-  if (f.z != 0.0 || m.x != 0.0 || m.y != 0.0)
-    return "out-of-plane components (force.z, torque.x, torque.y) must be zero";
-  double fx = f.x, fy = f.y;
-  if (!in_world) {
-    const double c = std::cos(phi_p), s = std::sin(phi_p);
-    fx = c * f.x - s * f.y;
-    fy = s * f.x + c * f.y;
-    // The limit holds for the force applied, in the world frame: turning can raise a component by
-    // up to sqrt(2) (and overflow to Inf near DBL_MAX). Found by test/fuzz/fuzz_commands.
-    std::string why = Check("force.x turned into the world frame", fx, limits.force);
-    if (why.empty()) why = Check("force.y turned into the world frame", fy, limits.force);
-    if (!why.empty()) return why;
-  }
+  const double fb[3] = {R[0] * f.x + R[1] * f.y + R[2] * f.z, R[3] * f.x + R[4] * f.y + R[5] * f.z,
+                        R[6] * f.x + R[7] * f.y + R[8] * f.z};
+  const double mb[3] = {R[0] * m.x + R[1] * m.y + R[2] * m.z, R[3] * m.x + R[4] * m.y + R[5] * m.z,
+                        R[6] * m.x + R[7] * m.y + R[8] * m.z};
+  // In the plane: exactly for a frame turned about z only (R's third row is (0, 0, 1)); to
+  // rounding for a frame whose z axis tf2 gives as the base's up to rounding.
+  const bool about_z = R[6] == 0.0 && R[7] == 0.0 && R[8] == 1.0;
+  const double size = std::fabs(f.x) + std::fabs(f.y) + std::fabs(f.z) + std::fabs(m.x) + std::fabs(m.y) +
+                      std::fabs(m.z);
+  const double tolerance = about_z ? 0.0 : 1e-12 * size;
+  const bool planar = about_z ? f.z == 0.0 && m.x == 0.0 && m.y == 0.0
+                              : std::fabs(fb[2]) <= tolerance && std::fabs(mb[0]) <= tolerance &&
+                                    std::fabs(mb[1]) <= tolerance;
+  if (!planar) return "out-of-plane components (force.z, torque.x, torque.y in the base frame) must be zero";
+  // The limit holds for the force applied, in the base frame: turning can raise a component by
+  // up to sqrt(2) (and overflow to Inf near DBL_MAX). Found by test/fuzz/fuzz_commands.
+  std::string why = Check("force.x turned into the base frame", fb[0], limits.force);
+  if (why.empty()) why = Check("force.y turned into the base frame", fb[1], limits.force);
+  if (why.empty()) why = Check("torque.z turned into the base frame", mb[2], limits.torque);
+  if (!why.empty()) return why;
   forces->assign(static_cast<size_t>(model.nq), 0.0);
-  (*forces)[F3R_FORCE_PLATFORM] = fx;
-  (*forces)[F3R_FORCE_PLATFORM + 1] = fy;
-  (*forces)[F3R_FORCE_PLATFORM + 2] = m.z;
+  (*forces)[F3R_FORCE_PLATFORM] = fb[0];
+  (*forces)[F3R_FORCE_PLATFORM + 1] = fb[1];
+  (*forces)[F3R_FORCE_PLATFORM + 2] = mb[2];
   return "";
 }
 

@@ -5,6 +5,7 @@
 #include <geometry_msgs/WrenchStamped.h>
 #include <std_msgs/Float64MultiArray.h>
 
+#include <array>
 #include <string>
 #include <vector>
 
@@ -23,11 +24,15 @@ std::string DecodeEffortCommand(const EffortCommand& msg, const f3r_model& model
 std::string DecodeEffortGroup(const std_msgs::Float64MultiArray& msg, const f3r_model& model,
                               const CommandLimits& limits, std::vector<double>* forces);
 
-// force.x, force.y, torque.z in world_frame (or an empty frame_id) or platform_frame, which is
-// turned by the platform angle phi_p; any other nonzero component is out of the plane.
-std::string DecodeWrench(const geometry_msgs::WrenchStamped& msg, const std::string& world_frame,
-                         const std::string& platform_frame, double phi_p,
-                         const CommandLimits& limits, const f3r_model& model,
-                         std::vector<double>* forces);
+// The axes of a frame in the base frame, row-major: v_base = R v_frame.
+using Rotation = std::array<double, 9>;
+Rotation YawRotation(double yaw);
+
+// A wrench acting on the platform at its centre P, its components given in a frame whose axes
+// are turned into the base frame by to_base. In the base frame only force.x, force.y and
+// torque.z may be nonzero (the plane); each component must be finite and within the limits,
+// both as given and as turned into the base frame.
+std::string DecodeWrench(const geometry_msgs::WrenchStamped& msg, const Rotation& to_base,
+                         const CommandLimits& limits, const f3r_model& model, std::vector<double>* forces);
 
 }  // namespace flex3rpr

@@ -1,5 +1,9 @@
 #include "command_inputs.hpp"
 
+#include <tf2_eigen/tf2_eigen.h>
+
+#include <Eigen/Geometry>
+
 namespace flex3rpr {
 
 CommandInputs::CommandInputs(ros::NodeHandle& pnh, const f3r_model& model,
@@ -11,21 +15,60 @@ CommandInputs::CommandInputs(ros::NodeHandle& pnh, const f3r_model& model,
   // Deep queues (~command_queue_size, 1000 by default): a controller at 10 kHz must not lose
   // commands (a lost invalid one would also go uncounted) while the node is descheduled.
   const uint32_t kCommandQueue = static_cast<uint32_t>(params.command_queue_size);
-  command_sub_ = pnh.subscribe<EffortCommand>("command", kCommandQueue, [this](const EffortCommand::ConstPtr& m) {
-    Accept(kCommand, DecodeEffortCommand(*m, model_, params_.limits, &scratch_), scratch_, "~command");
-  });
+  // Control commands are small and frequent: Nagle's algorithm would hold them back.
+  const ros::TransportHints hints = ros::TransportHints().tcpNoDelay();
+  command_sub_ = pnh.subscribe<EffortCommand>(
+      "command", kCommandQueue,
+      [this](const EffortCommand::ConstPtr& m) {
+        Accept(kCommand, DecodeEffortCommand(*m, model_, params_.limits, &scratch_), scratch_, "~command");
+      },
+      ros::VoidConstPtr(), hints);
   group_sub_ = pnh.subscribe<std_msgs::Float64MultiArray>(
-      "effort_group/command", kCommandQueue, [this](const std_msgs::Float64MultiArray::ConstPtr& m) {
+      "effort_group/command", kCommandQueue,
+      [this](const std_msgs::Float64MultiArray::ConstPtr& m) {
         Accept(kEffortGroup, DecodeEffortGroup(*m, model_, params_.limits, &scratch_), scratch_,
                "~effort_group/command");
-      });
+      },
+      ros::VoidConstPtr(), hints);
   wrench_sub_ = pnh.subscribe<geometry_msgs::WrenchStamped>(
-      "platform_wrench", kCommandQueue, [this](const geometry_msgs::WrenchStamped::ConstPtr& m) {
-        Accept(kWrench,
-               DecodeWrench(*m, params_.world_frame, "platform", *phi_p_, params_.limits, model_,
-                            &scratch_),
-               scratch_, "~platform_wrench");
-      });
+      "platform_wrench", kCommandQueue,
+      [this](const geometry_msgs::WrenchStamped::ConstPtr& m) {
+        Rotation to_base;
+        std::string why = ResolveFrame(m->header.frame_id, &to_base);
+        if (why.empty()) why = DecodeWrench(*m, to_base, params_.limits, model_, &scratch_);
+        Accept(kWrench, why, scratch_, "~platform_wrench");
+      },
+      ros::VoidConstPtr(), hints);
+}
+
+std::string CommandInputs::ResolveFrame(const std::string& frame, Rotation* to_base) {
+  const FrameNames& f = params_.frames;
+  // world -> base is the identity (state_outputs.cpp)
+  if (frame.empty() || frame == f.world || frame == f.base) {
+    *to_base = YawRotation(0.0);
+    return "";
+  }
+  if (frame == f.platform) {
+    *to_base = YawRotation(*phi_p_);
+    return "";
+  }
+  if (!tf_buffer_) {  // the first wrench in another frame: listen to tf2 from now on
+    tf_buffer_.reset(new tf2_ros::Buffer());
+    tf_listener_.reset(new tf2_ros::TransformListener(*tf_buffer_));  // its own spin thread
+    // Give the listener a moment to hear /tf_static and /tf; in wall time, because simulated
+    // time stands still while this loop waits.
+    const ros::WallTime until = ros::WallTime::now() + ros::WallDuration(0.5);
+    while (ros::WallTime::now() < until && !tf_buffer_->canTransform(f.base, frame, ros::Time(0)))
+      ros::WallDuration(0.01).sleep();
+  }
+  std::string tf_error;
+  if (!tf_buffer_->canTransform(f.base, frame, ros::Time(0), &tf_error))
+    return "header.frame_id '" + frame + "' has no transform to '" + f.base + "' in tf2 (" + tf_error + ")";
+  const Eigen::Matrix3d R =
+      tf2::transformToEigen(tf_buffer_->lookupTransform(f.base, frame, ros::Time(0))).rotation();
+  for (int r = 0; r < 3; ++r)
+    for (int c = 0; c < 3; ++c) (*to_base)[static_cast<size_t>(3 * r + c)] = R(r, c);
+  return "";
 }
 
 void CommandInputs::Accept(Source source, const std::string& why,

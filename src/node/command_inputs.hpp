@@ -2,8 +2,11 @@
 #pragma once
 
 #include <ros/ros.h>
+#include <tf2_ros/buffer.h>
+#include <tf2_ros/transform_listener.h>
 
 #include <array>
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -13,7 +16,7 @@ namespace flex3rpr {
 
 class CommandInputs {
  public:
-  // phi_p is read when a wrench arrives in the platform frame.
+  // phi_p is read when a wrench arrives in the platform frame. Commands arrive with TCP_NODELAY.
   CommandInputs(ros::NodeHandle& pnh, const f3r_model& model, const NodeParams& params,
                 const double* phi_p);
 
@@ -26,6 +29,9 @@ class CommandInputs {
   enum Source { kCommand = 0, kEffortGroup = 1, kWrench = 2, kSources = 3 };
   void Accept(Source source, const std::string& why, const std::vector<double>& forces,
               const char* topic);
+  // The axes of a wrench's frame in the base frame: the node's own world, base and platform
+  // frames directly; any other through tf2 (a listener started at the first such wrench).
+  std::string ResolveFrame(const std::string& frame, Rotation* to_base);
 
   const f3r_model& model_;
   const NodeParams& params_;
@@ -38,6 +44,8 @@ class CommandInputs {
   uint64_t rejected_ = 0;
   double now_ = 0.0;
   ros::Subscriber command_sub_, group_sub_, wrench_sub_;
+  std::unique_ptr<tf2_ros::Buffer> tf_buffer_;
+  std::unique_ptr<tf2_ros::TransformListener> tf_listener_;
 };
 
 }  // namespace flex3rpr

@@ -11,6 +11,7 @@
 namespace flex3rpr {
 
 namespace {
+const char* TypeName(bool) { return "a boolean"; }
 const char* TypeName(double) { return "a number"; }
 const char* TypeName(int) { return "an integer"; }
 const char* TypeName(const std::string&) { return "a string"; }
@@ -25,15 +26,41 @@ static bool Read(const ros::NodeHandle& pnh, const char* name, const T& fallback
   if (!pnh.hasParam(name)) return true;
   XmlRpc::XmlRpcValue value;
   pnh.getParam(name, value);
-  // roscpp would truncate 2.5 to an integer: an integer parameter must be one
-  const bool integer_ok = !std::is_same<T, int>::value || value.getType() == XmlRpc::XmlRpcValue::TypeInt;
-  if (integer_ok && pnh.getParam(name, *out)) return true;
+  // roscpp would truncate 2.5 to an integer, and take 0 and 1 for booleans: the type must match
+  const auto type = value.getType();
+  const bool type_ok = (!std::is_same<T, int>::value || type == XmlRpc::XmlRpcValue::TypeInt) &&
+                       (!std::is_same<T, bool>::value || type == XmlRpc::XmlRpcValue::TypeBoolean);
+  if (type_ok && pnh.getParam(name, *out)) return true;
   *error = std::string("parameter ~") + name + ": not " + TypeName(fallback);
   return false;
 }
 
 std::string DefaultScenePath() {
-  return ros::package::getPath("flex3rpr") + "/config/scenes/paper_sim3_fixed_free.yaml";
+  return ros::package::getPath("flex3rpr") + "/config/scenes/rest.yaml";
+}
+
+std::string NormalisePrefix(const std::string& prefix) {
+  size_t a = 0, b = prefix.size();
+  while (a < b && prefix[a] == '/') ++a;
+  while (b > a && prefix[b - 1] == '/') --b;
+  return a == b ? "" : prefix.substr(a, b - a) + "/";
+}
+
+FrameNames MakeFrameNames(const std::string& prefix, const std::string& world, const std::string& base,
+                          int beam_points) {
+  FrameNames f;
+  f.world = world;
+  f.base = base;
+  f.platform = prefix + "platform";
+  for (int i = 0; i < 3; ++i) {
+    const std::string leg = prefix + "leg_" + std::to_string(i + 1) + "_";
+    f.cylinder[i] = leg + "cylinder";
+    f.piston[i] = leg + "piston";
+    f.tip_nominal[i] = leg + "tip_nominal";
+    f.platform_c[i] = prefix + "platform_c" + std::to_string(i + 1);
+    for (int k = 0; k < beam_points; ++k) f.beam[i].push_back(leg + "beam_" + std::to_string(k));
+  }
+  return f;
 }
 
 namespace {
@@ -58,15 +85,20 @@ bool NonNegative(const char* name, double value, std::string* error) {
 }  // namespace
 
 bool LoadParams(const ros::NodeHandle& pnh, NodeParams* p, std::string* error) {
-  p->scene_path = pnh.param<std::string>("scene", DefaultScenePath());
+  if (!Read(pnh, "scene", DefaultScenePath(), &p->scene_path, error)) return false;
   f3r_error err{};
   if (f3r_scene_load(p->scene_path.c_str(), &p->scene, &err) != F3R_OK) {
     *error = std::string("parameter ~scene: ") + err.message;
     return false;
   }
   // Single entries of the scene may be overridden by parameter.
-  std::string formulation;
-  if (pnh.getParam("formulation", formulation)) {
+  std::string formulation, integrator, table;
+  if (!Read(pnh, "formulation", std::string(), &formulation, error) ||
+      !Read(pnh, "integrator", std::string(), &integrator, error) ||
+      !Read(pnh, "table", std::string(), &table, error) ||
+      !Read(pnh, "end_stops", false, &p->end_stops, error))
+    return false;
+  if (!formulation.empty()) {
     if (formulation == "dae") p->scene.formulation = F3R_FORMULATION_DAE;
     else if (formulation == "minimal") p->scene.formulation = F3R_FORMULATION_MINIMAL;
     else {
@@ -74,8 +106,7 @@ bool LoadParams(const ros::NodeHandle& pnh, NodeParams* p, std::string* error) {
       return false;
     }
   }
-  std::string integrator;
-  if (pnh.getParam("integrator", integrator)) {
+  if (!integrator.empty()) {
     if (integrator == "ida") p->scene.integrator = F3R_INTEGRATOR_IDA;
     else if (integrator == "erk") p->scene.integrator = F3R_INTEGRATOR_ERK;
     else if (integrator == "dirk") p->scene.integrator = F3R_INTEGRATOR_DIRK;
@@ -84,12 +115,12 @@ bool LoadParams(const ros::NodeHandle& pnh, NodeParams* p, std::string* error) {
       return false;
     }
   }
-  std::string table;
-  if (pnh.getParam("table", table))  // checked with the scene below (solver.table)
+  if (!table.empty())  // checked with the scene below (solver.table)
     std::snprintf(p->scene.table, sizeof p->scene.table, "%s", table.c_str());
   if (!Read(pnh, "rtol", p->scene.rtol, &p->scene.rtol, error) ||
       !Read(pnh, "atol", p->scene.atol, &p->scene.atol, error))
     return false;
+  if (p->end_stops) p->scene.end_stops = 1;  // the scene's stroke becomes hard
   if (f3r_scene_validate(&p->scene, &err) != F3R_OK) {
     *error = std::string("parameters override the scene badly: ") + err.message;
     return false;
@@ -101,8 +132,10 @@ bool LoadParams(const ros::NodeHandle& pnh, NodeParams* p, std::string* error) {
       Read(pnh, "publish_rate", 1000.0, &p->publish_rate, error) &&
       Read(pnh, "beam_points", p->scene.beam_points, &p->beam_points, error) &&
       Read(pnh, "realtime_factor", 1.0, &p->realtime_factor, error) &&
+      Read(pnh, "tf_prefix", std::string(), &p->tf_prefix, error) &&
       Read(pnh, "world_frame", std::string("world"), &p->world_frame, error) &&
-      Read(pnh, "base_frame", std::string("base"), &p->base_frame, error) &&
+      Read(pnh, "base_frame", NormalisePrefix(p->tf_prefix) + "base", &p->base_frame, error) &&
+      Read(pnh, "paused", false, &p->start_paused, error) &&
       Read(pnh, "command_timeout", 0.0, &p->command_timeout, error) &&
       Read(pnh, "duration", 0.0, &p->duration, error) &&
       Read(pnh, "wait_for_subscribers", 0, &p->wait_for_subscribers, error) &&
@@ -137,6 +170,25 @@ bool LoadParams(const ros::NodeHandle& pnh, NodeParams* p, std::string* error) {
   }
   if (p->world_frame.empty() || p->base_frame.empty()) {
     *error = "parameter ~world_frame and ~base_frame must not be empty";
+    return false;
+  }
+  p->tf_prefix = NormalisePrefix(p->tf_prefix);
+  p->frames = MakeFrameNames(p->tf_prefix, p->world_frame, p->base_frame, p->beam_points);
+  // One clock: stamps follow /use_sim_time (simulated time, with /clock from this node, as
+  // gazebo_ros does), unless ~stamps says otherwise.
+  bool use_sim_time = false;
+  ros::param::get("/use_sim_time", use_sim_time);
+  std::string stamps;
+  if (!Read(pnh, "stamps", std::string(use_sim_time ? "sim" : "wall"), &stamps, error) ||
+      !Read(pnh, "publish_clock", use_sim_time, &p->publish_clock, error))
+    return false;
+  if (stamps != "sim" && stamps != "wall") {
+    *error = "parameter ~stamps: '" + stamps + "' is not one of sim, wall";
+    return false;
+  }
+  p->sim_stamps = stamps == "sim";
+  if (p->publish_clock && !p->sim_stamps) {
+    *error = "parameter ~publish_clock: true needs simulated stamps (~stamps: sim)";
     return false;
   }
   return true;

@@ -3,7 +3,9 @@
 
 #include <ros/ros.h>
 
+#include <array>
 #include <string>
+#include <vector>
 
 #include "flex3rpr/sim.h"
 
@@ -15,6 +17,17 @@ struct CommandLimits {
   double modal = 1000.0;   // N, per modal force
 };
 
+// Every frame the node publishes: ~tf_prefix + name, except the world frame, which robots share.
+struct FrameNames {
+  std::string world, base, platform;
+  std::array<std::string, 3> cylinder, piston, tip_nominal, platform_c;
+  std::array<std::vector<std::string>, 3> beam;  // stations 0..beam_points-1
+};
+FrameNames MakeFrameNames(const std::string& prefix, const std::string& world, const std::string& base,
+                          int beam_points);
+// "robot1" and "robot1/" give "robot1/"; "" gives "".
+std::string NormalisePrefix(const std::string& prefix);
+
 struct NodeParams {
   std::string scene_path;             // ~scene, default: the package's paper_sim3_fixed_free.yaml
   f3r_scene scene;                    // loaded and overridden
@@ -22,8 +35,14 @@ struct NodeParams {
   double publish_rate = 1000.0;       // Hz of simulated time
   int beam_points = 11;               // stations per link
   double realtime_factor = 1.0;       // 1 paces to the wall clock, 0 runs as fast as possible
+  std::string tf_prefix;               // prepended to every frame but the world frame ("robot1/")
   std::string world_frame = "world";
-  std::string base_frame = "base";
+  std::string base_frame = "base";     // default: tf_prefix + "base"
+  FrameNames frames;
+  bool sim_stamps = false;            // ~stamps (sim, wall); default: /use_sim_time
+  bool publish_clock = false;         // ~publish_clock, default: /use_sim_time
+  bool start_paused = false;          // ~paused
+  bool end_stops = false;             // ~end_stops: the scene's stroke as hard stops
   double command_timeout = 0.0;       // s of simulated time; 0 holds commands forever
   double duration = 0.0;              // s; > 0 stops the node at that simulated time; < 0 the scene's run.duration
   int wait_for_subscribers = 0;       // before the first output, wait until every output topic has this many

@@ -37,7 +37,8 @@ bool SimNode::Init() {
   }
   model_.reset(model);
   std::string urdf;
-  if (!nh_.getParam("robot_description", urdf)) {
+  const bool described = nh_.getParam("robot_description", urdf);
+  if (!described) {
     const std::string path = ros::package::getPath("flex3rpr") + "/urdf/flex3rpr.urdf";
     if (!ReadFile(path, &urdf)) {
       ROS_ERROR("flex3rpr_node: no robot_description parameter and cannot read %s", path.c_str());
@@ -46,7 +47,8 @@ bool SimNode::Init() {
     ROS_INFO("flex3rpr_node: no robot_description parameter; checking the geometry against %s",
              path.c_str());
   }
-  const std::string mismatch = CheckUrdfGeometry(urdf, *model_);
+  // The package's URDF is for the default frames and 11 stations: only its geometry must match.
+  const std::string mismatch = CheckUrdf(urdf, *model_, described ? &params_.frames : nullptr);
   if (!mismatch.empty()) {
     ROS_ERROR("flex3rpr_node: %s", mismatch.c_str());
     return false;
@@ -61,28 +63,44 @@ bool SimNode::Init() {
   outputs_.reset(new StateOutputs(nh_, pnh_, *model_, params_));
   services_.reset(new Services(pnh_, &control_));
   ROS_INFO("flex3rpr_node: scene %s, nq %d, %s, rtol %g, publishing at %g Hz of simulated time, "
-           "real-time factor %g",
+           "real-time factor %g, %s stamps%s, frames under %s",
            params_.scene_path.c_str(), model_->nq,
            params_.settings.formulation == F3R_FORMULATION_DAE ? "dae" : "minimal",
-           params_.settings.rtol, params_.publish_rate, params_.realtime_factor);
+           params_.settings.rtol, params_.publish_rate, params_.realtime_factor,
+           params_.sim_stamps ? "simulated" : "wall-clock", params_.publish_clock ? " with /clock" : "",
+           params_.frames.base.c_str());
   return true;
 }
 
-// Paced runs only: how far the simulation lags its schedule (paced_sim simulated seconds since
-// pace_wall), into ~status, and a throttled warning with the achieved factor while it is late.
-void SimNode::ReportLag(const ros::WallTime& now, const ros::WallTime& pace_wall, double paced_sim) {
-  info_.lag = 0.0;
-  info_.behind = false;
-  if (params_.realtime_factor <= 0.0 || control_.paused) return;
-  const ros::WallTime due = pace_wall + ros::WallDuration(paced_sim / params_.realtime_factor);
-  info_.lag = std::max(0.0, (now - due).toSec());
-  info_.behind = info_.lag > kBehindSeconds;
+void SimNode::ReportPace() {
+  const Pacer& p = *pacer_;
+  info_.realtime_factor = p.achieved();
+  info_.requested_realtime_factor = p.requested();
+  info_.behind = p.behind();
+  info_.lag = p.lag();
+  info_.resyncs = p.resyncs();
   if (info_.behind)
     ROS_WARN_THROTTLE(5.0,
-                      "flex3rpr_node: behind the wall clock by %.2f s: achieved real-time factor %.3g of "
-                      "the requested %g (a looser solver.rtol, fewer modes or a lower ~realtime_factor "
-                      "would keep up)",
-                      info_.lag, info_.realtime_factor, params_.realtime_factor);
+                      "flex3rpr_node: behind the wall clock: achieved real-time factor %.3g of the requested %g "
+                      "(below %g of it; a looser solver.rtol, fewer modes or a lower ~realtime_factor would "
+                      "keep up)",
+                      p.achieved(), p.requested(), Pacer::kBehindFraction);
+}
+
+void SimNode::CheckStroke(const f3r_outputs& out) {
+  const double lo = model_->stroke_min, hi = model_->stroke_max;
+  for (int i = 0; i < 3; ++i) {
+    const double rho = out.q[F3R_Q_RHO + i];
+    // End stops hold rho to the stroke up to the event location's tolerance.
+    const double slack = model_->end_stops ? 1e-6 : 0.0;
+    const bool outside = rho < lo - slack || rho > hi + slack;
+    bool& flag = info_.outside_stroke[static_cast<size_t>(i)];
+    if (outside && !flag)
+      ROS_WARN("flex3rpr_node: leg %d left its stroke %g..%g m (the URDF's limits): rho_%d = %.6g m at t = "
+               "%.6g s; reported once until it returns (end_stops:=true makes the stroke hard)",
+               i + 1, lo, hi, i + 1, rho, out.t);
+    flag = outside;
+  }
 }
 
 // Handles callbacks for `seconds` of wall time; returns the wall time that passed.
@@ -137,17 +155,21 @@ int SimNode::Run() {
   // after the first period, and before it exits, the node holds ~subscriber_grace wall seconds.
   const bool grace = params_.wait_for_subscribers > 0 && params_.subscriber_grace > 0.0;
   bool grace_pending = grace;
-  ros::WallTime start = ros::WallTime::now();
-  ros::WallTime pace_wall = start;  // pacing restarts after a pause or a reset
-  double pace_sim = 0.0;
-  bool was_running = true;
-  ros::WallTime window_wall = start;
-  ros::WallTime last_status = start;
-  double window_sim = 0.0;
+  const double start = ros::WallTime::now().toSec();
+  double held = 0.0;  // wall s spent in the grace holds, not the simulation's
+  auto wall = [&]() { return ros::WallTime::now().toSec() - held; };
+  pacer_.reset(new Pacer(params_.realtime_factor));
+  bool was_running = false;  // the pacer is anchored when a run starts
+  double last_paused_output = -1e9, last_diagnostics = -1e9;
+  control_.paused = params_.start_paused;
+  info_.paused = control_.paused;
+  info_.requested_realtime_factor = params_.realtime_factor;
   outputs_->Publish(*f3r_sim_outputs(sim_.get()), info_);
+  if (control_.paused) ROS_INFO("flex3rpr_node: paused at the start (~paused); ~resume or ~step runs it");
   int exit_code = 0;
   while (ros::ok()) {
     ros::spinOnce();
+    const double now = wall();
     if (control_.reset_requested) {
       f3r_error err{};
       control_.reset_requested = false;
@@ -155,29 +177,32 @@ int SimNode::Run() {
       if (f3r_sim_reset(sim_.get(), &err) != F3R_OK) ROS_ERROR("flex3rpr_node: reset failed: %s", err.message);
       periods_ = 0;
       was_running = false;
-      window_sim = 0.0;
       info_.last_error.clear();
+      info_.outside_stroke = {};
       outputs_->RestartCount();
       outputs_->Publish(*f3r_sim_outputs(sim_.get()), info_);
+    }
+    if (now - last_diagnostics >= kDiagnosticsSeconds) {
+      info_.rejected_commands = inputs_->rejected();
+      outputs_->PublishDiagnostics(*f3r_sim_outputs(sim_.get()), info_);
+      last_diagnostics = now;
     }
     const bool run = !control_.paused || control_.pending_steps > 0;
     info_.paused = control_.paused;
     if (!run) {
       was_running = false;
-      const ros::WallTime now = ros::WallTime::now();
-      if ((now - last_status).toSec() >= 0.1) {
+      info_.behind = false;
+      info_.lag = 0.0;
+      if (now - last_paused_output >= kPausedPublishSeconds) {
         info_.rejected_commands = inputs_->rejected();
-        outputs_->PublishStatus(*f3r_sim_outputs(sim_.get()), info_);
-        last_status = now;
+        outputs_->PublishPaused(*f3r_sim_outputs(sim_.get()), info_);
+        last_paused_output = now;
       }
       ros::WallDuration(0.001).sleep();
       continue;
     }
     if (control_.pending_steps > 0) --control_.pending_steps;
-    if (!was_running) {
-      pace_wall = ros::WallTime::now();
-      pace_sim = f3r_sim_time(sim_.get());
-    }
+    if (!was_running) pacer_->Start(now, f3r_sim_time(sim_.get()));
     was_running = !control_.paused;
     if (!Step(period)) {  // the node outlives its physics: it pauses and keeps serving
       if (params_.duration > 0.0) {  // a scripted run (a recording) ends instead of waiting
@@ -195,38 +220,25 @@ int SimNode::Run() {
     }
     const f3r_outputs& out = *f3r_sim_outputs(sim_.get());
     phi_p_ = out.q[F3R_Q_PHI];
-    ros::WallTime now = ros::WallTime::now();
-    info_.wall_time = (now - start).toSec();
-    const double window = (now - window_wall).toSec();
-    if (window >= 0.5) {  // achieved real-time factor over the last half second of wall time
-      info_.realtime_factor = (out.t - window_sim) / window;
-      window_wall = now;
-      window_sim = out.t;
-    } else if (info_.realtime_factor == 0.0 && info_.wall_time > 0.0) {
-      info_.realtime_factor = out.t / info_.wall_time;
-    }
+    const double after = wall();
+    info_.wall_time = after - start;
+    const double due = pacer_->Due(after, out.t);
+    ReportPace();
+    CheckStroke(out);
     info_.rejected_commands = inputs_->rejected();
-    info_.requested_realtime_factor = params_.realtime_factor;
-    ReportLag(now, pace_wall, out.t - pace_sim);
     outputs_->Publish(out, info_);
     if (grace_pending) {
       grace_pending = false;
-      const ros::WallDuration held = SpinFor(params_.subscriber_grace);  // not the simulation's time
-      start += held;
-      window_wall += held;
-      pace_wall += held;
-      last_status += held;
-      now += held;
+      held += SpinFor(params_.subscriber_grace).toSec();
     }
     if (params_.duration > 0.0 && out.t >= params_.duration - 0.5 * period) {
       ROS_INFO("flex3rpr_node: reached the duration %g s (real-time factor %.3g)", out.t,
                out.t / info_.wall_time);
       break;
     }
-    if (params_.realtime_factor > 0.0 && !control_.paused) {  // pace to the wall clock
-      const ros::WallTime due =
-          pace_wall + ros::WallDuration((out.t - pace_sim) / params_.realtime_factor);
-      if (due > now) (due - now).sleep();
+    if (!control_.paused) {  // pace to the wall clock
+      const double ahead = due - wall();
+      if (ahead > 0.0) ros::WallDuration(ahead).sleep();
     }
   }
   if (grace) SpinFor(params_.subscriber_grace);  // the subscribers take the last messages

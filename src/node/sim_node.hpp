@@ -7,6 +7,7 @@
 #include <memory>
 
 #include "command_inputs.hpp"
+#include "pacer.hpp"
 #include "params.hpp"
 #include "services.hpp"
 #include "state_outputs.hpp"
@@ -29,11 +30,14 @@ class SimNode {
   int Run();
 
  private:
-  // Late by more than this much wall time, a paced run says it is behind (~status, ROS_WARN).
-  static constexpr double kBehindSeconds = 0.1;
+  static constexpr double kPausedPublishSeconds = 0.5;  // wall s between outputs while paused
+  static constexpr double kDiagnosticsSeconds = 1.0;     // wall s between /diagnostics
 
   bool Step(double period);
-  void ReportLag(const ros::WallTime& now, const ros::WallTime& pace_wall, double paced_sim);
+  // Into ~status and a throttled warning while the achieved factor is short of the request.
+  void ReportPace();
+  // rho_i outside the scene's stroke: into ~status, and a warning once per excursion.
+  void CheckStroke(const f3r_outputs& out);
 
   ros::NodeHandle nh_, pnh_;
   NodeParams params_;
@@ -44,6 +48,7 @@ class SimNode {
   std::unique_ptr<Services> services_;
   RunControl control_;
   RunInfo info_;
+  std::unique_ptr<Pacer> pacer_;
   double phi_p_ = 0.0;
   long periods_ = 0;
 };

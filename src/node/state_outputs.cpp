@@ -5,6 +5,7 @@
 #include <Eigen/Geometry>
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <map>
 #include <string>
 
@@ -42,17 +43,25 @@ std::string Leg(int i, const char* suffix) { return "leg_" + std::to_string(i + 
 
 StateOutputs::StateOutputs(ros::NodeHandle& nh, ros::NodeHandle& pnh, const f3r_model& model,
                            const NodeParams& params)
-    : model_(model), params_(params) {
+    : model_(model), params_(params), frames_(params.frames) {
   // Each subscriber connection holds up to queue_size messages the node's network thread has not
   // sent yet; a recorder that must not lose any (record.launch) asks for a deep queue.
   const uint32_t q = static_cast<uint32_t>(params.queue_size);
   joints_pub_ = nh.advertise<sensor_msgs::JointState>("joint_states", q);
+  odom_pub_ = pnh.advertise<nav_msgs::Odometry>("odom", q);
   status_pub_ = pnh.advertise<SimStatus>("status", q);
   beam_pub_ = pnh.advertise<BeamState>("beam_state", q);
   markers_pub_ = pnh.advertise<visualization_msgs::MarkerArray>("beams", q);
-  tf_pub_ = nh.advertise<tf2_msgs::TFMessage>("/tf", std::max(q, 100u));  // TransformBroadcaster's 100 at least
-  nh.param("/use_sim_time", publish_clock_, false);
-  if (publish_clock_) clock_pub_ = nh.advertise<rosgraph_msgs::Clock>("/clock", q);
+  diagnostics_pub_ = nh.advertise<diagnostic_msgs::DiagnosticArray>("/diagnostics", 10);
+  // A listener that connects while paused (rviz started later) gets the present frames at once.
+  // Not while running: the next period brings them, and the connection may already have had
+  // the last one (TF_REPEATED_DATA).
+  tf_pub_ = nh.advertise<tf2_msgs::TFMessage>(
+      "/tf", std::max(q, 100u),  // TransformBroadcaster's 100 at least
+      [this](const ros::SingleSubscriberPublisher& subscriber) {
+        if (have_transforms_ && paused_) subscriber.publish(tf_);
+      });
+  if (params.publish_clock) clock_pub_ = nh.advertise<rosgraph_msgs::Clock>("/clock", q);
 
   for (int i = 0; i < 3; ++i) {
     joints_.name.push_back(Leg(i, "_revolute"));
@@ -61,6 +70,8 @@ StateOutputs::StateOutputs(ros::NodeHandle& nh, ros::NodeHandle& pnh, const f3r_
   joints_.position.assign(6, 0.0);
   joints_.velocity.assign(6, 0.0);
   joints_.effort.assign(6, 0.0);
+  odom_.header.frame_id = frames_.base;
+  odom_.child_frame_id = frames_.platform;
 
   const int nmodal = model.nq - F3R_Q_MODAL;
   for (int i = 0; i < 3; ++i) {
@@ -70,32 +81,33 @@ StateOutputs::StateOutputs(ros::NodeHandle& nh, ros::NodeHandle& pnh, const f3r_
   beam_.modal.assign(static_cast<size_t>(nmodal), 0.0);
   beam_.modal_rate.assign(static_cast<size_t>(nmodal), 0.0);
 
-  const float colours[3][3] = {{1.0f, 0.5f, 0.0f}, {1.0f, 0.5f, 0.0f}, {1.0f, 0.5f, 0.0f}};
   for (int i = 0; i < 3; ++i) {
     visualization_msgs::Marker m;
-    m.header.frame_id = params.world_frame;
+    m.header.frame_id = frames_.base;
     m.ns = "beams";
     m.id = i;
     m.type = visualization_msgs::Marker::LINE_STRIP;
     m.action = visualization_msgs::Marker::ADD;
     m.pose.orientation.w = 1.0;
     m.scale.x = 0.008;
-    m.color.r = colours[i][0];
-    m.color.g = colours[i][1];
-    m.color.b = colours[i][2];
+    m.color.r = 1.0f;
+    m.color.g = 0.5f;
     m.color.a = 1.0f;
     m.points.resize(static_cast<size_t>(params.beam_points));
     markers_.markers.push_back(m);
   }
 
-  // Static frames: world -> base, the nominal beam tips and the platform joints.
+  // Static frames, as the URDF's fixed joints (scripts/make_urdf.py): world -> base, the nominal
+  // beam tips, the beams' clamped roots (station 0 is the piston, whatever the deflection) and
+  // the platform joints.
   std::vector<geometry_msgs::TransformStamped> statics;
-  if (params.base_frame != params.world_frame) statics.push_back(Frame(params.world_frame, params.base_frame));
+  if (frames_.base != frames_.world) statics.push_back(Frame(frames_.world, frames_.base));
   for (int i = 0; i < 3; ++i) {
-    auto tip = Frame(Leg(i, "_piston"), Leg(i, "_tip_nominal"));
+    auto tip = Frame(frames_.piston[i], frames_.tip_nominal[i]);
     tip.transform.translation.x = model.link_length;
     statics.push_back(tip);
-    auto c = Frame("platform", "platform_c" + std::to_string(i + 1));
+    statics.push_back(Frame(frames_.piston[i], frames_.beam[i][0]));
+    auto c = Frame(frames_.platform, frames_.platform_c[i]);
     c.transform.translation.x = model.platform_radius * std::cos(model.platform_angle[i]);
     c.transform.translation.y = model.platform_radius * std::sin(model.platform_angle[i]);
     statics.push_back(c);
@@ -103,15 +115,19 @@ StateOutputs::StateOutputs(ros::NodeHandle& nh, ros::NodeHandle& pnh, const f3r_
   for (auto& s : statics) s.header.stamp = ros::Time(0.0);
   static_tf_.sendTransform(statics);
 
-  // Dynamic frames: 2 per leg of the tree, the platform, and the beam stations.
+  // Dynamic frames, all in the base frame but the legs' chain: 2 per leg, the platform, and the
+  // beam stations 1..N-1.
   for (int i = 0; i < 3; ++i) {
-    tf_.transforms.push_back(Frame(params.base_frame, Leg(i, "_cylinder")));
-    tf_.transforms.push_back(Frame(Leg(i, "_cylinder"), Leg(i, "_piston")));
+    tf_.transforms.push_back(Frame(frames_.base, frames_.cylinder[i]));
+    tf_.transforms.push_back(Frame(frames_.cylinder[i], frames_.piston[i]));
   }
-  tf_.transforms.push_back(Frame(params.world_frame, "platform"));
+  tf_.transforms.push_back(Frame(frames_.base, frames_.platform));
   for (int i = 0; i < 3; ++i)
-    for (int k = 0; k < params.beam_points; ++k)
-      tf_.transforms.push_back(Frame(params.world_frame, Leg(i, "_beam_") + std::to_string(k)));
+    for (int k = 1; k < params.beam_points; ++k) tf_.transforms.push_back(Frame(frames_.base, frames_.beam[i][k]));
+
+  diagnostics_.status.resize(1);
+  diagnostics_.status[0].name = ros::this_node::getName() + ": simulation";
+  diagnostics_.status[0].hardware_id = "flex3rpr";
 }
 
 void StateOutputs::FillTransforms(const f3r_outputs& out, const ros::Time& stamp) {
@@ -132,7 +148,7 @@ void StateOutputs::FillTransforms(const f3r_outputs& out, const ros::Time& stamp
       const double xi = static_cast<double>(k) / (points - 1);
       double pos[2], angle, w;
       f3r_model_beam_point(&model_, q, i, xi, pos, &angle, &w);
-      SetPlanar(&tf_.transforms[n++], pos[0], pos[1], angle);
+      if (k > 0) SetPlanar(&tf_.transforms[n++], pos[0], pos[1], angle);  // station 0 is static
       // The marker may exaggerate the deflection; the physics and TF never do.
       auto& pt = marker.points[static_cast<size_t>(k)];
       pt.x = pos[0] - (exaggeration - 1.0) * w * s;
@@ -141,12 +157,12 @@ void StateOutputs::FillTransforms(const f3r_outputs& out, const ros::Time& stamp
     }
   }
   for (auto& t : tf_.transforms) t.header.stamp = stamp;
+  have_transforms_ = true;
 }
 
-void StateOutputs::Publish(const f3r_outputs& out, const RunInfo& info) {
-  const ros::Time stamp(out.t);
-  if (publish_clock_) {
-    clock_.clock = stamp;
+void StateOutputs::PublishState(const f3r_outputs& out, const ros::Time& stamp) {
+  if (clock_pub_) {
+    clock_.clock = ros::Time(out.t);
     clock_pub_.publish(clock_);
   }
   joints_.header.stamp = stamp;
@@ -160,8 +176,20 @@ void StateOutputs::Publish(const f3r_outputs& out, const RunInfo& info) {
   }
   joints_pub_.publish(joints_);
 
-  FillTransforms(out, stamp);
-  tf_pub_.publish(tf_);
+  // nav_msgs convention: the pose in header.frame_id, the twist in child_frame_id (the platform).
+  const double phi = out.q[F3R_Q_PHI], c = std::cos(phi), s = std::sin(phi);
+  const double vx = out.v[F3R_Q_X], vy = out.v[F3R_Q_Y];
+  odom_.header.stamp = stamp;
+  odom_.pose.pose.position.x = out.q[F3R_Q_X];
+  odom_.pose.pose.position.y = out.q[F3R_Q_Y];
+  odom_.pose.pose.orientation.z = std::sin(phi / 2);
+  odom_.pose.pose.orientation.w = std::cos(phi / 2);
+  odom_.twist.twist.linear.x = c * vx + s * vy;
+  odom_.twist.twist.linear.y = -s * vx + c * vy;
+  odom_.twist.twist.angular.z = out.v[F3R_Q_PHI];
+  odom_pub_.publish(odom_);
+
+  for (auto& marker : markers_.markers) marker.header.stamp = stamp;
   markers_pub_.publish(markers_);
 
   beam_.header.stamp = stamp;
@@ -174,8 +202,61 @@ void StateOutputs::Publish(const f3r_outputs& out, const RunInfo& info) {
     beam_.tip_deflection_rate[i] = out.tip_deflection_rate[i];
   }
   beam_pub_.publish(beam_);
+}
+
+void StateOutputs::Publish(const f3r_outputs& out, const RunInfo& info) {
+  paused_ = info.paused;
+  const ros::Time stamp = Stamp(out.t);
+  FillTransforms(out, stamp);
+  PublishState(out, stamp);
+  tf_pub_.publish(tf_);
   ++published_states_;
   PublishStatus(out, info);
+}
+
+void StateOutputs::PublishPaused(const f3r_outputs& out, const RunInfo& info) {
+  paused_ = true;
+  const ros::Time stamp = Stamp(out.t);
+  if (!params_.sim_stamps) {
+    FillTransforms(out, stamp);
+    tf_pub_.publish(tf_);
+  }
+  PublishState(out, stamp);
+  PublishStatus(out, info);
+}
+
+void StateOutputs::PublishDiagnostics(const f3r_outputs& out, const RunInfo& info) {
+  diagnostic_msgs::DiagnosticStatus& d = diagnostics_.status[0];
+  std::string outside;
+  for (int i = 0; i < 3; ++i)
+    if (info.outside_stroke[static_cast<size_t>(i)]) outside += (outside.empty() ? "" : ", ") + Leg(i, "");
+  if (!info.last_error.empty()) {
+    d.level = diagnostic_msgs::DiagnosticStatus::ERROR;
+    d.message = "integration stopped: " + info.last_error;
+  } else if (info.behind || !outside.empty()) {
+    d.level = diagnostic_msgs::DiagnosticStatus::WARN;
+    d.message = info.behind ? "behind the requested real-time factor" : outside + " outside the stroke";
+  } else {
+    d.level = diagnostic_msgs::DiagnosticStatus::OK;
+    d.message = info.paused ? "paused" : "running";
+  }
+  auto value = [](const char* key, double v) {
+    diagnostic_msgs::KeyValue kv;
+    kv.key = key;
+    char text[32];
+    std::snprintf(text, sizeof text, "%.6g", v);
+    kv.value = text;
+    return kv;
+  };
+  d.values = {value("sim_time", out.t),
+              value("realtime_factor", info.realtime_factor),
+              value("requested_realtime_factor", info.requested_realtime_factor),
+              value("steps", static_cast<double>(out.stats.steps)),
+              value("constraint_residual", out.constraint_residual),
+              value("energy_balance_error", out.energy_balance_error),
+              value("rejected_commands", static_cast<double>(info.rejected_commands))};
+  diagnostics_.header.stamp = Stamp(out.t);
+  diagnostics_pub_.publish(diagnostics_);
 }
 
 bool StateOutputs::SubscribersConnected(int n) const {
@@ -187,7 +268,8 @@ bool StateOutputs::SubscribersConnected(int n) const {
     for (int i = 0; i < payload[1].size(); ++i)
       registered[static_cast<std::string>(payload[1][i][0])] = payload[1][i][1].size();
   }
-  for (const ros::Publisher* p : {&joints_pub_, &status_pub_, &beam_pub_, &markers_pub_, &tf_pub_, &clock_pub_}) {
+  for (const ros::Publisher* p :
+       {&joints_pub_, &odom_pub_, &status_pub_, &beam_pub_, &markers_pub_, &tf_pub_, &clock_pub_}) {
     if (!*p) continue;  // no /clock without simulated time
     const int need = std::max(n, registered[p->getTopic()]);
     if (static_cast<int>(p->getNumSubscribers()) < need) return false;
@@ -196,13 +278,15 @@ bool StateOutputs::SubscribersConnected(int n) const {
 }
 
 void StateOutputs::PublishStatus(const f3r_outputs& out, const RunInfo& info) {
-  status_.header.stamp = ros::Time(out.t);
+  status_.header.stamp = Stamp(out.t);
   status_.sim_time = out.t;
   status_.wall_time = info.wall_time;
   status_.realtime_factor = info.realtime_factor;
   status_.requested_realtime_factor = info.requested_realtime_factor;
   status_.behind = info.behind;
   status_.lag = info.lag;
+  status_.resyncs = info.resyncs;
+  for (int i = 0; i < 3; ++i) status_.outside_stroke[static_cast<size_t>(i)] = info.outside_stroke[static_cast<size_t>(i)];
   status_.paused = info.paused;
   status_.steps = static_cast<uint64_t>(out.stats.steps);
   status_.residual_evals = static_cast<uint64_t>(out.stats.residual_evals);

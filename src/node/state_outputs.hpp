@@ -1,7 +1,9 @@
-// Everything the node publishes: joint_states, TF (tree, platform, beam points), ~status,
-// ~beam_state, ~beams and /clock. Messages are preallocated; Publish only fills them.
+// Everything the node publishes: joint_states, TF (tree, platform, beam points), ~odom, ~status,
+// ~beam_state, ~beams, /clock and /diagnostics. Messages are preallocated; Publish only fills them.
 #pragma once
 
+#include <diagnostic_msgs/DiagnosticArray.h>
+#include <nav_msgs/Odometry.h>
 #include <ros/ros.h>
 #include <rosgraph_msgs/Clock.h>
 #include <sensor_msgs/JointState.h>
@@ -9,6 +11,7 @@
 #include <tf2_ros/static_transform_broadcaster.h>
 #include <visualization_msgs/MarkerArray.h>
 
+#include <array>
 #include <vector>
 
 #include "flex3rpr/BeamState.h"
@@ -22,8 +25,10 @@ struct RunInfo {
   double wall_time = 0.0;
   double realtime_factor = 0.0;
   double requested_realtime_factor = 0.0;  // ~realtime_factor
-  bool behind = false;                     // paced and more than kBehindSeconds late
+  bool behind = false;                     // paced and achieving less than 0.95 of the request
   double lag = 0.0;                        // wall s behind the paced schedule
+  uint64_t resyncs = 0;                    // stalls after which pacing started again
+  std::array<bool, 3> outside_stroke{};    // rho_i outside the scene's stroke
   bool paused = false;
   uint64_t rejected_commands = 0;
   std::string last_error;
@@ -34,12 +39,17 @@ class StateOutputs {
   StateOutputs(ros::NodeHandle& nh, ros::NodeHandle& pnh, const f3r_model& model,
                const NodeParams& params);
   void Publish(const f3r_outputs& out, const RunInfo& info);
-  // Only ~status: while paused the state does not change, but the status (paused, rejected
-  // commands) still does.
-  void PublishStatus(const f3r_outputs& out, const RunInfo& info);
+  // While paused, at a low rate: /clock, joint_states, ~odom, ~beam_state, ~beams and ~status
+  // again (the state has not changed; the status may have). /tf only with wall stamps: a
+  // simulated stamp repeated is TF_REPEATED_DATA to every listener, so with simulated time a
+  // listener that connects later gets the frames once, on connection.
+  void PublishPaused(const f3r_outputs& out, const RunInfo& info);
+  // /diagnostics: one status for the simulation (OK, WARN when behind or outside the stroke,
+  // ERROR when the integration stopped).
+  void PublishDiagnostics(const f3r_outputs& out, const RunInfo& info);
   // Restarts ~status.published_states (a reset starts the count again at its initial state).
   void RestartCount() { published_states_ = 0; }
-  // True when every output topic (joint_states, /tf, ~status, ~beam_state, ~beams, and /clock
+  // True when every output topic (joint_states, /tf, ~odom, ~status, ~beam_state, ~beams, and /clock
   // when it is published) has at least n subscribers connected, and each subscriber the master
   // lists for it: on /clock, rosout and other nodes on simulated time count too, so a count alone
   // could pass before a recorder's own /clock connection is up.
@@ -47,18 +57,27 @@ class StateOutputs {
 
  private:
   void FillTransforms(const f3r_outputs& out, const ros::Time& stamp);
+  void PublishStatus(const f3r_outputs& out, const RunInfo& info);
+  void PublishState(const f3r_outputs& out, const ros::Time& stamp);  // all but /tf and ~status
+  // Simulated time, or the wall clock (~stamps).
+  ros::Time Stamp(double t) const { return params_.sim_stamps ? ros::Time(t) : ros::Time(ros::WallTime::now().toSec()); }
 
   const f3r_model& model_;
   const NodeParams& params_;
-  bool publish_clock_ = false;
+  const FrameNames& frames_;
   uint64_t published_states_ = 0;  // ~status.published_states
-  ros::Publisher joints_pub_, status_pub_, beam_pub_, markers_pub_, clock_pub_, tf_pub_;
+  bool have_transforms_ = false;   // tf_ holds a published state
+  bool paused_ = false;            // the last state was published paused
+  ros::Publisher joints_pub_, status_pub_, beam_pub_, markers_pub_, clock_pub_, tf_pub_, odom_pub_,
+      diagnostics_pub_;
   tf2_ros::StaticTransformBroadcaster static_tf_;
   sensor_msgs::JointState joints_;
   SimStatus status_;
   BeamState beam_;
   visualization_msgs::MarkerArray markers_;
   rosgraph_msgs::Clock clock_;
+  nav_msgs::Odometry odom_;
+  diagnostic_msgs::DiagnosticArray diagnostics_;
   tf2_msgs::TFMessage tf_;  // tf_.transforms: the dynamic frames
 };
 

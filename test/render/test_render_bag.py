@@ -130,7 +130,11 @@ def state_at(bag_path, t):
         corners.append((x + math.cos(phi) * ox - math.sin(phi) * oy, y + math.sin(phi) * ox + math.cos(phi) * oy))
     beams = []
     for i in (1, 2, 3):
-        beams.append([frames[f"leg_{i}_beam_{k}"][:2] for k in range(100) if f"leg_{i}_beam_{k}" in frames])
+        # station 0 is the piston (a static child of it): B_i = A_i + rho_i (cos, sin) theta_i
+        ax, ay, theta = frames[f"leg_{i}_cylinder"]
+        rho = frames[f"leg_{i}_piston"][0]
+        root = (ax + rho * math.cos(theta), ay + rho * math.sin(theta))
+        beams.append([root] + [frames[f"leg_{i}_beam_{k}"][:2] for k in range(1, 100) if f"leg_{i}_beam_{k}" in frames])
     return {"P": (x, y), "C": corners, "beams": beams}
 
 

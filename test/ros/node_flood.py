@@ -50,7 +50,7 @@ N_FLOOD = 10000
 FLOOD_RATE = 10000.0          # commands per second of wall time
 PUBLISH_RATE = 1000.0         # the nodes' ~publish_rate (flood.test)
 PERIOD = 1.0 / PUBLISH_RATE
-FLOOD_WORLD = "flood_world"   # the flood node's ~world_frame (flood.test)
+FLOOD_WORLD = "flood_world"   # the flood node's ~world_frame (flood.test); its other frames are flood/...
 REPLAY_STEPS = 240
 CLI_MAX_HOLDS = 64            # MAX_HOLDS of src/cli/flex3rpr_sim.c
 REPLAY_CHANGES = 60           # valid commands that change a force: one --hold each
@@ -98,8 +98,9 @@ def random_invalid(rng, topic, n_modal, world):
     w = {"frame": world, "force": [0.0, 0.0, 0.0], "torque": [0.0, 0.0, 0.0]}
     kind = rng.randrange(4)
     if kind == 0:
-        w["frame"] = rng.choice(["moon", "World", "world " if world == "world" else "world", "base",
-                                 "platform_c1", "/" + world, "pl\u00e4tform"])
+        # frames tf2 does not know (the replay node's world, base and platform_c1 it does)
+        w["frame"] = rng.choice(["moon", "World", world + " ", "flood/platform_c0", "leg_4_piston",
+                                 "/" + world, "pl\u00e4tform"])
         w["force"][0] = 1.0
     elif kind == 1:
         w["force" if rng.random() < 0.5 else "torque"][rng.randrange(3)] = bad
@@ -123,7 +124,7 @@ def random_valid_flood(rng, topic):
     if topic == 1:
         return (1, {"data": [rng.uniform(-1, 1) for _ in range(3)] +
                             [rng.uniform(-0.05, 0.05) for _ in range(3)]}, True)
-    return (2, {"frame": rng.choice([FLOOD_WORLD, "", "platform"]),
+    return (2, {"frame": rng.choice([FLOOD_WORLD, "", "flood/platform"]),
                 "force": [rng.uniform(-1, 1), rng.uniform(-1, 1), rng.choice([0.0, -0.0])],
                 "torque": [0.0, 0.0, rng.uniform(-0.01, 0.01)]}, True)
 
@@ -374,7 +375,7 @@ class NodeFlood(unittest.TestCase):
 
         def on_tf(m):
             for t in m.transforms:
-                if t.child_frame_id == "platform" and t.header.frame_id == "world":
+                if t.child_frame_id == "platform" and t.header.frame_id == "base":
                     q = t.transform.rotation
                     with tf_lock:
                         platform[round(t.header.stamp.to_sec(), 9)] = (

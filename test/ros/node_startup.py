@@ -72,7 +72,8 @@ class NodeStartup(unittest.TestCase):
 
     def test_a_run_that_cannot_keep_its_factor_says_it_is_behind(self):
         """Paper sim. 3 asked for at 1000x real time: no machine keeps that, so ~status must say
-        behind, with a growing lag, and the node must warn with the achieved factor."""
+        behind (achieved below 0.95 of the request), and the node must warn with the achieved
+        factor. It never races to catch up: the schedule is re-anchored (~status.resyncs)."""
         from flex3rpr.msg import SimStatus
         seen = []
         sub = rospy.Subscriber("/behind/status", SimStatus, seen.append, queue_size=1000)
@@ -82,7 +83,7 @@ class NodeStartup(unittest.TestCase):
                                 stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
         try:
             end = time.time() + 600
-            while time.time() < end and not any(m.behind and m.lag > 0.2 for m in seen):
+            while time.time() < end and not any(m.behind and m.resyncs > 0 for m in seen):
                 time.sleep(0.1)
         finally:
             proc.terminate()
@@ -91,11 +92,12 @@ class NodeStartup(unittest.TestCase):
         late = [m for m in seen if m.behind]
         self.assertTrue(late, "no ~status said behind; the node said:\n" + out[-3000:])
         self.assertEqual(late[-1].requested_realtime_factor, 1000.0)
-        self.assertGreater(late[-1].lag, 0.1)
         self.assertGreater(late[-1].realtime_factor, 0.0)
+        self.assertTrue(all(m.realtime_factor < 950.0 for m in late), "behind means below 0.95 of the request")
+        self.assertGreater(late[-1].resyncs, 0)
         self.assertIn("behind the wall clock", out)
         self.assertIn("of the requested 1000", out)
-        self.assertFalse(any(m.behind for m in seen if m.lag <= 0.1), "behind means more than 0.1 s late")
+
     def test_b_a_collapsed_leg_pauses_the_node_which_resets_and_runs_on(self):
         """A held command drives leg 1 into the collapse guard: the node pauses at the last good
         state with the error in ~status, keeps serving, and ~reset and ~resume run it on."""
@@ -137,6 +139,84 @@ class NodeStartup(unittest.TestCase):
             out, _ = proc.communicate(timeout=120)
         self.assertIn("leg 1 collapsed", out)
         self.assertIn("paused at the last good state", out)
+
+
+    def run_pushed(self, name, *params):
+        """A node on rest.yaml with leg 1 pushed outwards (3 N, held) until it pauses with an
+        error or has run 3 s; returns its ~status messages, joint_states and output."""
+        from flex3rpr.msg import EffortCommand, SimStatus
+        from sensor_msgs.msg import JointState
+        seen, joints = [], []
+        subs = [rospy.Subscriber("/%s/status" % name, SimStatus, seen.append, queue_size=100000),
+                rospy.Subscriber("/joint_states_%s" % name, JointState, joints.append, queue_size=100000)]
+        pub = rospy.Publisher("/%s/command" % name, EffortCommand, queue_size=10)
+        proc = subprocess.Popen(["stdbuf", "-oL", "rosrun", "flex3rpr", "flex3rpr_node", "__name:=" + name,
+                                 "joint_states:=/joint_states_" + name, "_realtime_factor:=0.0",
+                                 "_publish_rate:=100.0", "_paused:=true", *params],
+                                stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
+        try:
+            # paused until the command is there: unpaced, 3 s take milliseconds
+            from std_srvs.srv import Empty
+            end = time.time() + 300
+            while time.time() < end and pub.get_num_connections() == 0:
+                time.sleep(0.05)
+            pub.publish(EffortCommand(leg_force=[3.0, 0.0, 0.0]))
+            time.sleep(0.5)
+            rospy.wait_for_service("/%s/resume" % name, timeout=300)
+            rospy.ServiceProxy("/%s/resume" % name, Empty)()
+            end = time.time() + 600
+            while time.time() < end and not any((m.paused and m.last_error) or m.sim_time > 3.0 for m in seen):
+                time.sleep(0.1)
+            self.assertIsNone(proc.poll(), "the node died of its physics")
+        finally:
+            for sub in subs:
+                sub.unregister()
+            pub.unregister()
+            proc.terminate()
+            out, _ = proc.communicate(timeout=120)
+        self.assertTrue(seen, out[-3000:])
+        return seen, joints, out
+
+    def test_c_leaving_the_stroke_is_reported_once(self):
+        seen, _, out = self.run_pushed("stroke")
+        outside = [m for m in seen if m.outside_stroke[0]]
+        self.assertTrue(outside, "rho_1 left 0..0.2 m; ~status.outside_stroke[0] says so")
+        self.assertGreater(max(m.sim_time for m in outside) - min(m.sim_time for m in outside), 0.05,
+                           "and stayed outside for a while")
+        self.assertEqual(out.count("leg 1 left its stroke 0..0.2 m"), 1, out[-3000:])
+
+    def test_d_end_stops_from_a_parameter_keep_the_stroke(self):
+        seen, joints, out = self.run_pushed("stops", "_end_stops:=true")
+        self.assertFalse(any(m.outside_stroke[0] for m in seen))
+        self.assertNotIn("left its stroke", out)
+        rho = [m.position[m.name.index("leg_1_prismatic")] for m in joints]
+        self.assertTrue(rho)
+        self.assertGreater(max(rho), 0.2 - 1e-3, "leg 1 reached its stop")
+        self.assertLess(max(rho), 0.2 + 1e-6)
+
+    def test_e_paused_at_the_start_until_a_step(self):
+        from flex3rpr.msg import SimStatus
+        from std_srvs.srv import Trigger
+        seen = []
+        sub = rospy.Subscriber("/waiting/status", SimStatus, seen.append, queue_size=1000)
+        proc = subprocess.Popen(["rosrun", "flex3rpr", "flex3rpr_node", "__name:=waiting", "_paused:=true",
+                                 "_publish_rate:=100.0"], stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+        try:
+            rospy.wait_for_service("/waiting/step", timeout=300)
+            end = time.time() + 300
+            while time.time() < end and len(seen) < 3:
+                time.sleep(0.1)
+            self.assertTrue(seen and all(m.paused and m.sim_time == 0.0 for m in seen))
+            self.assertTrue(rospy.ServiceProxy("/waiting/step", Trigger)().success)
+            end = time.time() + 300
+            while time.time() < end and not any(m.sim_time > 0.0 for m in seen):
+                time.sleep(0.1)
+            self.assertAlmostEqual(max(m.sim_time for m in seen), 0.01, places=12)
+            self.assertTrue(seen[-1].paused)
+        finally:
+            sub.unregister()
+            proc.terminate()
+            proc.communicate(timeout=120)
 
 
 if __name__ == "__main__":
