@@ -1,0 +1,197 @@
+#!/usr/bin/env python3
+"""The install space works on its own (JUnit cases):
+
+  catkin_make_install  `catkin_make install` in the test's workspace, then, in an environment
+                       holding nothing but the install space's setup.bash: rospack finds the
+                       package there, the messages import, rosrun runs the CLI, make_urdf.py
+                       writes a URDF, and `roslaunch flex3rpr sim.launch` runs the node to its
+                       duration and exits cleanly
+  catkin_build         the same from `catkin build` with an install space in a fresh workspace
+                       (catkin_tools; skipped with --no-catkin-build)
+  catkin_lint          `catkin_lint --strict` finds nothing
+  roslaunch_check      roslaunch-check on every launch file: each package it uses is a dependency
+  rosdep_keys          each package.xml dependency is a ROS package or a known rosdep key whose
+                       Debian package is installed
+
+usage: install_space.py --junit FILE --workspace WS [--no-catkin-build]"""
+import argparse
+import re
+import os
+import shutil
+import socket
+import subprocess
+import sys
+import tempfile
+import time
+import xml.sax.saxutils
+
+ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+# The sanitizers' settings pass into the clean environment (an instrumented node needs them).
+KEEP = ("HOME", "ROS_HOME", "ASAN_OPTIONS", "LSAN_OPTIONS", "UBSAN_OPTIONS")
+
+
+def free_port():
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        return s.getsockname()[1]
+
+
+def clean_shell(setup, script, timeout):
+    """Runs script in bash with only the install space's setup.bash sourced."""
+    env = {k: os.environ[k] for k in KEEP if k in os.environ}
+    env["PATH"] = "/usr/bin:/bin"
+    p = subprocess.run(["/bin/bash", "-c", f"set -e; source '{setup}'; {script}"], env=env, capture_output=True,
+                       text=True, timeout=timeout)
+    return p.returncode, p.stdout + p.stderr
+
+
+def check_install(prefix):
+    """The install space alone runs the package. Returns a failure message or ''."""
+    setup = os.path.join(prefix, "setup.bash")
+    if not os.path.exists(setup):
+        return f"no {setup}"
+    share = os.path.join(prefix, "share", "flex3rpr")
+    rc, out = clean_shell(setup, "rospack find flex3rpr", 120)
+    if rc != 0 or out.strip() != share:
+        return f"rospack find flex3rpr gave '{out.strip()}', expected {share}"
+    rc, out = clean_shell(setup, "echo $ROS_PACKAGE_PATH:$CMAKE_PREFIX_PATH:$LD_LIBRARY_PATH:$PYTHONPATH", 120)
+    stray = [e for e in out.strip().split(":") if e and not (e.startswith(prefix) or e.startswith("/usr"))]
+    if stray:
+        return "the clean environment reaches beyond the install space: " + " ".join(stray)
+    checks = [
+        ("/usr/bin/python3 -c 'from flex3rpr.msg import SimStatus, EffortCommand, BeamState; print(SimStatus._type)'",
+         "flex3rpr/SimStatus"),
+        ("rosmsg show flex3rpr/SimStatus", "outside_stroke"),
+        ("rosrun flex3rpr flex3rpr_sim --geometry $(rospack find flex3rpr)/config/scenes/rest.yaml", "stroke_max"),
+        ("rosrun flex3rpr make_urdf.py --beam-points 4 --prefix r1", "r1/leg_3_beam_3"),
+    ]
+    for command, expect in checks:
+        rc, out = clean_shell(setup, command, 300)
+        if rc != 0 or expect not in out:
+            return f"`{command}` from the install space (exit {rc}):\n{out[-3000:]}"
+    port = free_port()
+    rc, out = clean_shell(setup, f"roslaunch -p {port} flex3rpr sim.launch duration:=0.2 realtime_factor:=0 "
+                                 "required:=true 2>&1", 900)
+    if "reached the duration" not in out or "flex3rpr_node-" not in out:
+        return f"roslaunch flex3rpr sim.launch from the install space (exit {rc}):\n{out[-4000:]}"
+    if "lib/flex3rpr/flex3rpr_node" in out and prefix not in out:
+        return "the node did not come from the install space:\n" + out[-3000:]
+    return ""
+
+
+def case_catkin_make_install(workspace):
+    workspace = os.path.abspath(workspace)
+    # catkin_make takes the workspace from $PWD
+    p = subprocess.run(["catkin_make", "install", "-j2"], cwd=workspace, env=dict(os.environ, PWD=workspace),
+                       capture_output=True, text=True, timeout=1800)
+    if p.returncode != 0:
+        return "catkin_make install failed:\n" + (p.stdout + p.stderr)[-4000:]
+    return check_install(os.path.join(workspace, "install"))
+
+
+def case_catkin_build():
+    ws = tempfile.mkdtemp(prefix="f3r_catkin_build_")
+    try:
+        pkg = os.path.join(ws, "src", "flex3rpr")
+        os.makedirs(pkg)
+        for entry in os.listdir(ROOT):  # as scripts/build: the package without its build outputs
+            if entry not in ("build", "output", ".git"):
+                os.symlink(os.path.join(ROOT, entry), os.path.join(pkg, entry))
+        # nothing of the test's own workspace: it would become the new one's underlay
+        env = {k: os.environ[k] for k in KEEP if k in os.environ}
+        env["PATH"] = "/usr/bin:/bin"
+        for cmd in (["catkin", "init"], ["catkin", "config", "--install"],
+                    ["catkin", "build", "--no-status", "--no-notify", "-j2", "flex3rpr", "--cmake-args",
+                     "-DCMAKE_BUILD_TYPE=Release", "-DPYTHON_EXECUTABLE=/usr/bin/python3",
+                     "-DCATKIN_ENABLE_TESTING=OFF"]):
+            p = subprocess.run(cmd, cwd=ws, env=env, capture_output=True, text=True, timeout=3600)
+            if p.returncode != 0:
+                return f"{' '.join(cmd)} failed:\n" + (p.stdout + p.stderr)[-4000:]
+        return check_install(os.path.join(ws, "install"))
+    finally:
+        shutil.rmtree(ws, ignore_errors=True)
+
+
+def case_catkin_lint(workspace):
+    p = subprocess.run(["catkin_lint", "--strict", os.path.join(workspace, "src", "flex3rpr")],
+                       capture_output=True, text=True, timeout=600)
+    if p.returncode != 0:
+        return "catkin_lint --strict:\n" + p.stdout + p.stderr
+    return ""
+
+
+def case_rosdep_keys():
+    """Each dependency of package.xml is a ROS package on this machine, or a rosdep key of
+    rosdistro (test/rosdep_keys.yaml) or of rosdep/flex3rpr.yaml whose Debian package is installed."""
+    import xml.etree.ElementTree as ET
+    import yaml
+    known = yaml.safe_load(open(os.path.join(ROOT, "test", "rosdep_keys.yaml")))
+    ours = {k: v["debian"] for k, v in yaml.safe_load(open(os.path.join(ROOT, "rosdep", "flex3rpr.yaml"))).items()}
+    tags = ("depend", "build_depend", "exec_depend", "test_depend", "buildtool_depend")
+    keys = {e.text.strip() for e in ET.parse(os.path.join(ROOT, "package.xml")).getroot() if e.tag in tags}
+    for key in sorted(keys):
+        found = subprocess.run(["rospack", "find", key], capture_output=True, text=True)
+        # A catkin package: rosdep resolves it through the ROS distribution. (Debian's urdfdom
+        # ships a package.xml too, but is a plain CMake package: its key is liburdfdom-dev.)
+        if found.returncode == 0 and key == "catkin" or found.returncode == 0 and re.search(r"<buildtool_depend[^>]*>\s*catkin\s*<",
+                                               open(os.path.join(found.stdout.strip(), "package.xml")).read()):
+            continue
+        debs = known.get(key) or ours.get(key)
+        if not debs:
+            return f"package.xml: '{key}' is neither a ROS package nor a rosdep key (test/rosdep_keys.yaml, rosdep/flex3rpr.yaml)"
+        for deb in debs:
+            st = subprocess.run(["dpkg-query", "-W", "-f=${Status}", deb], capture_output=True, text=True)
+            if "install ok installed" not in st.stdout:
+                return f"package.xml: key '{key}' resolves to the Debian package {deb}, which is not installed"
+    return ""
+
+
+def case_roslaunch_check():
+    """Every launch file's packages are dependencies in package.xml (rviz with rviz:=true)."""
+    import glob
+    for path in sorted(glob.glob(os.path.join(ROOT, "launch", "*.launch"))):
+        p = subprocess.run(["/usr/bin/python3", "/usr/share/roslaunch/scripts/roslaunch-check", path,
+                            "bag:=/tmp/none.bag", "rviz:=true"], capture_output=True, text=True, timeout=600)
+        if p.returncode != 0 or "passed" not in p.stdout:
+            return f"roslaunch-check {os.path.basename(path)}:\n" + p.stdout + p.stderr
+    return ""
+
+
+def main():
+    a = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    a.add_argument("--junit", required=True)
+    a.add_argument("--workspace", required=True)
+    a.add_argument("--no-catkin-build", action="store_true")
+    args = a.parse_args()
+    cases = [("catkin_lint", lambda: case_catkin_lint(args.workspace)),
+             ("roslaunch_check", case_roslaunch_check),
+             ("rosdep_keys", case_rosdep_keys),
+             ("catkin_make_install", lambda: case_catkin_make_install(args.workspace))]
+    if not args.no_catkin_build:
+        if shutil.which("catkin"):
+            cases.append(("catkin_build", case_catkin_build))
+        else:
+            print("install_space: catkin_tools is not installed; no catkin build case")
+    junit = []
+    failed = 0
+    for name, run in cases:
+        start = time.time()
+        try:
+            why = run()
+        except Exception as e:  # a hung or crashed step is a failure, with its reason
+            why = f"{type(e).__name__}: {e}"
+        print(f"{'ok  ' if not why else 'FAIL'} {name} ({time.time() - start:.0f} s)" + (f"\n{why}" if why else ""))
+        failed += bool(why)
+        body = "" if not why else f'<failure message="{xml_escape(why[:200])}">{xml_escape(why)}</failure>'
+        junit.append(f'<testcase classname="install_space" name="{name}">{body}</testcase>')
+    with open(args.junit, "w") as f:
+        f.write(f'<testsuite name="install_space" tests="{len(cases)}" failures="{failed}">{"".join(junit)}</testsuite>\n')
+    return 1 if failed else 0
+
+
+def xml_escape(text):
+    return xml.sax.saxutils.escape(text, {'"': "&quot;"})
+
+
+if __name__ == "__main__":
+    sys.exit(main())
