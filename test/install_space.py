@@ -185,7 +185,7 @@ def main():
         body = "" if not why else f'<failure message="{xml_escape(why[:200])}">{xml_escape(why)}</failure>'
         junit.append(f'<testcase classname="install_space" name="{name}">{body}</testcase>')
     with open(args.junit, "w") as f:
-        f.write(f'<testsuite name="install_space" tests="{len(cases)}" failures="{failed}">{"".join(junit)}</testsuite>\n')
+        f.write(f'<testsuite name="install_space" tests="{len(cases)}" errors="0" failures="{failed}" skipped="0">{"".join(junit)}</testsuite>\n')
     return 1 if failed else 0
 
 

@@ -3,7 +3,7 @@
 renders it in rviz under Xvfb with scripts/render_bag, and checks the result:
 
   bag_counts     rosbag info lists every recorded topic with its expected count: duration *
-                 publish_rate + 1 on /clock, /tf, joint_states, ~status, ~beam_state and ~beams,
+                 publish_rate + 1 on /clock, /tf, joint_states, ~status, ~beam_state, ~beams, ~odom,
                  one /tf_static, and one message on each command topic (a zero command is
                  published, latched, on all three before the run).
   platform_drawn in each frame the platform's colour (its URDF material) covers the platform's
@@ -39,7 +39,7 @@ URDF = os.path.join(ROOT, "urdf", "flex3rpr.urdf")
 DURATION, RATE = 0.1, 1000
 TIMES = (0.025, 0.1)
 OUTPUTS = ["/clock", "/tf", "/joint_states", "/flex3rpr_node/status", "/flex3rpr_node/beam_state",
-           "/flex3rpr_node/beams"]
+           "/flex3rpr_node/beams", "/flex3rpr_node/odom"]
 COMMANDS = {"/flex3rpr_node/command": ("flex3rpr/EffortCommand", "{}"),
             "/flex3rpr_node/effort_group/command": ("std_msgs/Float64MultiArray", "{data: [0, 0, 0, 0, 0, 0]}"),
             "/flex3rpr_node/platform_wrench": ("geometry_msgs/WrenchStamped", "{header: {frame_id: world}}")}

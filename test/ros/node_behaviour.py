@@ -22,6 +22,7 @@ from std_srvs.srv import Empty, Trigger
 from tf2_msgs.msg import TFMessage
 
 from flex3rpr.msg import EffortCommand, SimStatus
+from wall_wait import wait_for
 
 NODE = "/flex3rpr_node"
 R_A = 0.66 / math.sqrt(3.0)
@@ -86,12 +87,7 @@ class Recorder:
             return self.status.sim_time if self.status else -1.0
 
     def wait(self, predicate, timeout=60.0, what="condition"):
-        end = time.time() + timeout
-        while time.time() < end:
-            if predicate():
-                return
-            time.sleep(0.01)
-        raise AssertionError("timed out waiting for " + what)
+        wait_for(predicate, timeout, what, poll=0.01)
 
     def rejected(self):
         with self.lock:

@@ -38,6 +38,7 @@ from flex3rpr.msg import EffortCommand, SimStatus
 PKG = rospkg.RosPack().get_path("flex3rpr")
 LATE_LISTENER = """
 import time, rospy, tf2_ros
+from wall_wait import wait_for
 rospy.init_node("late_listener", anonymous=True)
 buf = tf2_ros.Buffer()
 tf2_ros.TransformListener(buf)
@@ -48,15 +49,6 @@ if buf.can_transform("world", "leg_2_beam_10", rospy.Time(0)):
     print("leg_2_beam_10 in world")
 """
 NODE = "/flex3rpr_node"
-
-
-def wait_for(cond, timeout, what):
-    end = time.time() + timeout
-    while time.time() < end:
-        if cond():
-            return
-        time.sleep(0.05)
-    raise AssertionError("timed out waiting for " + what)
 
 
 def yaw(q):

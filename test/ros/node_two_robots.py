@@ -18,17 +18,9 @@ import tf2_ros
 from tf2_msgs.msg import TFMessage
 
 from flex3rpr.msg import SimStatus
+from wall_wait import wait_for
 
 PKG = rospkg.RosPack().get_path("flex3rpr")
-
-
-def wait_for(cond, timeout, what):
-    end = time.time() + timeout
-    while time.time() < end:
-        if cond():
-            return
-        time.sleep(0.05)
-    raise AssertionError("timed out waiting for " + what)
 
 
 class TwoRobots(unittest.TestCase):
@@ -80,7 +72,8 @@ class TwoRobots(unittest.TestCase):
         files = [PKG + "/config/flex3rpr.rviz"] + glob.glob(PKG + "/launch/*.launch")
         for path in files:
             text = open(path).read()
-            for name in re.findall(r"/flex3rpr_node/\w+|(?<![\w$)])/joint_states", text):
+            # "$(arg ns)/joint_states" is a name written out from a namespace argument
+            for name in re.findall(r"(?<![\w$)])/flex3rpr_node/\w+|(?<![\w$)])/joint_states", text):
                 self.fail("%s names %s absolutely" % (os.path.basename(path), name))
 
 
