@@ -34,11 +34,11 @@ from std_srvs.srv import Empty
 from tf2_msgs.msg import TFMessage
 
 from flex3rpr.msg import EffortCommand, SimStatus
+from wall_wait import wait_for
 
 PKG = rospkg.RosPack().get_path("flex3rpr")
 LATE_LISTENER = """
 import time, rospy, tf2_ros
-from wall_wait import wait_for
 rospy.init_node("late_listener", anonymous=True)
 buf = tf2_ros.Buffer()
 tf2_ros.TransformListener(buf)

@@ -45,7 +45,6 @@ import threading
 import time
 import unittest
 import warnings
-import wall_wait
 
 N_FLOOD = 10000
 FLOOD_RATE = 10000.0          # commands per second of wall time
@@ -227,6 +226,7 @@ from std_srvs.srv import Empty, Trigger        # noqa: E402
 from tf2_msgs.msg import TFMessage             # noqa: E402
 
 from flex3rpr.msg import BeamState, SimStatus  # noqa: E402
+import wall_wait
 
 FLOOD = "/flood/flex3rpr_node"
 REPLAY = "/replay/flex3rpr_node"
