@@ -20,7 +20,7 @@ extern "C" {
 typedef struct {
   f3r_link_model model;
   int modes;    /* r_i (chosen by the model when the scene says auto) */
-  char modes_reason[200]; /* why, when the scene said modes: auto */
+  char modes_reason[256]; /* why, when the scene left the mode count open */
   int eta_index;/* index of this link's first modal coordinate in q */
   double alpha[F3R_MAX_MODES];        /* roots of the frequency equation */
   double mean[F3R_MAX_MODES];         /* int_0^1 psi_j dxi */
@@ -97,15 +97,8 @@ typedef struct f3r_model {
   double theta_branch[3];    /* leg directions at the scene's initial pose: branch of atan2 */
 } f3r_model;
 
-/* The mode count `modes: auto` gives a link of the scene (and why, into reason[size]):
- *  - frequency: every mode whose clamped frequency is at most 3x the highest scripted forcing
- *    frequency (Hz), and at least the first mode above that forcing;
- *  - accuracy: enough modes that the neglected ones hold less than auto_tolerance of the link's
- *    static compliance under a uniform load (sum over j > r of b_j^2/alpha_j^4, relative);
- * the larger of the two, within 1..F3R_MAX_MODES. */
-int f3r_auto_modes(const f3r_scene* scene, int link, char* reason, int size);
-
-/* Builds a model from a scene (validating it first). The result owns no pointers, so a model is
+/* Builds a model from a scene (validating it first). Links with modes left open (modes: auto, or
+ * no modes under an accuracy request) get theirs from f3r_accuracy_modes (accuracy.h). The result owns no pointers, so a model is
  * freed with f3r_model_destroy or simply copied. */
 f3r_status f3r_model_create(const f3r_scene* scene, f3r_model** model, f3r_error* err);
 void f3r_model_destroy(f3r_model* model);

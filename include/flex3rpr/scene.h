@@ -72,6 +72,18 @@ enum {
 
 #define F3R_MODES_AUTO (-1)
 
+/* Bits of f3r_scene.explicit_settings: what the scene file (or the caller) fixed itself, which
+ * the accuracy knob (accuracy.h) keeps. */
+enum {
+  F3R_EXPLICIT_MODES = 1,                 /* << i: links[i].modes was given as a number */
+  F3R_EXPLICIT_FORMULATION = 1 << 3,
+  F3R_EXPLICIT_INTEGRATOR = 1 << 4,
+  F3R_EXPLICIT_RTOL = 1 << 5,
+  F3R_EXPLICIT_TABLE = 1 << 6,
+  F3R_EXPLICIT_EXACT_KINEMATICS = 1 << 7,
+  F3R_EXPLICIT_ATOL = 1 << 8
+};
+
 typedef struct {
   f3r_link_model model;
   int modes;                         /* 1..F3R_MAX_MODES for a flexible link, 0 for rigid,
@@ -128,6 +140,10 @@ typedef struct {
   char table[48];              /* erk, dirk: the Butcher table by name; "" for the integrator's
                                 * default (f3r_rk_tables) */
 
+  /* accuracy knob (accuracy.h): requested end-effector accuracy (m), 0 for none */
+  double accuracy;
+  unsigned explicit_settings; /* F3R_EXPLICIT_* */
+
   /* run */
   double duration;    /* s, default 0.5 */
   double output_step; /* s, default 1e-4 */
@@ -149,6 +165,11 @@ const char* const* f3r_rk_tables(f3r_integrator integrator);
 
 /* Reads a scene YAML file over the defaults, then validates it. Errors start with "path:line: ". */
 f3r_status f3r_scene_load(const char* path, f3r_scene* scene, f3r_error* err);
+
+/* The same with an accuracy request from outside the file (a CLI flag, a node parameter): it
+ * replaces accuracy.end_effector when > 0, before validation, so flexible links may leave their
+ * modes to the knob. */
+f3r_status f3r_scene_load_accuracy(const char* path, double accuracy, f3r_scene* scene, f3r_error* err);
 
 /* Scene name of rigid generalized force `index` (F3R_FORCE_*), e.g. "rho_1", "platform_torque". */
 const char* f3r_input_name(int index);

@@ -1,7 +1,8 @@
 /* flex3rpr_sim: runs a scene headless, writes a CSV of the trajectory and prints a summary.
  *   flex3rpr_sim SCENE.yaml [--out FILE.csv] [--formulation dae|minimal] [--rtol R] [--atol A]
  *                [--output-step DT] [--duration T] [--fd-jacobian] [--dense-linear-solver]
- *                [--exact-kinematics] [--ida | --erk | --dirk] [--table NAME] ...
+ *                [--exact-kinematics] [--ida | --erk | --dirk] [--table NAME]
+ *                [--accuracy METRES] [--linear-path FILE.csv] ...
  *   flex3rpr_sim --modal SCENE.yaml
  *   flex3rpr_sim --geometry SCENE.yaml   (JSON for scripts/make_urdf.py) */
 #include <math.h>
@@ -12,6 +13,8 @@
 
 #include <sundials/sundials_config.h>
 
+#include "flex3rpr/accuracy.h"
+#include "flex3rpr/linear.h"
 #include "flex3rpr/modal.h"
 #include "flex3rpr/sim.h"
 
@@ -33,7 +36,8 @@ typedef struct {
   int dense_linear_solver;
   int exact_kinematics;
   const char* formulation;
-  double rtol, atol, max_order, output_step, duration;
+  double rtol, atol, max_order, output_step, duration, accuracy;
+  const char* linear_path;
   int stop_at_outputs;
   int integrator_ida, integrator_erk, integrator_dirk;
   const char* table;
@@ -48,6 +52,7 @@ static void usage(FILE* to) {
           "                    [--fd-jacobian] [--dense-linear-solver] [--exact-kinematics]\n"
           "                    [--ida | --erk | --dirk] [--table NAME]\n"
           "                    [--stop-at-outputs] [--hold T:INDEX:VALUE ...]\n"
+          "                    [--accuracy METRES] [--linear-path FILE.csv]\n"
           "       flex3rpr_sim --modal SCENE.yaml\n"
           "       flex3rpr_sim --geometry SCENE.yaml\n");
 }
@@ -90,6 +95,8 @@ static int parse_args(int argc, char** argv, cli_options* o) {
       ++k;
     }
     else if (!strcmp(a, "--out") && next) { o->out_path = next; ++k; }
+    else if (!strcmp(a, "--linear-path") && next) { o->linear_path = next; ++k; }
+    else if (!strcmp(a, "--accuracy")) { if (!parse_number(a, next, &o->accuracy)) return 0; ++k; }
     else if (!strcmp(a, "--formulation") && next) { o->formulation = next; ++k; }
     else if (!strcmp(a, "--rtol")) { if (!parse_number(a, next, &o->rtol)) return 0; ++k; }
     else if (!strcmp(a, "--atol")) { if (!parse_number(a, next, &o->atol)) return 0; ++k; }
@@ -177,6 +184,32 @@ static int run_modal(const f3r_model* m) {
   return 0;
 }
 
+/* The platform pose of the linearised model (linear.h) at the output step, as CSV. */
+static int write_linear_path(const f3r_model* m, const char* path) {
+  const int count = (int)llround(m->scene.duration / m->scene.output_step) + 1;
+  double* pose = malloc((size_t)count * 3 * sizeof(double));
+  f3r_linear_model* lin = NULL;
+  f3r_error err = {0};
+  FILE* f = NULL;
+  int rc = 1;
+  if (!pose) fprintf(stderr, "flex3rpr_sim: out of memory\n");
+  else if (f3r_linearise(m, &lin, &err) != F3R_OK ||
+           f3r_linear_response(lin, m, m->scene.output_step, count, pose, &err) != F3R_OK)
+    fprintf(stderr, "flex3rpr_sim: %s\n", err.message);
+  else if (!(f = fopen(path, "w"))) fprintf(stderr, "flex3rpr_sim: cannot write %s\n", path);
+  else {
+    fprintf(f, "t,x_p,y_p,phi_p\n");
+    for (int k = 0; k < count; ++k)
+      fprintf(f, "%.10g,%.15g,%.15g,%.15g\n", k * m->scene.output_step, pose[3 * k],
+              pose[3 * k + 1], pose[3 * k + 2]);
+    fclose(f);
+    rc = 0;
+  }
+  f3r_linear_destroy(lin);
+  free(pose);
+  return rc;
+}
+
 /* Process CPU time in s, at nanosecond resolution (clock() has microsecond steps). A system
  * call of about 0.5 us: read twice per run only. */
 static double cpu_seconds(void) {
@@ -203,12 +236,20 @@ int main(int argc, char** argv) {
   }
   f3r_error err = {0};
   f3r_scene scene;
-  if (f3r_scene_load(o.scene_path, &scene, &err) != F3R_OK) {
+  if (f3r_scene_load_accuracy(o.scene_path, o.accuracy, &scene, &err) != F3R_OK) {
     fprintf(stderr, "flex3rpr_sim: %s\n", err.message);
     return 1;
   }
-  if (o.formulation)
+  /* Options on the command line are explicit settings: the accuracy knob keeps them. */
+  if (o.formulation) {
     scene.formulation = strcmp(o.formulation, "dae") ? F3R_FORMULATION_MINIMAL : F3R_FORMULATION_DAE;
+    scene.explicit_settings |= F3R_EXPLICIT_FORMULATION;
+  }
+  if (o.rtol > 0) scene.explicit_settings |= F3R_EXPLICIT_RTOL;
+  if (o.atol > 0) scene.explicit_settings |= F3R_EXPLICIT_ATOL;
+  if (o.exact_kinematics) scene.explicit_settings |= F3R_EXPLICIT_EXACT_KINEMATICS;
+  if (o.integrator_ida || o.integrator_erk || o.integrator_dirk) scene.explicit_settings |= F3R_EXPLICIT_INTEGRATOR;
+  if (o.table) scene.explicit_settings |= F3R_EXPLICIT_TABLE;
   if (o.rtol > 0) scene.rtol = o.rtol;
   if (o.max_order > 0) scene.max_order = (int)o.max_order;
   if (o.atol > 0) scene.atol = o.atol;
@@ -220,6 +261,15 @@ int main(int argc, char** argv) {
     scene.integrator = o.integrator_erk ? F3R_INTEGRATOR_ERK : F3R_INTEGRATOR_DIRK;
     scene.formulation = F3R_FORMULATION_MINIMAL;
   }
+  if (o.table) snprintf(scene.table, sizeof scene.table, "%s", o.table);
+  const double choose_start = cpu_seconds();
+  f3r_accuracy_choice choice;
+  if (f3r_scene_validate(&scene, &err) != F3R_OK ||
+      f3r_accuracy_resolve(&scene, 0, &choice, &err) != F3R_OK) {
+    fprintf(stderr, "flex3rpr_sim: %s: %s\n", o.scene_path, err.message);
+    return 1;
+  }
+  const double choose_cpu = cpu_seconds() - choose_start;
   f3r_model* model = NULL;
   if (f3r_model_create(&scene, &model, &err) != F3R_OK) {
     fprintf(stderr, "flex3rpr_sim: %s: %s\n", o.scene_path, err.message);
@@ -230,8 +280,16 @@ int main(int argc, char** argv) {
     f3r_model_destroy(model);
     return 0;
   }
+  if (choice.summary[0]) printf("%s\n", choice.summary);
+  if (scene.accuracy > 0)
+    printf("choice cpu time     %.6f s (%d linear models)\n", choose_cpu, choice.linear_evaluations);
   for (int i = 0; i < 3; ++i)
     if (model->link[i].modes_reason[0]) printf("%s\n", model->link[i].modes_reason);
+  if (o.linear_path) {
+    const int rc = write_linear_path(model, o.linear_path);
+    f3r_model_destroy(model);
+    return rc;
+  }
   if (o.modal) {
     const int rc = run_modal(model);
     f3r_model_destroy(model);
@@ -315,7 +373,7 @@ int main(int argc, char** argv) {
          : o.fd_jacobian                           ? "IDA, difference-quotient Jacobian"
                                                    : "IDA, analytic Jacobian");
   if (scene.integrator != F3R_INTEGRATOR_IDA)
-    printf("butcher table       %s\n", o.table ? o.table : "default");
+    printf("butcher table       %s\n", scene.table[0] ? scene.table : "default");
   if (scene.integrator == F3R_INTEGRATOR_IDA) printf("max BDF order       %d\n", scene.max_order);
   printf("sundials            %s, %s\n", SUNDIALS_VERSION, F3R_SUNDIALS_BUILD);
   printf("state dimension     %d (nq %d)\n", f3r_state_size(model, scene.formulation), model->nq);

@@ -109,3 +109,43 @@ void f3r_cholesky_solve_inv(const double* L, int n, const double* inv, double* X
     }
   }
 }
+
+void f3r_symmetric_eigen(double* A, int n, double* eig, double* V) {
+  if (V)
+    for (int j = 0; j < n; ++j)
+      for (int i = 0; i < n; ++i) F3R_AT(V, n, i, j) = i == j ? 1.0 : 0.0;
+  for (int sweep = 0; sweep < 100; ++sweep) {
+    double off = 0.0, diag = 0.0;
+    for (int j = 0; j < n; ++j)
+      for (int i = 0; i < n; ++i) {
+        if (i == j) diag += F3R_AT(A, n, i, i) * F3R_AT(A, n, i, i);
+        else off += F3R_AT(A, n, i, j) * F3R_AT(A, n, i, j);
+      }
+    if (off <= 1e-30 * diag) break;
+    for (int p = 0; p < n; ++p)
+      for (int r = p + 1; r < n; ++r) {
+        const double apr = F3R_AT(A, n, p, r);
+        if (apr == 0.0) continue;
+        const double theta = (F3R_AT(A, n, r, r) - F3R_AT(A, n, p, p)) / (2.0 * apr);
+        const double t = (theta >= 0 ? 1.0 : -1.0) / (fabs(theta) + sqrt(theta * theta + 1.0));
+        const double c = 1.0 / sqrt(t * t + 1.0), s = t * c;
+        for (int k = 0; k < n; ++k) { /* columns p, r */
+          const double akp = F3R_AT(A, n, k, p), akr = F3R_AT(A, n, k, r);
+          F3R_AT(A, n, k, p) = c * akp - s * akr;
+          F3R_AT(A, n, k, r) = s * akp + c * akr;
+        }
+        for (int k = 0; k < n; ++k) { /* rows p, r */
+          const double apk = F3R_AT(A, n, p, k), ark = F3R_AT(A, n, r, k);
+          F3R_AT(A, n, p, k) = c * apk - s * ark;
+          F3R_AT(A, n, r, k) = s * apk + c * ark;
+        }
+        if (V)
+          for (int k = 0; k < n; ++k) {
+            const double vkp = F3R_AT(V, n, k, p), vkr = F3R_AT(V, n, k, r);
+            F3R_AT(V, n, k, p) = c * vkp - s * vkr;
+            F3R_AT(V, n, k, r) = s * vkp + c * vkr;
+          }
+      }
+  }
+  for (int i = 0; i < n; ++i) eig[i] = F3R_AT(A, n, i, i);
+}

@@ -21,4 +21,8 @@ void f3r_cholesky_solve(const double* L, int n, double* b);
 int f3r_cholesky_factor_inv(double* A, int n, double* inv);
 void f3r_cholesky_solve_inv(const double* L, int n, const double* inv, double* X, int nrhs);
 
+/* Eigenvalues (eig[n], unordered) and, when V is not NULL, orthonormal eigenvectors (columns of
+ * V, n x n) of the symmetric n x n matrix A by cyclic Jacobi rotations; A is destroyed. */
+void f3r_symmetric_eigen(double* A, int n, double* eig, double* V);
+
 #endif

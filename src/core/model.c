@@ -4,52 +4,12 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "flex3rpr/accuracy.h"
 #include "flex3rpr/model.h"
 #include "effects.h"
 #include "data.h"
 
 static const double kPlatformAngle[3] = {-M_PI / 6.0, M_PI / 2.0, 7.0 * M_PI / 6.0};
-
-int f3r_auto_modes(const f3r_scene* scene, int link, char* reason, int size) {
-  const f3r_link_scene* L = &scene->links[link];
-  const f3r_beam_end end = (f3r_beam_end)L->model;
-  double alpha[F3R_MAX_MODES], mean[F3R_MAX_MODES];
-  f3r_beam_roots(end, F3R_MAX_MODES, alpha);
-  f3r_beam_modal_integrals(end, F3R_MAX_MODES, mean, NULL, NULL, NULL, NULL);
-  const double l = scene->link_length, d = scene->link_diameter;
-  const double mass = scene->link_density * M_PI * d * d / 4.0 * l;
-  const double EI = scene->link_youngs_modulus * M_PI * d * d * d * d / 64.0;
-  const double hz_per_alpha2 = sqrt(EI / (mass * l * l * l)) / (2.0 * M_PI);
-  double forcing = 0.0;
-  for (int k = 0; k < F3R_RIGID_FORCES; ++k)
-    forcing = fmax(forcing, f3r_input_max_frequency(&scene->inputs[k]));
-  int by_frequency = 1;
-  if (forcing > 0.0) {
-    by_frequency = 0;
-    while (by_frequency < F3R_MAX_MODES &&
-           alpha[by_frequency] * alpha[by_frequency] * hz_per_alpha2 <= 3.0 * forcing)
-      ++by_frequency;
-    if (by_frequency < F3R_MAX_MODES &&
-        alpha[by_frequency > 0 ? by_frequency - 1 : 0] * alpha[by_frequency > 0 ? by_frequency - 1 : 0] *
-                hz_per_alpha2 <= forcing)
-      ++by_frequency;
-    if (by_frequency < 1) by_frequency = 1;
-  }
-  double total = 0.0, tail[F3R_MAX_MODES + 1];
-  for (int j = 0; j < F3R_MAX_MODES; ++j) total += mean[j] * mean[j] / pow(alpha[j], 4);
-  tail[F3R_MAX_MODES] = 0.0;
-  for (int j = F3R_MAX_MODES - 1; j >= 0; --j) tail[j] = tail[j + 1] + mean[j] * mean[j] / pow(alpha[j], 4);
-  int by_accuracy = 1;
-  while (by_accuracy < F3R_MAX_MODES && tail[by_accuracy] > L->auto_tolerance * total) ++by_accuracy;
-  const int r = by_frequency > by_accuracy ? by_frequency : by_accuracy;
-  if (reason)
-    snprintf(reason, (size_t)size,
-             "links[%d]: modes auto -> %d (forcing up to %.4g Hz needs %d, clamped mode %d at "
-             "%.4g Hz; static accuracy %g needs %d)",
-             link, r, forcing, by_frequency, r, alpha[r - 1] * alpha[r - 1] * hz_per_alpha2,
-             L->auto_tolerance, by_accuracy);
-  return r;
-}
 
 static int compare_doubles(const void* a, const void* b) {
   const double x = *(const double*)a, y = *(const double*)b;
@@ -112,24 +72,45 @@ f3r_status f3r_model_create(const f3r_scene* scene, f3r_model** out, f3r_error* 
   m->restitution = scene->restitution;
   m->exact_kinematics = scene->exact_kinematics;
 
+  /* Mode counts left open (modes: auto, or none under an accuracy request): the linear estimate
+   * of accuracy.h, for auto_tolerance of the path's extent or the request's model share. */
+  int open_modes[3];
+  unsigned open = 0;
+  double tolerance = 0.0;
+  for (int i = 0; i < 3; ++i) {
+    const f3r_link_scene* L = &scene->links[i];
+    open_modes[i] = L->model == F3R_LINK_RIGID ? 0 : L->modes;
+    if (L->model != F3R_LINK_RIGID && (L->modes == F3R_MODES_AUTO || L->modes == 0)) {
+      open |= 1u << i;
+      tolerance = fmax(tolerance, L->auto_tolerance);
+    }
+  }
+  if (open) {
+    f3r_scene fixed = *scene;
+    for (int i = 0; i < 3; ++i)
+      if (open >> i & 1) fixed.links[i].modes = 1;
+    const double target = scene->accuracy > 0.0 ? F3R_ACCURACY_MODEL_SHARE * scene->accuracy : -tolerance;
+    double estimate = 0.0, extent = 0.0;
+    st = f3r_accuracy_modes(&fixed, open, target, open_modes, &estimate, &extent, NULL, err);
+    if (st != F3R_OK) {
+      free(m);
+      return st;
+    }
+    for (int i = 0; i < 3; ++i) {
+      if (!(open >> i & 1)) continue;
+      m->scene.links[i].modes = open_modes[i];
+      snprintf(m->link[i].modes_reason, sizeof m->link[i].modes_reason,
+               "links[%d]: modes -> %d (linearised end-effector path within %.3g m of %d modes; "
+               "target %.3g m, path extent %.3g m)",
+               i, open_modes[i], estimate, F3R_MAX_MODES, target > 0 ? target : -target * extent, extent);
+    }
+  }
   int next = 9;
   const double EI_l3 = m->bending_stiffness / (l * l * l);
   for (int i = 0; i < 3; ++i) {
     f3r_link_params* lp = &m->link[i];
     lp->model = scene->links[i].model;
-    lp->modes = lp->model == F3R_LINK_RIGID ? 0 : scene->links[i].modes;
-    if (lp->modes == F3R_MODES_AUTO) {
-      lp->modes = f3r_auto_modes(scene, i, lp->modes_reason, (int)sizeof lp->modes_reason);
-      m->scene.links[i].modes = lp->modes;
-      for (int j = lp->modes; j < F3R_MAX_MODES; ++j)
-        if (scene->links[i].eta0[j] != 0.0 || scene->links[i].eta_rate0[j] != 0.0) {
-          const int chosen = lp->modes;
-          free(m);
-          return f3r_error_set(err, F3R_ERR_SCENE,
-                               "links[%d].initial_deflection: mode %d given but modes auto chose %d",
-                               i, j + 1, chosen);
-        }
-    }
+    lp->modes = open_modes[i];
     lp->eta_index = next;
     next += lp->modes;
     if (!lp->modes) continue;

@@ -243,6 +243,8 @@ f3r_status f3r_scene_validate(const f3r_scene* s, f3r_error* err) {
     } else if (L->modes == F3R_MODES_AUTO) {
       snprintf(name, sizeof name, "links[%d].auto_tolerance", i);
       CHECK_RANGE(name, L->auto_tolerance, 1e-12, 0.5);
+    } else if (L->modes == 0 && s->accuracy > 0.0) {
+      /* left to the accuracy knob */
     } else if (L->modes < 1 || L->modes > F3R_MAX_MODES) {
       return f3r_scene_error(err, name, NULL, "%d is out of range 1..%d", L->modes, F3R_MAX_MODES);
     }
@@ -251,7 +253,8 @@ f3r_status f3r_scene_validate(const f3r_scene* s, f3r_error* err) {
       CHECK_RANGE(name, L->eta0[j], -0.1, 0.1);
       snprintf(name, sizeof name, "links[%d].initial_rate[%d]", i, j);
       CHECK_RANGE(name, L->eta_rate0[j], -100.0, 100.0);
-      if (L->modes != F3R_MODES_AUTO && j >= L->modes && (L->eta0[j] != 0.0 || L->eta_rate0[j] != 0.0)) {
+      const int open = L->modes == F3R_MODES_AUTO || (L->modes == 0 && L->model != F3R_LINK_RIGID);
+      if (!open && j >= L->modes && (L->eta0[j] != 0.0 || L->eta_rate0[j] != 0.0)) {
         char list[64];
         snprintf(list, sizeof list, "links[%d].initial_deflection", i);
         snprintf(name, sizeof name, "%s[%d]", list, j);
@@ -321,6 +324,7 @@ f3r_status f3r_scene_validate(const f3r_scene* s, f3r_error* err) {
     return f3r_scene_error(err, "solver.table", NULL, "'%s' is not one of %s", s->table, allowed);
   }
   CHECK_RANGE("solver.rtol", s->rtol, 1e-14, 1e-1);
+  if (s->accuracy != 0.0) CHECK_RANGE("accuracy.end_effector", s->accuracy, 1e-9, 1.0);
   CHECK_RANGE("solver.atol", s->atol, 1e-16, 1e-1);
   CHECK_RANGE("solver.max_step", s->max_step, 0.0, 1e3);
   if (s->max_order < 1 || s->max_order > 5)

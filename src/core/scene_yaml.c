@@ -192,6 +192,8 @@ static f3r_status read_link(loader* L, const yaml_node_t* map, int i) {
         remember(L, name, value);
       } else if ((st = read_int(L, value, name, &link->modes)) != F3R_OK) {
         return fail(L, value, name, "expected 1..%d or auto", F3R_MAX_MODES);
+      } else {
+        L->scene->explicit_settings |= F3R_EXPLICIT_MODES << i;
       }
     } else if (!strcmp(key, "auto_tolerance")) {
       if ((st = read_number(L, value, name, &link->auto_tolerance)) != F3R_OK) return st;
@@ -357,6 +359,7 @@ static f3r_status read_solver(loader* L, const yaml_node_t* map) {
       if (v && !strcmp(v, "dae")) s->formulation = F3R_FORMULATION_DAE;
       else if (v && !strcmp(v, "minimal")) s->formulation = F3R_FORMULATION_MINIMAL;
       else return fail(L, value, name, "'%s' is not one of dae, minimal", v ? v : "?");
+      s->explicit_settings |= F3R_EXPLICIT_FORMULATION;
       remember(L, name, value);
     } else if (!strcmp(key, "integrator")) {
       const char* v = scalar(value);
@@ -364,6 +367,7 @@ static f3r_status read_solver(loader* L, const yaml_node_t* map) {
       else if (v && !strcmp(v, "erk")) s->integrator = F3R_INTEGRATOR_ERK;
       else if (v && !strcmp(v, "dirk")) s->integrator = F3R_INTEGRATOR_DIRK;
       else return fail(L, value, name, "'%s' is not one of ida, erk, dirk", v ? v : "?");
+      s->explicit_settings |= F3R_EXPLICIT_INTEGRATOR;
       remember(L, name, value);
     } else if (!strcmp(key, "table")) {
       const char* v = scalar(value);
@@ -371,9 +375,14 @@ static f3r_status read_solver(loader* L, const yaml_node_t* map) {
         return fail(L, value, name, "needs a Butcher table's name (at most %d characters)",
                     (int)sizeof s->table - 1);
       snprintf(s->table, sizeof s->table, "%s", v);
+      s->explicit_settings |= F3R_EXPLICIT_TABLE;
       remember(L, name, value);
-    } else if (!strcmp(key, "rtol")) { st = read_number(L, value, name, &s->rtol);
-    } else if (!strcmp(key, "atol")) { st = read_number(L, value, name, &s->atol);
+    } else if (!strcmp(key, "rtol")) {
+      st = read_number(L, value, name, &s->rtol);
+      s->explicit_settings |= F3R_EXPLICIT_RTOL;
+    } else if (!strcmp(key, "atol")) {
+      st = read_number(L, value, name, &s->atol);
+      s->explicit_settings |= F3R_EXPLICIT_ATOL;
     } else if (!strcmp(key, "max_step")) { st = read_number(L, value, name, &s->max_step);
     } else if (!strcmp(key, "max_order")) {
       double order = 0.0;
@@ -421,6 +430,7 @@ static f3r_status read_root(loader* L, const yaml_node_t* root) {
         snprintf(name, sizeof name, "effects.%s", ekey);
         if (!strcmp(ekey, "exact_kinematics")) {
           st = read_bool(L, evalue, name, &s->exact_kinematics);
+          s->explicit_settings |= F3R_EXPLICIT_EXACT_KINEMATICS;
         } else if (!strcmp(ekey, "gravity")) {
           st = read_vector(L, evalue, name, s->gravity, 3);
         } else if (!strcmp(ekey, "payload")) {
@@ -466,6 +476,9 @@ static f3r_status read_root(loader* L, const yaml_node_t* root) {
       st = read_inputs(L, value);
     } else if (!strcmp(key, "solver")) {
       st = read_solver(L, value);
+    } else if (!strcmp(key, "accuracy")) {
+      const number_field f[] = {{"end_effector", &s->accuracy}};
+      st = read_numbers(L, value, "accuracy", f, 1);
     } else if (!strcmp(key, "run")) {
       if ((st = expect_mapping(L, value, "run")) != F3R_OK) return st;
       FOR_EACH_PAIR(L, value, rkey, rvalue) {
@@ -480,7 +493,7 @@ static f3r_status read_root(loader* L, const yaml_node_t* root) {
     } else {
       return fail(L, value, key,
                   "unknown section (allowed: geometry, platform, link, cylinder, links, effects, "
-                  "initial, inputs, solver, run)");
+                  "initial, inputs, solver, accuracy, run)");
     }
     if (st != F3R_OK) return st;
   }
@@ -501,6 +514,10 @@ static f3r_status locate_validation_error(loader* L, f3r_error* err) {
 }
 
 f3r_status f3r_scene_load(const char* path, f3r_scene* scene, f3r_error* err) {
+  return f3r_scene_load_accuracy(path, 0.0, scene, err);
+}
+
+f3r_status f3r_scene_load_accuracy(const char* path, double accuracy, f3r_scene* scene, f3r_error* err) {
   if (!path || !scene) return f3r_error_set(err, F3R_ERR_ARGUMENT, "f3r_scene_load: NULL argument");
   FILE* file = fopen(path, "rb");
   if (!file) return f3r_error_set(err, F3R_ERR_SCENE, "%s: cannot open: %s", path, strerror(errno));
@@ -530,6 +547,7 @@ f3r_status f3r_scene_load(const char* path, f3r_scene* scene, f3r_error* err) {
   else st = read_root(L, root);
   if (st == F3R_OK && L->out_of_memory)
     st = f3r_error_set(err, F3R_ERR_MEMORY, "%s: out of memory", path);
+  if (st == F3R_OK && accuracy > 0.0) parsed.accuracy = accuracy;
   if (st == F3R_OK) {
     st = f3r_scene_validate(&parsed, err);
     if (st != F3R_OK) st = locate_validation_error(L, err);

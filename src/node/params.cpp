@@ -86,8 +86,16 @@ bool NonNegative(const char* name, double value, std::string* error) {
 
 bool LoadParams(const ros::NodeHandle& pnh, NodeParams* p, std::string* error) {
   if (!Read(pnh, "scene", DefaultScenePath(), &p->scene_path, error)) return false;
+  double accuracy = 0.0;  // ~accuracy (m): the scene's accuracy.end_effector when 0
+  if (!Read(pnh, "accuracy", 0.0, &accuracy, error)) return false;
+  if (accuracy != 0.0 && !(accuracy >= 1e-9 && accuracy <= 1.0)) {
+    std::ostringstream os;
+    os << "parameter ~accuracy: " << accuracy << " is out of range 1e-09..1 (m; 0 for the scene's)";
+    *error = os.str();
+    return false;
+  }
   f3r_error err{};
-  if (f3r_scene_load(p->scene_path.c_str(), &p->scene, &err) != F3R_OK) {
+  if (f3r_scene_load_accuracy(p->scene_path.c_str(), accuracy, &p->scene, &err) != F3R_OK) {
     *error = std::string("parameter ~scene: ") + err.message;
     return false;
   }
@@ -98,6 +106,12 @@ bool LoadParams(const ros::NodeHandle& pnh, NodeParams* p, std::string* error) {
       !Read(pnh, "table", std::string(), &table, error) ||
       !Read(pnh, "end_stops", false, &p->end_stops, error))
     return false;
+  // A solver parameter is an explicit setting: the accuracy knob keeps it.
+  if (!formulation.empty()) p->scene.explicit_settings |= F3R_EXPLICIT_FORMULATION;
+  if (!integrator.empty()) p->scene.explicit_settings |= F3R_EXPLICIT_INTEGRATOR;
+  if (!table.empty()) p->scene.explicit_settings |= F3R_EXPLICIT_TABLE;
+  if (pnh.hasParam("rtol")) p->scene.explicit_settings |= F3R_EXPLICIT_RTOL;
+  if (pnh.hasParam("atol")) p->scene.explicit_settings |= F3R_EXPLICIT_ATOL;
   if (!formulation.empty()) {
     if (formulation == "dae") p->scene.formulation = F3R_FORMULATION_DAE;
     else if (formulation == "minimal") p->scene.formulation = F3R_FORMULATION_MINIMAL;
@@ -123,6 +137,12 @@ bool LoadParams(const ros::NodeHandle& pnh, NodeParams* p, std::string* error) {
   if (p->end_stops) p->scene.end_stops = 1;  // the scene's stroke becomes hard
   if (f3r_scene_validate(&p->scene, &err) != F3R_OK) {
     *error = std::string("parameters override the scene badly: ") + err.message;
+    return false;
+  }
+  // The accuracy knob (or modes: auto) fixes what the scene left open; commands are held from
+  // publish time to publish time, so its solver relation is the commanded one.
+  if (f3r_accuracy_resolve(&p->scene, 1, &p->accuracy, &err) != F3R_OK) {
+    *error = std::string("parameter ~accuracy: ") + err.message;
     return false;
   }
   p->settings = f3r_solver_settings_from_scene(&p->scene);

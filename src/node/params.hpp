@@ -7,6 +7,7 @@
 #include <string>
 #include <vector>
 
+#include "flex3rpr/accuracy.h"
 #include "flex3rpr/sim.h"
 
 namespace flex3rpr {
@@ -32,6 +33,7 @@ struct NodeParams {
   std::string scene_path;             // ~scene, default: the package's paper_sim3_fixed_free.yaml
   f3r_scene scene;                    // loaded and overridden
   f3r_solver_settings settings;       // ~formulation, ~integrator, ~rtol, ~atol
+  f3r_accuracy_choice accuracy{};     // ~accuracy or the scene's: what the knob chose, and why
   double publish_rate = 1000.0;       // Hz of simulated time
   int beam_points = 11;               // stations per link
   double realtime_factor = 1.0;       // 1 paces to the wall clock, 0 runs as fast as possible

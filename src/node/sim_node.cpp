@@ -69,6 +69,9 @@ bool SimNode::Init() {
            params_.settings.rtol, params_.publish_rate, params_.realtime_factor,
            params_.sim_stamps ? "simulated" : "wall-clock", params_.publish_clock ? " with /clock" : "",
            params_.frames.base.c_str());
+  if (params_.accuracy.summary[0]) ROS_INFO("flex3rpr_node: %s", params_.accuracy.summary);
+  for (int i = 0; i < 3; ++i)
+    if (model_->link[i].modes_reason[0]) ROS_INFO("flex3rpr_node: %s", model_->link[i].modes_reason);
   return true;
 }
 

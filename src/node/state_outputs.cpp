@@ -41,6 +41,12 @@ std::string Leg(int i, const char* suffix) { return "leg_" + std::to_string(i + 
 
 }  // namespace
 
+// The knob's total estimate: model, kinematics and solver error (m); 0 when nothing was chosen.
+static double EstimatedError(const f3r_accuracy_choice& c) {
+  if (!c.brief[0]) return 0.0;
+  return c.model_error + c.kinematics_error + (std::isfinite(c.solver_error) ? c.solver_error : 0.0);
+}
+
 StateOutputs::StateOutputs(ros::NodeHandle& nh, ros::NodeHandle& pnh, const f3r_model& model,
                            const NodeParams& params)
     : model_(model), params_(params), frames_(params.frames) {
@@ -248,6 +254,9 @@ void StateOutputs::PublishDiagnostics(const f3r_outputs& out, const RunInfo& inf
     kv.value = text;
     return kv;
   };
+  diagnostic_msgs::KeyValue choice;
+  choice.key = "accuracy_choice";
+  choice.value = params_.accuracy.brief;
   d.values = {value("sim_time", out.t),
               value("realtime_factor", info.realtime_factor),
               value("requested_realtime_factor", info.requested_realtime_factor),
@@ -255,6 +264,10 @@ void StateOutputs::PublishDiagnostics(const f3r_outputs& out, const RunInfo& inf
               value("constraint_residual", out.constraint_residual),
               value("energy_balance_error", out.energy_balance_error),
               value("rejected_commands", static_cast<double>(info.rejected_commands))};
+  if (!choice.value.empty()) {
+    d.values.push_back(choice);
+    d.values.push_back(value("estimated_error", EstimatedError(params_.accuracy)));
+  }
   diagnostics_.header.stamp = Stamp(out.t);
   diagnostics_pub_.publish(diagnostics_);
 }
@@ -278,6 +291,8 @@ bool StateOutputs::SubscribersConnected(int n) const {
 }
 
 void StateOutputs::PublishStatus(const f3r_outputs& out, const RunInfo& info) {
+  status_.accuracy_choice = params_.accuracy.brief;
+  status_.estimated_error = EstimatedError(params_.accuracy);
   status_.header.stamp = Stamp(out.t);
   status_.sim_time = out.t;
   status_.wall_time = info.wall_time;

@@ -39,6 +39,37 @@ class NodeStartup(unittest.TestCase):
             self.assertNotEqual(code, 0, out[-2000:])
             self.assertIn("parameter ~%s: not %s" % (name, kind), out)
 
+    def test_accuracy_out_of_range_is_named(self):
+        code, out = run_node("__name:=bad_accuracy", "_accuracy:=5.0")
+        self.assertNotEqual(code, 0)
+        self.assertIn("parameter ~accuracy: 5 is out of range 1e-09..1", out)
+
+    def test_f_the_accuracy_knob_reports_its_choice_in_status(self):
+        """~accuracy on a scene whose links leave their modes open: ~status carries the choice
+        and its estimate (within the request), the log the reasoning, and the node runs."""
+        from flex3rpr.msg import SimStatus
+        seen = []
+        sub = rospy.Subscriber("/knob/status", SimStatus, seen.append, queue_size=1000)
+        proc = subprocess.Popen(["stdbuf", "-oL", "rosrun", "flex3rpr", "flex3rpr_node", "__name:=knob",
+                                 "_scene:=" + PKG + "/test/scenes/open_modes.yaml", "_accuracy:=1e-4",
+                                 "_realtime_factor:=1.0", "_publish_rate:=100.0"],
+                                stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
+        try:
+            end = time.time() + 600
+            while time.time() < end and not any(m.sim_time >= 0.05 for m in seen) and proc.poll() is None:
+                time.sleep(0.1)
+        finally:
+            sub.unregister()
+            proc.terminate()
+            out, _ = proc.communicate(timeout=120)
+        self.assertTrue(seen, out[-3000:])
+        last = seen[-1]
+        self.assertTrue(last.accuracy_choice.startswith("accuracy 0.0001 m: modes "), last.accuracy_choice)
+        self.assertGreater(last.estimated_error, 0.0)
+        self.assertLessEqual(last.estimated_error, 1e-4)
+        self.assertIn("accuracy 0.0001 m on the end-effector path", out)
+        self.assertIn("estimated error", out)
+
     def test_mismatching_urdf_exits_with_the_joint_named(self):
         tree = ET.parse(PKG + "/urdf/flex3rpr.urdf")
         for joint in tree.getroot().iter("joint"):

@@ -1,0 +1,87 @@
+/* The accuracy knob: from a requested end-effector accuracy (m) to the cheapest mode counts,
+ * exact kinematics, formulation, integrator and tolerance that deliver it. Settings the scene
+ * file gives itself (f3r_scene.explicit_settings) are kept; the knob chooses the rest.
+ *
+ * Total error = model error + kinematics error + solver error, each given a share of the request:
+ *  - model error: the end-effector path of the linearised model (linear.h) with r modes against
+ *    the same with F3R_MAX_MODES on every link being chosen, over the scene's own inputs,
+ *    duration and initial state; r is raised uniformly until it fits, then trimmed per link;
+ *  - pilot check: when the linear path leaves the initial pose far, a short nonlinear run at r
+ *    and at r + 1 (and one with exact kinematics) measures what the linearisation cannot;
+ *  - solver error: the benchmark's measured relation of error to tolerance (solver_table.c).
+ * modes: auto without an accuracy request asks the linear estimate for auto_tolerance of the
+ * path's extent. */
+#ifndef FLEX3RPR_ACCURACY_H
+#define FLEX3RPR_ACCURACY_H
+
+#include "flex3rpr/model.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+/* Shares of the request given to each part of the error. */
+#define F3R_ACCURACY_MODEL_SHARE 0.5
+#define F3R_ACCURACY_KINEMATICS_SHARE 0.2
+#define F3R_ACCURACY_SOLVER_SHARE 0.25
+
+typedef struct {
+  double request;         /* m; 0 when only modes: auto asked */
+  int modes[3];           /* per link; 0 for rigid links */
+  int exact_kinematics;
+  f3r_formulation formulation;
+  f3r_integrator integrator;
+  char table[48];         /* the Butcher table for erk and dirk, "" for the default */
+  double rtol, atol;
+  double model_error;     /* m, estimated error of the mode counts */
+  double kinematics_effect;/* m, estimated effect of exact kinematics on the path */
+  double kinematics_error;/* m, the part of it left in the run: the effect when it is off, else 0 */
+  double solver_error;    /* m, the measured relation's error at rtol */
+  double extent;          /* m, largest distance of the linear end-effector path from its start */
+  int pilot;              /* 1 when nonlinear pilot runs checked the estimate */
+  double pilot_ratio;     /* nonlinear over linear mode-count difference in the pilot window */
+  int linear_evaluations; /* linear models built and solved */
+  char summary[1024];     /* the choice and why, one line per decision */
+  char brief[256];        /* the same in one line, for a status message */
+} f3r_accuracy_choice;
+
+/* Chooses for `request` (m, > 0). The scene's explicit settings are kept and reported.
+ * commanded: 1 when a caller will hold new forces every output period (the node), so that the
+ * solver relation measured with such restarts applies. */
+f3r_status f3r_accuracy_choose(const f3r_scene* scene, double request, int commanded,
+                               f3r_accuracy_choice* choice, f3r_error* err);
+
+/* Writes a choice into the scene (modes, exact kinematics, solver), where the scene left it open. */
+void f3r_accuracy_apply(const f3r_accuracy_choice* choice, f3r_scene* scene);
+
+/* Resolves a scene for a run: with scene->accuracy > 0, chooses and applies; otherwise resolves
+ * links with modes: auto by the linear estimate alone. choice may be NULL. */
+f3r_status f3r_accuracy_resolve(f3r_scene* scene, int commanded, f3r_accuracy_choice* choice,
+                                f3r_error* err);
+
+/* Mode counts for the links in `chosen` (bit i for link i) so that the linear end-effector path
+ * stays within `target` (m) of the path with F3R_MAX_MODES on those links; the other links keep
+ * scene->links[i].modes. target <= 0 asks for -target times the path's extent. */
+f3r_status f3r_accuracy_modes(const f3r_scene* scene, unsigned chosen, double target, int modes[3],
+                              double* estimate, double* extent, int* evaluations, f3r_error* err);
+
+/* A measured point of the work-precision relation (solver_table.c, written by scripts/bench). */
+typedef struct {
+  const char* kind;           /* "flexible", "rigid" (all links rigid), "commanded" (held commands) */
+  f3r_formulation formulation;
+  f3r_integrator integrator;
+  const char* table;          /* Butcher table, "" for the default or for IDA */
+  double rtol, atol;          /* the benchmark's sweep sets atol = 1e-2 rtol (m, m/s) */
+  double error;               /* m: the largest end-effector error over the benchmark scenes */
+  double cost;                /* median over those scenes of CPU time / that of minimal IDA at 1e-6 */
+  int scenes;                 /* how many scenes were measured */
+} f3r_solver_relation;
+
+extern const f3r_solver_relation f3r_solver_relations[];
+extern const int f3r_solver_relation_count;
+extern const char f3r_solver_relations_source[]; /* machine, date and commit of the measurement */
+
+#ifdef __cplusplus
+}
+#endif
+#endif

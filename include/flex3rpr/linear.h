@@ -1,0 +1,46 @@
+/* The model linearised about the scene's initial platform pose with zero deflection and zero
+ * velocity, in the minimal coordinates z = (X_p, Y_p, phi_p, eta) (n = 3 + sum r_i):
+ *   M z'' + D z' + K (z - z0) = f0 + U u(t)
+ * M, D, K are the derivatives of the public minimal residual (f3r_residual_jacobian) with respect
+ * to z'', z' and z; U (n x 9) is the generalized force in z of a unit rigid force (F3R_FORCE_*),
+ * from two residual evaluations; f0 is the residual's static force at rest (in-plane gravity).
+ * Its modes, mass-normalised, and the platform pose's response to the scene's own
+ * inputs and initial state follow by modal superposition, exact for piecewise-linear inputs.
+ * The accuracy knob (accuracy.h) compares this response across mode counts. */
+#ifndef FLEX3RPR_LINEAR_H
+#define FLEX3RPR_LINEAR_H
+
+#include "flex3rpr/model.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+typedef struct {
+  int n;                  /* number of minimal coordinates */
+  double* mass;           /* n x n, column-major */
+  double* damping;        /* n x n: joint friction and modal damping through the loop closure */
+  double* stiffness;      /* n x n: beam stiffness and the geometric stiffness of static loads */
+  double* input;          /* n x F3R_RIGID_FORCES */
+  double* static_force;   /* n */
+  double* shapes;         /* n x n: mode shapes Phi, Phi^T M Phi = I, by ascending omega^2 */
+  double* omega2;         /* n: eigenvalues of K Phi = M Phi diag(omega^2), rad^2/s^2 */
+  double* modal_damping;  /* n: diagonal of Phi^T D Phi (its coupling terms are neglected) */
+} f3r_linear_model;
+
+/* Linearises the model (with its actuator lag left out and its scripted inputs at zero) and
+ * computes its modes. */
+f3r_status f3r_linearise(const f3r_model* model, f3r_linear_model** out, f3r_error* err);
+void f3r_linear_destroy(f3r_linear_model* linear);
+
+/* Platform pose (X_p, Y_p, phi_p) at t_k = k dt, k = 0..count-1, into pose[3 k .. 3 k + 2]:
+ * the response of the linear model to the scene's scripted inputs (through its actuator lag, if
+ * any) and to its initial platform velocity and modal deflections and rates. The inputs are
+ * sampled at t_k and taken as linear in between. */
+f3r_status f3r_linear_response(const f3r_linear_model* linear, const f3r_model* model, double dt,
+                               int count, double* pose, f3r_error* err);
+
+#ifdef __cplusplus
+}
+#endif
+#endif

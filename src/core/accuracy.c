@@ -1,0 +1,503 @@
+/* The accuracy knob (include/flex3rpr/accuracy.h): linear mode-count estimate, nonlinear pilot
+ * check, exact kinematics and the measured solver relation. Runs once before a simulation, so
+ * it allocates freely; nothing here touches the step loop. */
+#include <math.h>
+#include <stdarg.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "flex3rpr/accuracy.h"
+#include "flex3rpr/linear.h"
+#include "flex3rpr/sim.h"
+
+#define MAX_SAMPLES 200001
+/* The linear path "leaves the initial pose far" beyond this share of the platform's side (or
+ * this rotation): then the linearisation is checked by a nonlinear pilot. */
+#define FAR_SHARE 0.1
+#define FAR_ROTATION 0.05
+#define PILOT_SHARE 0.1 /* of the duration */
+
+static int is_flexible(const f3r_scene* s, int i) { return s->links[i].model != F3R_LINK_RIGID; }
+
+static int lowest_modes(const f3r_scene* s, int i) { /* the initial state's highest mode */
+  int low = 1;
+  for (int j = 0; j < F3R_MAX_MODES; ++j)
+    if (s->links[i].eta0[j] != 0.0 || s->links[i].eta_rate0[j] != 0.0) low = j + 1;
+  return low;
+}
+
+/* The scene with fixed mode counts, no accuracy request: a model the caller must destroy. */
+static f3r_status model_with(const f3r_scene* base, const int modes[3], int exact_kinematics,
+                             f3r_model** model, f3r_error* err) {
+  f3r_scene s = *base;
+  s.accuracy = 0.0;
+  s.exact_kinematics = exact_kinematics;
+  for (int i = 0; i < 3; ++i) s.links[i].modes = is_flexible(&s, i) ? modes[i] : 0;
+  return f3r_model_create(&s, model, err);
+}
+
+static f3r_status linear_path(const f3r_scene* s, const int modes[3], double dt, int count,
+                              double* pose, f3r_error* err) {
+  f3r_model* model = NULL;
+  f3r_linear_model* lin = NULL;
+  f3r_status st = model_with(s, modes, 0, &model, err);
+  if (st == F3R_OK) st = f3r_linearise(model, &lin, err);
+  if (st == F3R_OK) st = f3r_linear_response(lin, model, dt, count, pose, err);
+  f3r_linear_destroy(lin);
+  f3r_model_destroy(model);
+  return st;
+}
+
+/* Largest end-effector distance between two pose paths (3 values a sample) over count samples. */
+static double max_distance(const double* a, const double* b, int count) {
+  double worst = 0.0;
+  for (int k = 0; k < count; ++k)
+    worst = fmax(worst, hypot(a[3 * k] - b[3 * k], a[3 * k + 1] - b[3 * k + 1]));
+  return worst;
+}
+
+/* A scene whose linear path never leaves its initial state: no scripted input, no initial rate
+ * or deflection, no in-plane gravity. Its mode counts need no estimate. */
+static int at_rest(const f3r_scene* s) {
+  for (int k = 0; k < F3R_RIGID_FORCES; ++k) {
+    const f3r_input* in = &s->inputs[k];
+    if (in->kind != F3R_INPUT_NONE && !(in->kind == F3R_INPUT_CONSTANT && in->offset == 0.0)) return 0;
+  }
+  if (s->gravity[0] != 0.0 || s->gravity[1] != 0.0) return 0;
+  for (int k = 0; k < 3; ++k)
+    if (s->platform_velocity0[k] != 0.0) return 0;
+  for (int i = 0; i < 3; ++i)
+    for (int j = 0; j < F3R_MAX_MODES; ++j)
+      if (s->links[i].eta0[j] != 0.0 || s->links[i].eta_rate0[j] != 0.0) return 0;
+  return 1;
+}
+
+/* The nonlinear end-effector path at t_k = k dt, k < count (minimal on IDA at rtol): a pilot. */
+static f3r_status pilot_path(const f3r_scene* base, const int modes[3], int exact_kinematics,
+                             double rtol, double dt, int count, double* pose, f3r_error* err) {
+  f3r_model* model = NULL;
+  f3r_sim* sim = NULL;
+  f3r_status st = model_with(base, modes, exact_kinematics, &model, err);
+  if (st == F3R_OK) {
+    f3r_solver_settings settings = f3r_solver_settings_from_scene(&model->scene);
+    settings.formulation = F3R_FORMULATION_MINIMAL;
+    settings.integrator = F3R_INTEGRATOR_IDA;
+    settings.rtol = rtol;
+    settings.atol = 1e-2 * rtol; /* as the relation was measured */
+    settings.rk_table[0] = '\0';
+    st = f3r_sim_create(model, &settings, &sim, err);
+  }
+  for (int k = 0; st == F3R_OK && k < count; ++k) {
+    if (k) st = f3r_sim_advance(sim, k * dt, err);
+    const f3r_outputs* out = f3r_sim_outputs(sim);
+    for (int c = 0; c < 3; ++c) pose[3 * k + c] = out->q[F3R_Q_X + c];
+  }
+  f3r_sim_destroy(sim);
+  f3r_model_destroy(model);
+  if (st != F3R_OK)
+    return f3r_error_set(err, st, "accuracy: pilot run at %d, %d, %d modes: %s", modes[0], modes[1],
+                         modes[2], err ? err->message : "failed");
+  return F3R_OK;
+}
+
+/* What the mode search shares: the sampling, the links chosen, their least counts (the initial
+ * state's highest mode) and the reference path with F3R_MAX_MODES on the chosen links. */
+typedef struct {
+  double dt;
+  int count;
+  unsigned chosen;
+  int low[3];
+  int ref_modes[3];
+  double* ref;      /* 3 count */
+  double* path;     /* 3 count, scratch */
+  double extent;    /* m: largest distance of the reference end effector from its start */
+  double rotation;  /* rad: largest platform rotation from its start */
+  int at_rest;
+  int evaluations;
+} mode_search;
+
+static void search_free(mode_search* ms) {
+  free(ms->ref);
+  free(ms->path);
+}
+
+static f3r_status search_init(const f3r_scene* s, unsigned chosen, mode_search* ms, f3r_error* err) {
+  memset(ms, 0, sizeof *ms);
+  double fastest = 0.0; /* sampling: the output step, fine enough for the fastest input */
+  for (int k = 0; k < F3R_RIGID_FORCES; ++k) fastest = fmax(fastest, f3r_input_max_frequency(&s->inputs[k]));
+  double h = s->output_step;
+  if (fastest > 0.0) h = fmin(h, 1.0 / (20.0 * fastest));
+  if (s->duration / h > MAX_SAMPLES - 1) h = s->duration / (MAX_SAMPLES - 1);
+  ms->count = (int)ceil(s->duration / h - 1e-9) + 1;
+  ms->dt = s->duration / (ms->count - 1);
+  for (int i = 0; i < 3; ++i) {
+    if (!is_flexible(s, i)) chosen &= ~(1u << i);
+    ms->low[i] = lowest_modes(s, i);
+    ms->ref_modes[i] = !is_flexible(s, i) ? 0 : (chosen >> i & 1) ? F3R_MAX_MODES : s->links[i].modes;
+  }
+  ms->chosen = chosen;
+  ms->at_rest = at_rest(s);
+  if (ms->at_rest) return F3R_OK;
+  ms->ref = malloc((size_t)ms->count * 3 * sizeof(double));
+  ms->path = malloc((size_t)ms->count * 3 * sizeof(double));
+  if (!ms->ref || !ms->path) {
+    search_free(ms);
+    return f3r_error_set(err, F3R_ERR_MEMORY, "accuracy: out of memory");
+  }
+  const f3r_status st = linear_path(s, ms->ref_modes, ms->dt, ms->count, ms->ref, err);
+  ++ms->evaluations;
+  if (st != F3R_OK) return st;
+  for (int k = 0; k < ms->count; ++k) {
+    const double* p = ms->ref + 3 * k;
+    ms->extent = fmax(ms->extent, hypot(p[0] - ms->ref[0], p[1] - ms->ref[1]));
+    ms->rotation = fmax(ms->rotation, fabs(p[2] - ms->ref[2]));
+  }
+  return F3R_OK;
+}
+
+/* The fewest modes whose linear path stays within target of the reference: uniform r on the
+ * chosen links first (the cost grows with every link's r alike), then each link down while the
+ * path stays within it (a link the inputs excite less needs fewer). */
+static f3r_status search_modes(const f3r_scene* s, mode_search* ms, double target, int modes[3],
+                               double* estimate, f3r_error* err) {
+  for (int i = 0; i < 3; ++i) modes[i] = ms->ref_modes[i];
+  *estimate = 0.0;
+  if (!ms->chosen) return F3R_OK;
+  if (ms->at_rest) {
+    for (int i = 0; i < 3; ++i)
+      if (ms->chosen >> i & 1) modes[i] = ms->low[i];
+    return F3R_OK;
+  }
+  f3r_status st = F3R_OK;
+  double est = 0.0;
+  for (int r = 1; r < F3R_MAX_MODES; ++r) {
+    int trial[3];
+    for (int i = 0; i < 3; ++i)
+      trial[i] = (ms->chosen >> i & 1) ? (r > ms->low[i] ? r : ms->low[i]) : modes[i];
+    if ((st = linear_path(s, trial, ms->dt, ms->count, ms->path, err)) != F3R_OK) return st;
+    ++ms->evaluations;
+    const double e = max_distance(ms->path, ms->ref, ms->count);
+    if (e <= target) {
+      memcpy(modes, trial, sizeof trial);
+      est = e;
+      break;
+    }
+  }
+  for (int i = 0; i < 3; ++i) {
+    if (!(ms->chosen >> i & 1)) continue;
+    while (modes[i] > ms->low[i]) {
+      --modes[i];
+      if ((st = linear_path(s, modes, ms->dt, ms->count, ms->path, err)) != F3R_OK) return st;
+      ++ms->evaluations;
+      const double e = max_distance(ms->path, ms->ref, ms->count);
+      if (e > target) {
+        ++modes[i];
+        break;
+      }
+      est = e;
+    }
+  }
+  *estimate = est;
+  return F3R_OK;
+}
+
+f3r_status f3r_accuracy_modes(const f3r_scene* scene, unsigned chosen, double target, int modes[3],
+                              double* estimate, double* extent, int* evaluations, f3r_error* err) {
+  mode_search ms;
+  double est = 0.0;
+  f3r_status st = search_init(scene, chosen, &ms, err);
+  if (st == F3R_OK) st = search_modes(scene, &ms, target > 0.0 ? target : -target * ms.extent, modes, &est, err);
+  if (st == F3R_OK) {
+    if (estimate) *estimate = est;
+    if (extent) *extent = ms.extent;
+    if (evaluations) *evaluations = ms.evaluations;
+  }
+  search_free(&ms);
+  return st;
+}
+
+/* The cheapest measured solver whose error fits `budget`, among those the scene leaves open. */
+static const f3r_solver_relation* pick_solver(const f3r_scene* s, const char* kind, double budget) {
+  const f3r_solver_relation* best = NULL;
+  const unsigned fixed = s->explicit_settings;
+  for (int k = 0; k < f3r_solver_relation_count; ++k) {
+    const f3r_solver_relation* r = &f3r_solver_relations[k];
+    if (strcmp(r->kind, kind) || r->error > budget) continue;
+    if ((fixed & F3R_EXPLICIT_FORMULATION) && r->formulation != s->formulation) continue;
+    if ((fixed & F3R_EXPLICIT_INTEGRATOR) && r->integrator != s->integrator) continue;
+    if ((fixed & F3R_EXPLICIT_RTOL) && r->rtol != s->rtol) continue;
+    if ((fixed & F3R_EXPLICIT_TABLE) && strcmp(r->table, s->table)) continue;
+    if (!best || r->cost < best->cost || (r->cost == best->cost && r->rtol > best->rtol)) best = r;
+  }
+  return best;
+}
+
+/* The measured error of the scene's own fixed solver (the nearest tolerance at or below). */
+static double solver_error_of(const f3r_scene* s, const char* kind) {
+  double error = NAN, at = 0.0;
+  for (int k = 0; k < f3r_solver_relation_count; ++k) {
+    const f3r_solver_relation* r = &f3r_solver_relations[k];
+    if (strcmp(r->kind, kind) || r->formulation != s->formulation || r->integrator != s->integrator ||
+        strcmp(r->table, s->explicit_settings & F3R_EXPLICIT_TABLE ? s->table : "") ||
+        r->rtol > s->rtol * (1.0 + 1e-9))
+      continue;
+    if (r->rtol > at) {
+      at = r->rtol;
+      error = r->error;
+    }
+  }
+  return error;
+}
+
+static const char* integrator_name(f3r_integrator i) {
+  return i == F3R_INTEGRATOR_ERK ? "erk" : i == F3R_INTEGRATOR_DIRK ? "dirk" : "ida";
+}
+
+static void append(char* text, size_t size, const char* fmt, ...) __attribute__((format(printf, 3, 4)));
+static void append(char* text, size_t size, const char* fmt, ...) {
+  const size_t used = strlen(text);
+  if (used + 1 >= size) return;
+  va_list ap;
+  va_start(ap, fmt);
+  vsnprintf(text + used, size - used, fmt, ap);
+  va_end(ap);
+}
+
+/* The loosest tolerance of minimal IDA whose measured error stays below `error` (1e-6 if none),
+ * and that error: the pilot's noise. */
+static double pilot_rtol(const char* kind, double error, double* noise) {
+  double best = 0.0;
+  *noise = error;
+  for (int k = 0; k < f3r_solver_relation_count; ++k) {
+    const f3r_solver_relation* r = &f3r_solver_relations[k];
+    if (!strcmp(r->kind, kind) && r->formulation == F3R_FORMULATION_MINIMAL &&
+        r->integrator == F3R_INTEGRATOR_IDA && r->error <= error && r->rtol > best) {
+      best = r->rtol;
+      *noise = r->error;
+    }
+  }
+  return best > 0.0 ? best : 1e-6;
+}
+
+/* The nonlinear pilot over the first PILOT_SHARE of the run: the chosen modes against one more
+ * on each chosen link (their ratio to the linear difference scales the linear estimate) and,
+ * unless the scene fixes it, exact kinematics on against off. Differences grow with time where
+ * the platform moves far, so the window's excess over the linear estimate is extrapolated in
+ * proportion to time: ratio = 1 + (window ratio - 1) T / W, effect = window effect T / W. */
+static f3r_status pilot(const f3r_scene* s, mode_search* ms, const int modes[3], const char* kind,
+                        double resolution, int check_kinematics, double* ratio, double* kinematics,
+                        f3r_error* err) {
+  const double window = fmax(PILOT_SHARE * s->duration, ms->dt);
+  const int count = ms->count < (int)ceil(window / ms->dt) + 1 ? ms->count : (int)ceil(window / ms->dt) + 1;
+  const double grow = s->duration / ((count - 1) * ms->dt);
+  double noise;
+  const double rtol = pilot_rtol(kind, resolution, &noise);
+  double* a = malloc((size_t)count * 3 * sizeof(double));
+  double* b = malloc((size_t)count * 3 * sizeof(double));
+  double* la = malloc((size_t)count * 3 * sizeof(double));
+  double* lb = malloc((size_t)count * 3 * sizeof(double));
+  f3r_status st = a && b && la && lb ? F3R_OK : f3r_error_set(err, F3R_ERR_MEMORY, "accuracy: out of memory");
+  *ratio = 1.0;
+  *kinematics = 0.0;
+  if (st == F3R_OK) st = pilot_path(s, modes, 0, rtol, ms->dt, count, a, err);
+  if (st == F3R_OK && ms->chosen) {
+    int more[3];
+    for (int i = 0; i < 3; ++i)
+      more[i] = (ms->chosen >> i & 1) && modes[i] < F3R_MAX_MODES ? modes[i] + 1 : modes[i];
+    if ((st = pilot_path(s, more, 0, rtol, ms->dt, count, b, err)) == F3R_OK &&
+        (st = linear_path(s, modes, ms->dt, count, la, err)) == F3R_OK &&
+        (st = linear_path(s, more, ms->dt, count, lb, err)) == F3R_OK) {
+      ms->evaluations += 2;
+      const double nonlinear = max_distance(a, b, count), linear = max_distance(la, lb, count);
+      /* Below three times the pilot's own solver error the difference says nothing. */
+      if (nonlinear > 3.0 * noise && nonlinear > linear)
+        *ratio = 1.0 + (nonlinear / fmax(linear, 1e-300) - 1.0) * grow;
+    }
+  }
+  if (st == F3R_OK && check_kinematics && (st = pilot_path(s, modes, 1, rtol, ms->dt, count, b, err)) == F3R_OK) {
+    const double effect = max_distance(a, b, count);
+    if (effect > 3.0 * noise) *kinematics = effect * grow;
+  }
+  free(a), free(b), free(la), free(lb);
+  return st;
+}
+
+f3r_status f3r_accuracy_choose(const f3r_scene* scene, double request, int commanded,
+                               f3r_accuracy_choice* c, f3r_error* err) {
+  memset(c, 0, sizeof *c);
+  if (!(request > 0.0) || !isfinite(request))
+    return f3r_error_set(err, F3R_ERR_ARGUMENT, "accuracy: the request must be a positive length (m)");
+  c->request = request;
+  unsigned chosen = 0;
+  int any_flexible = 0;
+  f3r_scene s = *scene;
+  for (int i = 0; i < 3; ++i) {
+    if (!is_flexible(scene, i)) continue;
+    any_flexible = 1;
+    if (!(scene->explicit_settings & (F3R_EXPLICIT_MODES << i))) {
+      chosen |= 1u << i;
+      s.links[i].modes = 1; /* a placeholder until chosen */
+    }
+  }
+  const char* kind = commanded && any_flexible ? "commanded" : any_flexible ? "flexible" : "rigid";
+  const double model_target = F3R_ACCURACY_MODEL_SHARE * request;
+  const int kinematics_open = any_flexible && !(scene->explicit_settings & F3R_EXPLICIT_EXACT_KINEMATICS);
+  mode_search ms;
+  f3r_status st = search_init(&s, chosen, &ms, err);
+  double linear_error = 0.0;
+  if (st == F3R_OK) st = search_modes(&s, &ms, model_target, c->modes, &linear_error, err);
+  c->extent = ms.extent;
+  c->model_error = linear_error;
+  c->pilot_ratio = 1.0;
+  c->exact_kinematics = scene->exact_kinematics;
+  const int far = ms.extent > FAR_SHARE * scene->platform_side || ms.rotation > FAR_ROTATION;
+  if (st == F3R_OK && far && (chosen || kinematics_open)) {
+    double ratio = 1.0, kinematics = 0.0;
+    st = pilot(&s, &ms, c->modes, kind, 0.1 * model_target, kinematics_open, &ratio, &kinematics, err);
+    if (st == F3R_OK) {
+      c->pilot = 1;
+      c->pilot_ratio = ratio;
+      if (ratio > 1.0) { /* the linear estimate is short by this factor: search again */
+        st = search_modes(&s, &ms, model_target / ratio, c->modes, &linear_error, err);
+        c->model_error = ratio * linear_error;
+      }
+      if (kinematics_open) {
+        c->exact_kinematics = kinematics > F3R_ACCURACY_KINEMATICS_SHARE * request;
+        c->kinematics_effect = kinematics;
+        c->kinematics_error = c->exact_kinematics ? 0.0 : kinematics;
+      }
+    }
+  }
+  c->linear_evaluations = ms.evaluations;
+  const int rest = ms.at_rest;
+  search_free(&ms);
+  if (st != F3R_OK) return st;
+
+  char* text = c->summary;
+  const size_t size = sizeof c->summary;
+  append(text, size, "accuracy %g m on the end-effector path (shares: model %g, kinematics %g, solver %g)\n",
+         request, F3R_ACCURACY_MODEL_SHARE, F3R_ACCURACY_KINEMATICS_SHARE, F3R_ACCURACY_SOLVER_SHARE);
+  for (int i = 0; i < 3; ++i) {
+    if (!is_flexible(scene, i)) append(text, size, "links[%d]: rigid\n", i);
+    else if (!(chosen >> i & 1)) append(text, size, "links[%d]: %d modes, as the scene sets\n", i, c->modes[i]);
+    else append(text, size, "links[%d]: %d modes\n", i, c->modes[i]);
+  }
+  if (chosen && rest)
+    append(text, size, "modes: nothing excites the scene (no inputs, initial rates or deflections)\n");
+  else if (chosen)
+    append(text, size,
+           "modes: the linearised path is within %.3g m of %d modes (path extent %.3g m, %d linear models)\n",
+           linear_error, F3R_MAX_MODES, c->extent, c->linear_evaluations);
+  if (c->pilot)
+    append(text, size,
+           "pilot: the path leaves the initial pose (%.3g m); nonlinear runs over %.0f%% of it scale the "
+           "linear estimate by %.3g\n",
+           c->extent, 100.0 * PILOT_SHARE, c->pilot_ratio);
+  if (!any_flexible) append(text, size, "exact kinematics: no flexible link\n");
+  else if (!kinematics_open)
+    append(text, size, "exact kinematics: %s, as the scene sets\n", c->exact_kinematics ? "on" : "off");
+  else if (!c->pilot)
+    append(text, size, "exact kinematics: off (second order in the deflections; the path stays near the initial pose)\n");
+  else
+    append(text, size, "exact kinematics: %s (its effect is estimated at %.3g m; the limit is %.3g m)\n",
+           c->exact_kinematics ? "on" : "off", c->kinematics_effect,
+           F3R_ACCURACY_KINEMATICS_SHARE * request);
+
+  double budget = request - c->model_error - c->kinematics_error;
+  budget = fmax(budget, F3R_ACCURACY_SOLVER_SHARE * request);
+  const unsigned solver_fixed = F3R_EXPLICIT_FORMULATION | F3R_EXPLICIT_INTEGRATOR | F3R_EXPLICIT_RTOL;
+  c->formulation = scene->formulation;
+  c->integrator = scene->integrator;
+  c->rtol = scene->rtol;
+  c->atol = scene->atol;
+  snprintf(c->table, sizeof c->table, "%s", scene->table);
+  if ((scene->explicit_settings & solver_fixed) == solver_fixed) {
+    c->solver_error = solver_error_of(scene, kind);
+    append(text, size, "solver: %s, %s, rtol %g, as the scene sets (measured error %.3g m)\n",
+           scene->formulation == F3R_FORMULATION_DAE ? "dae" : "minimal",
+           integrator_name(scene->integrator), scene->rtol, c->solver_error);
+  } else {
+    const f3r_solver_relation* r = pick_solver(scene, kind, budget);
+    if (!r) {
+      c->solver_error = solver_error_of(scene, kind);
+      append(text, size, "solver: no measured solver fits %.3g m; keeping %s, rtol %g\n", budget,
+             integrator_name(scene->integrator), scene->rtol);
+    } else {
+      c->formulation = r->formulation;
+      c->integrator = r->integrator;
+      c->rtol = r->rtol;
+      if (!(scene->explicit_settings & F3R_EXPLICIT_ATOL)) c->atol = r->atol;
+      snprintf(c->table, sizeof c->table, "%s", r->table);
+      c->solver_error = r->error;
+      append(text, size,
+             "solver: %s, %s%s%s, rtol %g, atol %g: the cheapest measured within %.3g m (at most %.3g m on "
+             "the %d %s benchmark scenes; cost %.2g of minimal IDA at 1e-6)\n",
+             r->formulation == F3R_FORMULATION_DAE ? "dae" : "minimal",
+             integrator_name(r->integrator), r->table[0] ? " " : "", r->table, r->rtol, c->atol, budget,
+             r->error, r->scenes, r->kind, r->cost);
+    }
+  }
+  const double total = c->model_error + c->kinematics_error + (isfinite(c->solver_error) ? c->solver_error : 0.0);
+  append(text, size, "estimated error %.3g m (model %.3g, kinematics %.3g, solver %.3g)", total,
+         c->model_error, c->kinematics_error, c->solver_error);
+  char how[64] = "linear estimate";
+  if (c->pilot) snprintf(how, sizeof how, "linear estimate x %.3g from the pilot", c->pilot_ratio);
+  snprintf(c->brief, sizeof c->brief,
+           "accuracy %g m: modes %d/%d/%d (%s), exact kinematics %s, %s %s%s%s rtol %g; "
+           "estimated %.3g m",
+           request, c->modes[0], c->modes[1], c->modes[2], how, c->exact_kinematics ? "on" : "off",
+           c->formulation == F3R_FORMULATION_DAE ? "dae" : "minimal", integrator_name(c->integrator),
+           c->table[0] ? " " : "", c->table, c->rtol, total);
+  return F3R_OK;
+}
+
+void f3r_accuracy_apply(const f3r_accuracy_choice* c, f3r_scene* s) {
+  for (int i = 0; i < 3; ++i)
+    if (is_flexible(s, i)) s->links[i].modes = c->modes[i];
+  s->exact_kinematics = c->exact_kinematics;
+  s->formulation = c->formulation;
+  s->integrator = c->integrator;
+  s->rtol = c->rtol;
+  s->atol = c->atol;
+  snprintf(s->table, sizeof s->table, "%s", c->table);
+}
+
+f3r_status f3r_accuracy_resolve(f3r_scene* scene, int commanded, f3r_accuracy_choice* choice,
+                                f3r_error* err) {
+  f3r_accuracy_choice local;
+  f3r_accuracy_choice* c = choice ? choice : &local;
+  memset(c, 0, sizeof *c);
+  if (scene->accuracy > 0.0) {
+    const f3r_status st = f3r_accuracy_choose(scene, scene->accuracy, commanded, c, err);
+    if (st == F3R_OK) f3r_accuracy_apply(c, scene);
+    return st;
+  }
+  unsigned chosen = 0;
+  double tolerance = 0.0;
+  for (int i = 0; i < 3; ++i)
+    if (is_flexible(scene, i) && scene->links[i].modes == F3R_MODES_AUTO) {
+      chosen |= 1u << i;
+      tolerance = fmax(tolerance, scene->links[i].auto_tolerance);
+    }
+  if (!chosen) return F3R_OK;
+  f3r_scene s = *scene;
+  for (int i = 0; i < 3; ++i)
+    if (chosen >> i & 1) s.links[i].modes = 1;
+  const f3r_status st = f3r_accuracy_modes(&s, chosen, -tolerance, c->modes, &c->model_error,
+                                           &c->extent, &c->linear_evaluations, err);
+  if (st != F3R_OK) return st;
+  snprintf(c->brief, sizeof c->brief,
+           "modes auto: %d/%d/%d (linearised path within %.3g m of %d modes, auto_tolerance %g of "
+           "its extent %.3g m)",
+           c->modes[0], c->modes[1], c->modes[2], c->model_error, F3R_MAX_MODES, tolerance, c->extent);
+  for (int i = 0; i < 3; ++i) {
+    if (chosen >> i & 1) scene->links[i].modes = c->modes[i];
+    if (chosen >> i & 1)
+      append(c->summary, sizeof c->summary,
+             "links[%d]: modes auto -> %d (linearised path within %.3g m = auto_tolerance %g of "
+             "its extent %.3g m of %d modes)\n",
+             i, c->modes[i], c->model_error, tolerance, c->extent, F3R_MAX_MODES);
+  }
+  return F3R_OK;
+}

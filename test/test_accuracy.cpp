@@ -1,0 +1,290 @@
+// The accuracy knob (accuracy.h) and the linearised model under it (linear.h), each against an
+// independent computation: Eigen's generalized eigensolver, a direct integration of the linear
+// ODE, the nonlinear simulation at small amplitude, and a high-fidelity reference run.
+#include <gtest/gtest.h>
+
+#include <Eigen/Dense>
+#include <cstdio>
+#include <cstring>
+
+#include "flex3rpr/accuracy.h"
+#include "flex3rpr/linear.h"
+#include "test_support.h"
+
+namespace {
+
+struct LinearDeleter {
+  void operator()(f3r_linear_model* l) const { f3r_linear_destroy(l); }
+};
+using LinearPtr = std::unique_ptr<f3r_linear_model, LinearDeleter>;
+
+LinearPtr Linearise(const f3r_model* m) {
+  f3r_linear_model* lin = nullptr;
+  f3r_error err{};
+  if (f3r_linearise(m, &lin, &err) != F3R_OK) throw std::runtime_error(err.message);
+  return LinearPtr(lin);
+}
+
+Eigen::Map<const Eigen::MatrixXd> Mat(const double* data, int rows, int cols) {
+  return Eigen::Map<const Eigen::MatrixXd>(data, rows, cols);
+}
+
+// Paper sim. 3's geometry with small inputs: the nonlinear response stays linear.
+f3r_scene SmallScene(f3r_link_model model, int modes) {
+  f3r_scene s = SceneWithLinks(model, modes, model, modes, model, modes);
+  s.inputs[F3R_FORCE_THETA + 0].kind = F3R_INPUT_HARMONIC;
+  s.inputs[F3R_FORCE_THETA + 0].amplitude = 1e-3;
+  s.inputs[F3R_FORCE_THETA + 0].omega = 2 * M_PI * 150.0;
+  s.inputs[F3R_FORCE_PLATFORM + 1].kind = F3R_INPUT_HARMONIC;
+  s.inputs[F3R_FORCE_PLATFORM + 1].amplitude = 5e-2;
+  s.inputs[F3R_FORCE_PLATFORM + 1].omega = 2 * M_PI * 40.0;
+  s.inputs[F3R_FORCE_PLATFORM + 1].phase = 0.3;
+  s.duration = 0.05;
+  return s;
+}
+
+std::vector<double> LinearPath(const f3r_scene& s, double dt, int count) {
+  ModelPtr m = MakeModel(s);
+  LinearPtr lin = Linearise(m.get());
+  std::vector<double> pose(3 * count);
+  f3r_error err{};
+  EXPECT_EQ(f3r_linear_response(lin.get(), m.get(), dt, count, pose.data(), &err), F3R_OK) << err.message;
+  return pose;
+}
+
+std::vector<double> NonlinearPath(const f3r_scene& s, double dt, int count, double rtol) {
+  ModelPtr m = MakeModel(s);
+  f3r_solver_settings settings = f3r_solver_settings_from_scene(&s);
+  settings.rtol = rtol;
+  settings.atol = rtol * 1e-2;
+  f3r_sim* raw = nullptr;
+  f3r_error err{};
+  EXPECT_EQ(f3r_sim_create(m.get(), &settings, &raw, &err), F3R_OK) << err.message;
+  SimPtr sim(raw);
+  std::vector<double> pose(3 * count);
+  for (int k = 0; k < count; ++k) {
+    if (k) EXPECT_EQ(f3r_sim_advance(sim.get(), k * dt, &err), F3R_OK) << err.message;
+    const f3r_outputs* o = f3r_sim_outputs(sim.get());
+    for (int c = 0; c < 3; ++c) pose[3 * k + c] = o->q[F3R_Q_X + c];
+  }
+  return pose;
+}
+
+double MaxDistance(const std::vector<double>& a, const std::vector<double>& b) {
+  double worst = 0;
+  for (size_t k = 0; k < a.size() / 3; ++k)
+    worst = std::max(worst, std::hypot(a[3 * k] - b[3 * k], a[3 * k + 1] - b[3 * k + 1]));
+  return worst;
+}
+
+double Extent(const std::vector<double>& a) {
+  double worst = 0;
+  for (size_t k = 0; k < a.size() / 3; ++k) worst = std::max(worst, std::hypot(a[3 * k] - a[0], a[3 * k + 1] - a[1]));
+  return worst;
+}
+
+}  // namespace
+
+TEST(Linear, ModesSolveTheGeneralizedEigenproblemAsEigenDoes) {
+  for (f3r_link_model model : {F3R_LINK_FIXED_FREE, F3R_LINK_FIXED_PINNED}) {
+    f3r_scene s = SceneWithLinks(model, 4, model, 2, model, 3);
+    s.platform_pose0[0] = 0.02;  // off the symmetric home pose
+    s.platform_pose0[2] = 0.1;
+    s.links[1].damping_ratio = 0.02;
+    ModelPtr m = MakeModel(s);
+    LinearPtr lin = Linearise(m.get());
+    const int n = lin->n;
+    ASSERT_EQ(n, m->n_independent);
+    const Eigen::MatrixXd M = Mat(lin->mass, n, n), K = Mat(lin->stiffness, n, n);
+    Eigen::GeneralizedSelfAdjointEigenSolver<Eigen::MatrixXd> eig(K, M);
+    ASSERT_EQ(eig.info(), Eigen::Success);
+    const double top = eig.eigenvalues().cwiseAbs().maxCoeff();
+    for (int j = 0; j < n; ++j) EXPECT_NEAR(lin->omega2[j], eig.eigenvalues()[j], 1e-9 * top) << j;
+    const Eigen::MatrixXd Phi = Mat(lin->shapes, n, n);
+    EXPECT_LT((Phi.transpose() * M * Phi - Eigen::MatrixXd::Identity(n, n)).norm(), 1e-9);
+    EXPECT_LT((K * Phi - M * Phi * Eigen::VectorXd(Eigen::Map<const Eigen::VectorXd>(lin->omega2, n)).asDiagonal()).norm(),
+              1e-8 * top * M.norm());
+    const Eigen::MatrixXd D = Mat(lin->damping, n, n);
+    for (int j = 0; j < n; ++j) EXPECT_NEAR(lin->modal_damping[j], Phi.col(j).dot(D * Phi.col(j)), 1e-9 * (1 + D.norm()));
+  }
+}
+
+// Without damping, modal superposition is exact: it must equal a direct integration of
+// M z'' + K (z - z0) = f0 + U u(t) (classical RK4 at a step far below every period).
+TEST(Linear, ResponseEqualsDirectIntegrationOfTheLinearOde) {
+  f3r_scene s = SmallScene(F3R_LINK_FIXED_FREE, 2);
+  s.inputs[F3R_FORCE_RHO + 1].kind = F3R_INPUT_CONSTANT;  // a step at t = 0
+  s.inputs[F3R_FORCE_RHO + 1].offset = 0.5;
+  s.links[0].eta0[0] = 1e-4;
+  s.platform_velocity0[1] = 1e-3;
+  s.duration = 0.02;
+  ModelPtr m = MakeModel(s);
+  LinearPtr lin = Linearise(m.get());
+  const int n = lin->n, count = 201;
+  const double dt = s.duration / (count - 1);
+  std::vector<double> pose(3 * count);
+  f3r_error err{};
+  ASSERT_EQ(f3r_linear_response(lin.get(), m.get(), dt, count, pose.data(), &err), F3R_OK);
+  const Eigen::MatrixXd M = Mat(lin->mass, n, n), K = Mat(lin->stiffness, n, n), U = Mat(lin->input, n, F3R_RIGID_FORCES);
+  const Eigen::VectorXd f0 = Eigen::Map<const Eigen::VectorXd>(lin->static_force, n);
+  const Eigen::LLT<Eigen::MatrixXd> Mi(M);
+  auto force = [&](double t) {  // the inputs, linear between samples as the response takes them
+    const int k = std::min(count - 2, static_cast<int>(t / dt));
+    const double a = (t - k * dt) / dt;
+    Eigen::VectorXd u(F3R_RIGID_FORCES);
+    for (int f = 0; f < F3R_RIGID_FORCES; ++f)
+      u[f] = (1 - a) * f3r_input_value(&s.inputs[f], k * dt) + a * f3r_input_value(&s.inputs[f], (k + 1) * dt);
+    return Eigen::VectorXd(f0 + U * u);
+  };
+  auto rhs = [&](double t, const Eigen::VectorXd& x) {
+    Eigen::VectorXd d(2 * n);
+    d.head(n) = x.tail(n);
+    d.tail(n) = Mi.solve(force(t) - K * x.head(n));
+    return d;
+  };
+  Eigen::VectorXd x = Eigen::VectorXd::Zero(2 * n);  // deviation from the initial pose, rates
+  x[3] = 1e-4;      // link 1, mode 1 (z index 3)
+  x[n + 1] = 1e-3;  // Y_p rate
+  const int sub = 400;
+  const double h = dt / sub;
+  double worst = 0, scale = 0;
+  for (int k = 0; k < count; ++k) {
+    worst = std::max(worst, std::hypot(pose[3 * k] - x[0], pose[3 * k + 1] - x[1]));
+    scale = std::max(scale, std::hypot(x[0], x[1]));
+    for (int j = 0; j < sub && k + 1 < count; ++j) {
+      const double t = k * dt + j * h;
+      const Eigen::VectorXd k1 = rhs(t, x), k2 = rhs(t + h / 2, x + h / 2 * k1), k3 = rhs(t + h / 2, x + h / 2 * k2),
+                            k4 = rhs(t + h, x + h * k3);
+      x += h / 6 * (k1 + 2 * k2 + 2 * k3 + k4);
+    }
+  }
+  ASSERT_GT(scale, 1e-7);
+  EXPECT_LT(worst, 1e-6 * scale) << "scale " << scale;
+}
+
+// The linear model is the nonlinear one's tangent: at small amplitude their paths agree to
+// second order in the amplitude.
+TEST(Linear, SmallMotionFollowsTheNonlinearSimulation) {
+  for (f3r_link_model model : {F3R_LINK_FIXED_FREE, F3R_LINK_FIXED_PINNED}) {
+    f3r_scene s = SmallScene(model, 3);
+    s.links[2].damping_ratio = 0.01;
+    const int count = 251;
+    const double dt = s.duration / (count - 1);
+    const std::vector<double> lin = LinearPath(s, dt, count);
+    const std::vector<double> nonlin = NonlinearPath(s, dt, count, 1e-10);
+    const double extent = Extent(nonlin);
+    ASSERT_GT(extent, 1e-6);
+    EXPECT_LT(MaxDistance(lin, nonlin), 2e-3 * extent) << "extent " << extent;
+  }
+}
+
+TEST(Accuracy, ModeSearchStopsWhereTheLinearPathIsWithinTheTarget) {
+  f3r_scene s;
+  f3r_error err{};
+  ASSERT_EQ(f3r_scene_load(ScenePath("resonance_damped.yaml").c_str(), &s, &err), F3R_OK) << err.message;
+  s.duration = 0.05;
+  int loose[3], tight[3], evals = 0;
+  double estimate = 0, extent = 0;
+  ASSERT_EQ(f3r_accuracy_modes(&s, 7u, 1e-3, loose, &estimate, &extent, &evals, &err), F3R_OK) << err.message;
+  EXPECT_LE(estimate, 1e-3);
+  for (int i = 0; i < 3; ++i) EXPECT_EQ(loose[i], 1);
+  ASSERT_EQ(f3r_accuracy_modes(&s, 7u, 1e-7, tight, &estimate, &extent, &evals, &err), F3R_OK) << err.message;
+  EXPECT_LE(estimate, 1e-7);
+  EXPECT_GT(tight[0], 1);  // link 1 carries the resonant input
+  // The estimate is what it says: the linear path at those modes against 20 modes.
+  const int count = static_cast<int>(std::lround(s.duration / s.output_step)) + 1;
+  f3r_scene at = s, ref = s;
+  for (int i = 0; i < 3; ++i) {
+    at.links[i].modes = tight[i];
+    ref.links[i].modes = F3R_MAX_MODES;
+  }
+  EXPECT_LE(MaxDistance(LinearPath(at, s.output_step, count), LinearPath(ref, s.output_step, count)), 1e-7 * 1.001);
+}
+
+TEST(Accuracy, ExplicitSettingsWinAndAreReported) {
+  f3r_scene s;
+  f3r_error err{};
+  ASSERT_EQ(f3r_scene_load(ScenePath("paper_sim3_fixed_free.yaml").c_str(), &s, &err), F3R_OK);
+  ASSERT_TRUE(s.explicit_settings & (F3R_EXPLICIT_MODES << 0));
+  s.duration = 0.02;
+  s.rtol = 3e-6;
+  s.integrator = F3R_INTEGRATOR_ERK;
+  s.explicit_settings |= F3R_EXPLICIT_RTOL | F3R_EXPLICIT_INTEGRATOR | F3R_EXPLICIT_EXACT_KINEMATICS;
+  f3r_accuracy_choice c;
+  ASSERT_EQ(f3r_accuracy_choose(&s, 1e-5, 0, &c, &err), F3R_OK) << err.message;
+  for (int i = 0; i < 3; ++i) EXPECT_EQ(c.modes[i], 3);
+  EXPECT_EQ(c.rtol, 3e-6);
+  EXPECT_EQ(c.integrator, F3R_INTEGRATOR_ERK);
+  EXPECT_EQ(c.exact_kinematics, 0);
+  EXPECT_NE(std::strstr(c.summary, "links[0]: 3 modes, as the scene sets"), nullptr) << c.summary;
+  EXPECT_NE(std::strstr(c.summary, "exact kinematics: off, as the scene sets"), nullptr) << c.summary;
+}
+
+TEST(Accuracy, ASceneAtRestNeedsNoLinearModelAndTheLoosestSolver) {
+  f3r_scene s;
+  f3r_error err{};
+  ASSERT_EQ(f3r_scene_load_accuracy(ScenePath("rest.yaml").c_str(), 1e-4, &s, &err), F3R_OK) << err.message;
+  s.explicit_settings &= ~(7u * F3R_EXPLICIT_MODES);
+  f3r_accuracy_choice c;
+  ASSERT_EQ(f3r_accuracy_resolve(&s, 0, &c, &err), F3R_OK) << err.message;
+  EXPECT_EQ(c.linear_evaluations, 0);
+  for (int i = 0; i < 3; ++i) EXPECT_EQ(s.links[i].modes, 1);
+  double loosest = 0;
+  for (int k = 0; k < f3r_solver_relation_count; ++k)
+    if (!std::strcmp(f3r_solver_relations[k].kind, "flexible") && f3r_solver_relations[k].error <= 1e-4 / 4)
+      loosest = std::max(loosest, f3r_solver_relations[k].rtol);
+  EXPECT_EQ(s.rtol, loosest);
+}
+
+TEST(Accuracy, SolverRelationsAreCompleteAndTheChoiceTightensWithTheRequest) {
+  int ida_flexible = 0;
+  for (int k = 0; k < f3r_solver_relation_count; ++k) {
+    const f3r_solver_relation& r = f3r_solver_relations[k];
+    EXPECT_GT(r.error, 0);
+    EXPECT_GT(r.cost, 0);
+    EXPECT_GE(r.scenes, 1);
+    EXPECT_DOUBLE_EQ(r.atol, 1e-2 * r.rtol);
+    ida_flexible += !std::strcmp(r.kind, "flexible") && r.integrator == F3R_INTEGRATOR_IDA &&
+                    r.formulation == F3R_FORMULATION_MINIMAL;
+  }
+  EXPECT_GE(ida_flexible, 5);
+  f3r_scene s = SceneWithLinks(F3R_LINK_RIGID, 0, F3R_LINK_RIGID, 0, F3R_LINK_RIGID, 0);
+  s.inputs[F3R_FORCE_RHO].kind = F3R_INPUT_CONSTANT;
+  s.inputs[F3R_FORCE_RHO].offset = 5.0;
+  s.duration = 0.05;
+  f3r_accuracy_choice loose, tight;
+  f3r_error err{};
+  ASSERT_EQ(f3r_accuracy_choose(&s, 1e-3, 0, &loose, &err), F3R_OK) << err.message;
+  ASSERT_EQ(f3r_accuracy_choose(&s, 1e-7, 0, &tight, &err), F3R_OK) << err.message;
+  EXPECT_LT(tight.rtol, loose.rtol);
+  EXPECT_LE(tight.solver_error, 1e-7);
+  EXPECT_LE(loose.solver_error, 1e-3);
+}
+
+// End to end on a short resonant scene: what the knob chooses meets the request against an
+// independent high-fidelity run (more modes, exact kinematics, tight tolerance).
+TEST(Accuracy, TheChoiceMeetsTheRequestAgainstAHighFidelityRun) {
+  f3r_scene open;
+  f3r_error err{};
+  ASSERT_EQ(f3r_scene_load(ScenePath("resonance_damped.yaml").c_str(), &open, &err), F3R_OK);
+  open.duration = 0.06;
+  open.output_step = 1e-3;
+  for (int i = 0; i < 3; ++i) open.links[i].modes = 0;
+  open.explicit_settings = 0;
+  f3r_scene reference = open;
+  for (int i = 0; i < 3; ++i) reference.links[i].modes = 12;
+  reference.exact_kinematics = 1;
+  const int count = static_cast<int>(std::lround(open.duration / open.output_step)) + 1;
+  const std::vector<double> ref = NonlinearPath(reference, open.output_step, count, 1e-10);
+  for (double request : {1e-4, 1e-5}) {
+    f3r_scene s = open;
+    s.accuracy = request;
+    f3r_accuracy_choice c;
+    ASSERT_EQ(f3r_accuracy_resolve(&s, 0, &c, &err), F3R_OK) << err.message;
+    ASSERT_GT(s.links[0].modes, 0);
+    f3r_scene run = s;
+    const std::vector<double> got = NonlinearPath(run, open.output_step, count, s.rtol);
+    EXPECT_LE(MaxDistance(got, ref), request) << c.summary;
+    EXPECT_LE(c.model_error + c.kinematics_error + c.solver_error, request) << c.summary;
+  }
+}
