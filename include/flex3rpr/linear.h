@@ -36,9 +36,15 @@ void f3r_linear_destroy(f3r_linear_model* linear);
 /* Platform pose (X_p, Y_p, phi_p) at t_k = k dt, k = 0..count-1, into pose[3 k .. 3 k + 2]:
  * the response of the linear model to the scene's scripted inputs (through its actuator lag, if
  * any) and to its initial platform velocity and modal deflections and rates. The inputs are
- * sampled at t_k and taken as linear in between. */
+ * sampled at t_k and taken as linear in between.
+ * order 2 adds the second-order correction: the nonlinear residual's remainder along the linear
+ * path (what the linearisation leaves out: quadratic velocity terms, the drift that vibration
+ * drives in the unactuated mechanism, geometry) fed back through the same modes. Samples where the
+ * linear path leaves the reachable poses contribute no correction; *unreachable (may be NULL)
+ * counts them. */
 f3r_status f3r_linear_response(const f3r_linear_model* linear, const f3r_model* model, double dt,
-                               int count, double* pose, f3r_error* err);
+                               int count, int order, double* pose, int* unreachable,
+                               f3r_error* err);
 
 #ifdef __cplusplus
 }

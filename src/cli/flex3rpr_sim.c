@@ -184,25 +184,30 @@ static int run_modal(const f3r_model* m) {
   return 0;
 }
 
-/* The platform pose of the linearised model (linear.h) at the output step, as CSV. */
+/* The platform pose of the linearised model (linear.h) at the output step, as CSV: first order
+ * and with the second-order correction. */
 static int write_linear_path(const f3r_model* m, const char* path) {
   const int count = (int)llround(m->scene.duration / m->scene.output_step) + 1;
-  double* pose = malloc((size_t)count * 3 * sizeof(double));
+  double* pose = malloc((size_t)count * 6 * sizeof(double));
   f3r_linear_model* lin = NULL;
   f3r_error err = {0};
   FILE* f = NULL;
-  int rc = 1;
+  int rc = 1, unreachable = 0;
   if (!pose) fprintf(stderr, "flex3rpr_sim: out of memory\n");
   else if (f3r_linearise(m, &lin, &err) != F3R_OK ||
-           f3r_linear_response(lin, m, m->scene.output_step, count, pose, &err) != F3R_OK)
+           f3r_linear_response(lin, m, m->scene.output_step, count, 1, pose, NULL, &err) != F3R_OK ||
+           f3r_linear_response(lin, m, m->scene.output_step, count, 2, pose + 3 * count, &unreachable, &err) != F3R_OK)
     fprintf(stderr, "flex3rpr_sim: %s\n", err.message);
   else if (!(f = fopen(path, "w"))) fprintf(stderr, "flex3rpr_sim: cannot write %s\n", path);
   else {
-    fprintf(f, "t,x_p,y_p,phi_p\n");
-    for (int k = 0; k < count; ++k)
-      fprintf(f, "%.10g,%.15g,%.15g,%.15g\n", k * m->scene.output_step, pose[3 * k],
-              pose[3 * k + 1], pose[3 * k + 2]);
+    fprintf(f, "t,x_p,y_p,phi_p,x_p_2,y_p_2,phi_p_2\n");
+    for (int k = 0; k < count; ++k) {
+      const double *a = pose + 3 * k, *b = pose + 3 * (count + k);
+      fprintf(f, "%.10g,%.15g,%.15g,%.15g,%.15g,%.15g,%.15g\n", k * m->scene.output_step, a[0], a[1],
+              a[2], b[0], b[1], b[2]);
+    }
     fclose(f);
+    if (unreachable) printf("linear path: %d samples beyond the reachable poses (no correction there)\n", unreachable);
     rc = 0;
   }
   f3r_linear_destroy(lin);

@@ -11,7 +11,7 @@
 #include "flex3rpr/linear.h"
 #include "flex3rpr/sim.h"
 
-#define MAX_SAMPLES 200001
+#define MAX_SAMPLES 20001
 /* The linear path "leaves the initial pose far" beyond this share of the platform's side (or
  * this rotation): then the linearisation is checked by a nonlinear pilot. */
 #define FAR_SHARE 0.1
@@ -43,7 +43,7 @@ static f3r_status linear_path(const f3r_scene* s, const int modes[3], double dt,
   f3r_linear_model* lin = NULL;
   f3r_status st = model_with(s, modes, 0, &model, err);
   if (st == F3R_OK) st = f3r_linearise(model, &lin, err);
-  if (st == F3R_OK) st = f3r_linear_response(lin, model, dt, count, pose, err);
+  if (st == F3R_OK) st = f3r_linear_response(lin, model, dt, count, 1, pose, NULL, err);
   f3r_linear_destroy(lin);
   f3r_model_destroy(model);
   return st;
@@ -101,18 +101,27 @@ static f3r_status pilot_path(const f3r_scene* base, const int modes[3], int exac
   return F3R_OK;
 }
 
+/* The reference the mode count r is compared with: "larger r", three times r and three more, so
+ * that a slowly converging fixed-free link is compared with modes well beyond it; 20 from r = 6. */
+static int reference_modes(int r) { return 3 * r + 3 < F3R_MAX_MODES ? 3 * r + 3 : F3R_MAX_MODES; }
+
 /* What the mode search shares: the sampling, the links chosen, their least counts (the initial
- * state's highest mode) and the reference path with F3R_MAX_MODES on the chosen links. */
+ * state's highest mode), the order of the linear path (2 near the initial pose, where the
+ * second-order correction holds; 1 where the path leaves it and the pilot checks instead) and the
+ * current reference path. */
 typedef struct {
   double dt;
   int count;
   unsigned chosen;
   int low[3];
-  int ref_modes[3];
+  int fixed[3];     /* the modes of the links not chosen */
+  int order;
+  int ref_r;        /* the uniform count the reference in ref has on the chosen links, 0: none */
   double* ref;      /* 3 count */
   double* path;     /* 3 count, scratch */
-  double extent;    /* m: largest distance of the reference end effector from its start */
-  double rotation;  /* rad: largest platform rotation from its start */
+  double extent;    /* m: largest distance of the first-order end effector from its start */
+  double rotation;  /* rad: largest first-order platform rotation from its start */
+  int far;          /* the first-order path leaves the initial pose far */
   int at_rest;
   int evaluations;
 } mode_search;
@@ -120,6 +129,34 @@ typedef struct {
 static void search_free(mode_search* ms) {
   free(ms->ref);
   free(ms->path);
+}
+
+static void uniform(const mode_search* ms, int r, int modes[3]) {
+  for (int i = 0; i < 3; ++i) modes[i] = (ms->chosen >> i & 1) ? (r > ms->low[i] ? r : ms->low[i]) : ms->fixed[i];
+}
+
+static f3r_status path_at(const f3r_scene* s, mode_search* ms, const int modes[3], int order,
+                          double* pose, f3r_error* err) {
+  f3r_model* model = NULL;
+  f3r_linear_model* lin = NULL;
+  f3r_status st = model_with(s, modes, 0, &model, err);
+  if (st == F3R_OK) st = f3r_linearise(model, &lin, err);
+  if (st == F3R_OK) st = f3r_linear_response(lin, model, ms->dt, ms->count, order, pose, NULL, err);
+  f3r_linear_destroy(lin);
+  f3r_model_destroy(model);
+  ++ms->evaluations;
+  return st;
+}
+
+static f3r_status reference_for(const f3r_scene* s, mode_search* ms, int r, f3r_error* err) {
+  const int R = reference_modes(r);
+  if (ms->ref_r == R) return F3R_OK;
+  int modes[3];
+  uniform(ms, R, modes);
+  ms->ref_r = 0;
+  const f3r_status st = path_at(s, ms, modes, ms->order, ms->ref, err);
+  if (st == F3R_OK) ms->ref_r = R;
+  return st;
 }
 
 static f3r_status search_init(const f3r_scene* s, unsigned chosen, mode_search* ms, f3r_error* err) {
@@ -134,9 +171,10 @@ static f3r_status search_init(const f3r_scene* s, unsigned chosen, mode_search* 
   for (int i = 0; i < 3; ++i) {
     if (!is_flexible(s, i)) chosen &= ~(1u << i);
     ms->low[i] = lowest_modes(s, i);
-    ms->ref_modes[i] = !is_flexible(s, i) ? 0 : (chosen >> i & 1) ? F3R_MAX_MODES : s->links[i].modes;
+    ms->fixed[i] = is_flexible(s, i) ? s->links[i].modes : 0;
   }
   ms->chosen = chosen;
+  ms->order = 1;
   ms->at_rest = at_rest(s);
   if (ms->at_rest) return F3R_OK;
   ms->ref = malloc((size_t)ms->count * 3 * sizeof(double));
@@ -145,51 +183,60 @@ static f3r_status search_init(const f3r_scene* s, unsigned chosen, mode_search* 
     search_free(ms);
     return f3r_error_set(err, F3R_ERR_MEMORY, "accuracy: out of memory");
   }
-  const f3r_status st = linear_path(s, ms->ref_modes, ms->dt, ms->count, ms->ref, err);
-  ++ms->evaluations;
+  /* How far the first-order path goes decides the order of the estimate. */
+  f3r_status st = reference_for(s, ms, 1, err);
   if (st != F3R_OK) return st;
   for (int k = 0; k < ms->count; ++k) {
     const double* p = ms->ref + 3 * k;
     ms->extent = fmax(ms->extent, hypot(p[0] - ms->ref[0], p[1] - ms->ref[1]));
     ms->rotation = fmax(ms->rotation, fabs(p[2] - ms->ref[2]));
   }
+  ms->far = ms->extent > FAR_SHARE * s->platform_side || ms->rotation > FAR_ROTATION;
+  if (!ms->far) {
+    ms->order = 2;
+    ms->ref_r = 0; /* the first-order reference is no longer the one compared with */
+  }
   return F3R_OK;
 }
 
-/* The fewest modes whose linear path stays within target of the reference: uniform r on the
+/* The fewest modes whose linear path stays within target of its reference: uniform r on the
  * chosen links first (the cost grows with every link's r alike), then each link down while the
  * path stays within it (a link the inputs excite less needs fewer). */
 static f3r_status search_modes(const f3r_scene* s, mode_search* ms, double target, int modes[3],
                                double* estimate, f3r_error* err) {
-  for (int i = 0; i < 3; ++i) modes[i] = ms->ref_modes[i];
+  uniform(ms, F3R_MAX_MODES, modes);
   *estimate = 0.0;
   if (!ms->chosen) return F3R_OK;
   if (ms->at_rest) {
-    for (int i = 0; i < 3; ++i)
-      if (ms->chosen >> i & 1) modes[i] = ms->low[i];
+    uniform(ms, 1, modes);
     return F3R_OK;
   }
   f3r_status st = F3R_OK;
   double est = 0.0;
+  int found = F3R_MAX_MODES;
   for (int r = 1; r < F3R_MAX_MODES; ++r) {
     int trial[3];
-    for (int i = 0; i < 3; ++i)
-      trial[i] = (ms->chosen >> i & 1) ? (r > ms->low[i] ? r : ms->low[i]) : modes[i];
-    if ((st = linear_path(s, trial, ms->dt, ms->count, ms->path, err)) != F3R_OK) return st;
-    ++ms->evaluations;
+    uniform(ms, r, trial);
+    if ((st = reference_for(s, ms, r, err)) != F3R_OK ||
+        (st = path_at(s, ms, trial, ms->order, ms->path, err)) != F3R_OK)
+      return st;
     const double e = max_distance(ms->path, ms->ref, ms->count);
     if (e <= target) {
       memcpy(modes, trial, sizeof trial);
       est = e;
+      found = r;
       break;
     }
   }
-  for (int i = 0; i < 3; ++i) {
+  if (found == F3R_MAX_MODES) {
+    *estimate = 0.0;
+    return F3R_OK;
+  }
+  for (int i = 0; i < 3; ++i) { /* against the same reference */
     if (!(ms->chosen >> i & 1)) continue;
     while (modes[i] > ms->low[i]) {
       --modes[i];
-      if ((st = linear_path(s, modes, ms->dt, ms->count, ms->path, err)) != F3R_OK) return st;
-      ++ms->evaluations;
+      if ((st = path_at(s, ms, modes, ms->order, ms->path, err)) != F3R_OK) return st;
       const double e = max_distance(ms->path, ms->ref, ms->count);
       if (e > target) {
         ++modes[i];
@@ -351,7 +398,7 @@ f3r_status f3r_accuracy_choose(const f3r_scene* scene, double request, int comma
   c->model_error = linear_error;
   c->pilot_ratio = 1.0;
   c->exact_kinematics = scene->exact_kinematics;
-  const int far = ms.extent > FAR_SHARE * scene->platform_side || ms.rotation > FAR_ROTATION;
+  const int far = ms.far;
   if (st == F3R_OK && far && (chosen || kinematics_open)) {
     double ratio = 1.0, kinematics = 0.0;
     st = pilot(&s, &ms, c->modes, kind, 0.1 * model_target, kinematics_open, &ratio, &kinematics, err);
@@ -370,7 +417,7 @@ f3r_status f3r_accuracy_choose(const f3r_scene* scene, double request, int comma
     }
   }
   c->linear_evaluations = ms.evaluations;
-  const int rest = ms.at_rest;
+  const int rest = ms.at_rest, order = ms.order, reference = ms.ref_r;
   search_free(&ms);
   if (st != F3R_OK) return st;
 
@@ -387,8 +434,9 @@ f3r_status f3r_accuracy_choose(const f3r_scene* scene, double request, int comma
     append(text, size, "modes: nothing excites the scene (no inputs, initial rates or deflections)\n");
   else if (chosen)
     append(text, size,
-           "modes: the linearised path is within %.3g m of %d modes (path extent %.3g m, %d linear models)\n",
-           linear_error, F3R_MAX_MODES, c->extent, c->linear_evaluations);
+           "modes: the %s-order linearised path is within %.3g m of the same with %d modes (path "
+           "extent %.3g m, %d linear models)\n",
+           order == 2 ? "second" : "first", linear_error, reference, c->extent, c->linear_evaluations);
   if (c->pilot)
     append(text, size,
            "pilot: the path leaves the initial pose (%.3g m); nonlinear runs over %.0f%% of it scale the "
@@ -488,16 +536,16 @@ f3r_status f3r_accuracy_resolve(f3r_scene* scene, int commanded, f3r_accuracy_ch
                                            &c->extent, &c->linear_evaluations, err);
   if (st != F3R_OK) return st;
   snprintf(c->brief, sizeof c->brief,
-           "modes auto: %d/%d/%d (linearised path within %.3g m of %d modes, auto_tolerance %g of "
-           "its extent %.3g m)",
-           c->modes[0], c->modes[1], c->modes[2], c->model_error, F3R_MAX_MODES, tolerance, c->extent);
+           "modes auto: %d/%d/%d (linearised path within %.3g m of 3r + 3 modes, auto_tolerance %g "
+           "of its extent %.3g m)",
+           c->modes[0], c->modes[1], c->modes[2], c->model_error, tolerance, c->extent);
   for (int i = 0; i < 3; ++i) {
     if (chosen >> i & 1) scene->links[i].modes = c->modes[i];
     if (chosen >> i & 1)
       append(c->summary, sizeof c->summary,
-             "links[%d]: modes auto -> %d (linearised path within %.3g m = auto_tolerance %g of "
-             "its extent %.3g m of %d modes)\n",
-             i, c->modes[i], c->model_error, tolerance, c->extent, F3R_MAX_MODES);
+             "links[%d]: modes auto -> %d (linearised path within %.3g m of 3r + 3 modes: "
+             "auto_tolerance %g of its extent %.3g m)\n",
+             i, c->modes[i], c->model_error, tolerance, c->extent);
   }
   return F3R_OK;
 }

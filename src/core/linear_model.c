@@ -205,17 +205,8 @@ static void mode_transition(double k, double c, double h, double E[4][4]) {
   }
 }
 
-f3r_status f3r_linear_response(const f3r_linear_model* lin, const f3r_model* model, double dt,
-                               int count, double* pose, f3r_error* err) {
-  const int n = lin->n;
-  if (count < 1 || !(dt > 0.0))
-    return f3r_error_set(err, F3R_ERR_ARGUMENT, "linear response: needs count >= 1 and dt > 0");
-  double* u = malloc((size_t)count * F3R_RIGID_FORCES * sizeof(double)); /* inputs at t_k */
-  double* p = malloc((size_t)count * sizeof(double));                     /* one mode's force */
-  if (!u || !p) {
-    free(u), free(p);
-    return f3r_error_set(err, F3R_ERR_MEMORY, "linear response: out of memory");
-  }
+/* The scripted inputs at t_k, through the actuator lag when there is one: u[k * 9 + f]. */
+static void sample_inputs(const f3r_model* model, double dt, int count, double* u) {
   const f3r_scene* s = &model->scene;
   for (int f = 0; f < F3R_RIGID_FORCES; ++f) {
     const int lagged = model->n_lag && f < 3;
@@ -223,16 +214,152 @@ f3r_status f3r_linear_response(const f3r_linear_model* lin, const f3r_model* mod
     double applied = 0.0; /* the lag states start at zero */
     for (int k = 0; k < count; ++k) {
       const double command = f3r_input_value(&s->inputs[f], k * dt);
-      if (lagged) { /* first-order lag, command held over each sample */
-        if (k) applied = decay * applied + (1.0 - decay) * command;
-        u[(size_t)k * F3R_RIGID_FORCES + f] = applied;
-      } else {
-        u[(size_t)k * F3R_RIGID_FORCES + f] = command;
+      if (lagged && k) applied = decay * applied + (1.0 - decay) * command; /* held over a sample */
+      u[(size_t)k * F3R_RIGID_FORCES + f] = lagged ? applied : command;
+    }
+  }
+}
+
+/* Modal forces P (count per mode, mode after mode) of the forces F (n per sample): phi_j^T F_k. */
+static void project(const f3r_linear_model* lin, int count, const double* F, double* P) {
+  const int n = lin->n;
+  for (int j = 0; j < n; ++j) {
+    const double* phi = lin->shapes + (size_t)j * n;
+    double* Pj = P + (size_t)j * count;
+    for (int k = 0; k < count; ++k) {
+      const double* Fk = F + (size_t)k * n;
+      double v = 0.0;
+      for (int a = 0; a < n; ++a) v += phi[a] * Fk[a];
+      Pj[k] = v;
+    }
+  }
+}
+
+/* One modal superposition of modal forces P (linear between samples) from the initial deviation
+ * dz0 and rate vz0 in z. Adds the pose deviation to pose (3 per sample) and, when z is not NULL,
+ * writes the deviation, rate and acceleration of every coordinate (z, zd, zdd: n per sample). */
+static void superpose(const f3r_linear_model* lin, double dt, int count, const double* P,
+                      const double* dz0, const double* vz0, double* pose, double* z, double* zd,
+                      double* zdd) {
+  const int n = lin->n;
+  if (z) {
+    memset(z, 0, (size_t)n * count * sizeof(double));
+    memset(zd, 0, (size_t)n * count * sizeof(double));
+    memset(zdd, 0, (size_t)n * count * sizeof(double));
+  }
+  for (int j = 0; j < n; ++j) {
+    const double* phi = lin->shapes + (size_t)j * n;
+    const double* p = P + (size_t)j * count;
+    double xi = 0.0, rate = 0.0;
+    for (int a = 0; a < n; ++a) { /* xi0 = phi^T M dz0 */
+      double mdz = 0.0, mvz = 0.0;
+      for (int b = 0; b < n; ++b) {
+        mdz += F3R_AT(lin->mass, n, a, b) * dz0[b];
+        mvz += F3R_AT(lin->mass, n, a, b) * vz0[b];
+      }
+      xi += phi[a] * mdz;
+      rate += phi[a] * mvz;
+    }
+    double E[4][4];
+    const double k2 = lin->omega2[j], c = lin->modal_damping[j];
+    mode_transition(k2, c, dt, E);
+    for (int k = 0; k < count; ++k) {
+      if (k) {
+        const double slope = (p[k] - p[k - 1]) / dt;
+        const double x1 = E[0][0] * xi + E[0][1] * rate + E[0][2] * p[k - 1] + E[0][3] * slope;
+        const double v1 = E[1][0] * xi + E[1][1] * rate + E[1][2] * p[k - 1] + E[1][3] * slope;
+        xi = x1;
+        rate = v1;
+      }
+      for (int a = 0; a < 3; ++a) pose[3 * k + a] += phi[a] * xi;
+      if (z) {
+        const double acc = p[k] - c * rate - k2 * xi;
+        double *zk = z + (size_t)k * n, *zdk = zd + (size_t)k * n, *zddk = zdd + (size_t)k * n;
+        for (int a = 0; a < n; ++a) {
+          zk[a] += phi[a] * xi;
+          zdk[a] += phi[a] * rate;
+          zddk[a] += phi[a] * acc;
+        }
       }
     }
   }
-  /* Initial deviation from the linearisation point and its rate, in z. */
-  double dz0[F3R_MAX_Q] = {0}, vz0[F3R_MAX_Q] = {0};
+}
+
+/* The residual's remainder along the linear path: e = F_b(z, z', z''; u) less its linear part
+ * M z'' + D z' + K dz - f0 - U u, second order in the motion. A sample the loop closure cannot
+ * reach gets e = 0 and is counted in *unreachable. */
+static f3r_status second_order_remainder(const f3r_linear_model* lin, const f3r_model* model, int count,
+                            const double* u, const double* z, const double* zd, const double* zdd,
+                            double* e, int* unreachable, f3r_error* err) {
+  const int n = lin->n;
+  f3r_model m = *model; /* the applied forces come in as held forces, the lag already applied */
+  memset(m.scene.inputs, 0, sizeof m.scene.inputs);
+  m.n_lag = 0;
+  m.n_breakpoints = 0;
+  const int ny = f3r_state_size(&m, F3R_FORMULATION_MINIMAL);
+  f3r_workspace* ws = f3r_workspace_create(&m);
+  double* y = calloc((size_t)ny, sizeof(double));
+  double* yp = calloc((size_t)ny, sizeof(double));
+  double* res = calloc((size_t)ny, sizeof(double));
+  double held[F3R_MAX_Q] = {0};
+  if (!ws || !y || !yp || !res) {
+    f3r_workspace_destroy(ws);
+    free(y), free(yp), free(res);
+    return f3r_error_set(err, F3R_ERR_MEMORY, "linear response: out of memory");
+  }
+  *unreachable = 0;
+  for (int k = 0; k < count; ++k) {
+    const double *zk = z + (size_t)k * n, *zdk = zd + (size_t)k * n, *zddk = zdd + (size_t)k * n;
+    double* ek = e + (size_t)k * n;
+    for (int a = 0; a < n; ++a) {
+      y[a] = zk[a] + (a < 3 ? model->scene.platform_pose0[a] : 0.0);
+      y[n + a] = zdk[a];
+      yp[a] = zdk[a];
+      yp[n + a] = zddk[a];
+    }
+    memcpy(held, u + (size_t)k * F3R_RIGID_FORCES, F3R_RIGID_FORCES * sizeof(double));
+    if (f3r_residual(&m, F3R_FORMULATION_MINIMAL, 0.0, y, yp, held, res, ws) != F3R_OK) {
+      memset(ek, 0, (size_t)n * sizeof(double));
+      ++*unreachable;
+      continue;
+    }
+    for (int a = 0; a < n; ++a) {
+      double linear = -lin->static_force[a];
+      for (int b = 0; b < n; ++b)
+        linear += F3R_AT(lin->mass, n, a, b) * zddk[b] + F3R_AT(lin->damping, n, a, b) * zdk[b] +
+                  F3R_AT(lin->stiffness, n, a, b) * zk[b];
+      for (int f = 0; f < F3R_RIGID_FORCES; ++f) linear -= F3R_AT(lin->input, n, a, f) * held[f];
+      ek[a] = -(res[n + a] - linear); /* a force: the correction solves M dz'' + ... = -e */
+    }
+  }
+  f3r_workspace_destroy(ws);
+  free(y), free(yp), free(res);
+  return F3R_OK;
+}
+
+f3r_status f3r_linear_response(const f3r_linear_model* lin, const f3r_model* model, double dt,
+                               int count, int order, double* pose, int* unreachable,
+                               f3r_error* err) {
+  const int n = lin->n;
+  if (unreachable) *unreachable = 0;
+  if (count < 1 || !(dt > 0.0))
+    return f3r_error_set(err, F3R_ERR_ARGUMENT, "linear response: needs count >= 1 and dt > 0");
+  const size_t series = (size_t)n * count;
+  const int second = order >= 2;
+  double* u = malloc((size_t)count * F3R_RIGID_FORCES * sizeof(double));
+  double* P = malloc(series * sizeof(double));
+  double* F = second ? malloc(series * sizeof(double)) : NULL;
+  double* z = second ? malloc(series * sizeof(double)) : NULL;
+  double* zd = second ? malloc(series * sizeof(double)) : NULL;
+  double* zdd = second ? malloc(series * sizeof(double)) : NULL;
+  f3r_status st = F3R_OK;
+  if (!u || !P || (second && (!F || !z || !zd || !zdd))) {
+    st = f3r_error_set(err, F3R_ERR_MEMORY, "linear response: out of memory");
+    goto done;
+  }
+  sample_inputs(model, dt, count, u);
+  const f3r_scene* s = &model->scene;
+  double dz0[F3R_MAX_Q] = {0}, vz0[F3R_MAX_Q] = {0}, zero[F3R_MAX_Q] = {0};
   for (int k = 0; k < 3; ++k) vz0[k] = s->platform_velocity0[k];
   for (int i = 0; i < 3; ++i)
     for (int j = 0; j < model->link[i].modes; ++j) {
@@ -241,41 +368,31 @@ f3r_status f3r_linear_response(const f3r_linear_model* lin, const f3r_model* mod
     }
   for (int k = 0; k < count; ++k)
     for (int c = 0; c < 3; ++c) pose[3 * k + c] = s->platform_pose0[c];
-  for (int j = 0; j < n; ++j) {
+  for (int j = 0; j < n; ++j) { /* modal forces phi_j^T (f0 + U u): 10 products a sample */
     const double* phi = lin->shapes + (size_t)j * n;
-    double ui[F3R_RIGID_FORCES], p0 = 0.0, xi = 0.0, rate = 0.0;
-    for (int f = 0; f < F3R_RIGID_FORCES; ++f) {
-      ui[f] = 0.0;
-      for (int a = 0; a < n; ++a) ui[f] += phi[a] * F3R_AT(lin->input, n, a, f);
-    }
+    double constant = 0.0, gain[F3R_RIGID_FORCES] = {0};
     for (int a = 0; a < n; ++a) {
-      p0 += phi[a] * lin->static_force[a];
-      double mdz = 0.0, mvz = 0.0; /* xi0 = phi^T M dz0 */
-      for (int b = 0; b < n; ++b) {
-        mdz += F3R_AT(lin->mass, n, a, b) * dz0[b];
-        mvz += F3R_AT(lin->mass, n, a, b) * vz0[b];
-      }
-      xi += phi[a] * mdz;
-      rate += phi[a] * mvz;
+      constant += phi[a] * lin->static_force[a];
+      for (int f = 0; f < F3R_RIGID_FORCES; ++f) gain[f] += phi[a] * F3R_AT(lin->input, n, a, f);
     }
+    double* Pj = P + (size_t)j * count;
     for (int k = 0; k < count; ++k) {
-      const double* uk = u + (size_t)k * F3R_RIGID_FORCES;
-      double v = p0;
-      for (int f = 0; f < F3R_RIGID_FORCES; ++f) v += ui[f] * uk[f];
-      p[k] = v;
-    }
-    double E[4][4];
-    mode_transition(lin->omega2[j], lin->modal_damping[j], dt, E);
-    for (int c = 0; c < 3; ++c) pose[c] += phi[c] * xi;
-    for (int k = 0; k + 1 < count; ++k) {
-      const double slope = (p[k + 1] - p[k]) / dt;
-      const double x1 = E[0][0] * xi + E[0][1] * rate + E[0][2] * p[k] + E[0][3] * slope;
-      const double v1 = E[1][0] * xi + E[1][1] * rate + E[1][2] * p[k] + E[1][3] * slope;
-      xi = x1;
-      rate = v1;
-      for (int c = 0; c < 3; ++c) pose[3 * (k + 1) + c] += phi[c] * xi;
+      double v = constant;
+      for (int f = 0; f < F3R_RIGID_FORCES; ++f) v += gain[f] * u[(size_t)k * F3R_RIGID_FORCES + f];
+      Pj[k] = v;
     }
   }
-  free(u), free(p);
-  return F3R_OK;
+  superpose(lin, dt, count, P, dz0, vz0, pose, z, zd, zdd);
+  if (second) {
+    int missed = 0;
+    st = second_order_remainder(lin, model, count, u, z, zd, zdd, F, &missed, err);
+    if (st == F3R_OK) {
+      project(lin, count, F, P);
+      superpose(lin, dt, count, P, zero, zero, pose, NULL, NULL, NULL);
+    }
+    if (unreachable) *unreachable = missed;
+  }
+done:
+  free(u), free(P), free(F), free(z), free(zd), free(zdd);
+  return st;
 }

@@ -100,9 +100,9 @@ f3r_status f3r_model_create(const f3r_scene* scene, f3r_model** out, f3r_error* 
       if (!(open >> i & 1)) continue;
       m->scene.links[i].modes = open_modes[i];
       snprintf(m->link[i].modes_reason, sizeof m->link[i].modes_reason,
-               "links[%d]: modes -> %d (linearised end-effector path within %.3g m of %d modes; "
+               "links[%d]: modes -> %d (linearised end-effector path within %.3g m of 3r + 3 modes; "
                "target %.3g m, path extent %.3g m)",
-               i, open_modes[i], estimate, F3R_MAX_MODES, target > 0 ? target : -target * extent, extent);
+               i, open_modes[i], estimate, target > 0 ? target : -target * extent, extent);
     }
   }
   int next = 9;
@@ -114,6 +114,24 @@ f3r_status f3r_model_create(const f3r_scene* scene, f3r_model** out, f3r_error* 
     lp->eta_index = next;
     next += lp->modes;
     if (!lp->modes) continue;
+    /* Each mode's constants depend on the boundary model and its index only: a link with the
+     * model and no more modes than an earlier one copies them (the quadrature is most of the
+     * cost of a model). */
+    int same = -1;
+    for (int k = 0; k < i; ++k)
+      if (m->link[k].model == lp->model && m->link[k].modes >= lp->modes) same = k;
+    if (same >= 0) {
+      const f3r_link_params* from = &m->link[same];
+      for (int j = 0; j < lp->modes; ++j) {
+        lp->alpha[j] = from->alpha[j];
+        lp->mean[j] = from->mean[j];
+        lp->first_moment[j] = from->first_moment[j];
+        lp->tip[j] = from->tip[j];
+        lp->stiffness[j] = from->stiffness[j];
+        lp->omega_clamped[j] = from->omega_clamped[j];
+      }
+      continue;
+    }
     const f3r_beam_end end = (f3r_beam_end)lp->model;
     double bending[F3R_MAX_MODES * F3R_MAX_MODES];
     if (f3r_beam_roots(end, lp->modes, lp->alpha) ||
