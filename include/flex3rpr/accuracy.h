@@ -41,7 +41,7 @@ typedef struct {
   int pilot;              /* 1 when nonlinear pilot runs checked the estimate */
   double pilot_ratio;     /* nonlinear over linear mode-count difference in the pilot window */
   int linear_evaluations; /* linear models built and solved */
-  char summary[1024];     /* the choice and why, one line per decision */
+  char summary[2048];     /* the choice and why, one line per decision */
   char brief[256];        /* the same in one line, for a status message */
 } f3r_accuracy_choice;
 

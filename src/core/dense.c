@@ -1,6 +1,8 @@
 #include "dense.h"
 
 #include <math.h>
+#include <stdlib.h>
+#include <string.h>
 
 int f3r_lu_factor(double* A, int n, int* piv) {
   for (int k = 0; k < n; ++k) {
@@ -110,7 +112,116 @@ void f3r_cholesky_solve_inv(const double* L, int n, const double* inv, double* X
   }
 }
 
-void f3r_symmetric_eigen(double* A, int n, double* eig, double* V) {
+/* Householder reduction of the symmetric A (lower triangle read) to tridiagonal form
+ * T = Q^T A Q: diagonal d, subdiagonal e (e[0] = 0, e[i] couples i - 1 and i), Q into A. */
+static void tridiagonalise(double* A, int n, double* d, double* e) {
+#define A_(i, j) F3R_AT(A, n, i, j)
+  for (int i = n - 1; i > 0; --i) {
+    const int l = i - 1;
+    double h = 0.0;
+    if (l > 0) {
+      double scale = 0.0;
+      for (int k = 0; k <= l; ++k) scale += fabs(A_(i, k));
+      if (scale == 0.0) {
+        e[i] = A_(i, l);
+      } else {
+        for (int k = 0; k <= l; ++k) {
+          A_(i, k) /= scale;
+          h += A_(i, k) * A_(i, k);
+        }
+        double f = A_(i, l);
+        double g = f >= 0.0 ? -sqrt(h) : sqrt(h);
+        e[i] = scale * g;
+        h -= f * g;
+        A_(i, l) = f - g;
+        f = 0.0;
+        for (int j = 0; j <= l; ++j) {
+          A_(j, i) = A_(i, j) / h;
+          g = 0.0;
+          for (int k = 0; k <= j; ++k) g += A_(j, k) * A_(i, k);
+          for (int k = j + 1; k <= l; ++k) g += A_(k, j) * A_(i, k);
+          e[j] = g / h;
+          f += e[j] * A_(i, j);
+        }
+        const double hh = f / (h + h);
+        for (int j = 0; j <= l; ++j) {
+          f = A_(i, j);
+          e[j] = g = e[j] - hh * f;
+          for (int k = 0; k <= j; ++k) A_(j, k) -= f * e[k] + g * A_(i, k);
+        }
+      }
+    } else {
+      e[i] = A_(i, l);
+    }
+    d[i] = h;
+  }
+  d[0] = 0.0;
+  e[0] = 0.0;
+  for (int i = 0; i < n; ++i) { /* accumulate Q */
+    const int l = i - 1;
+    if (d[i] != 0.0)
+      for (int j = 0; j <= l; ++j) {
+        double g = 0.0;
+        for (int k = 0; k <= l; ++k) g += A_(i, k) * A_(k, j);
+        for (int k = 0; k <= l; ++k) A_(k, j) -= g * A_(k, i);
+      }
+    d[i] = A_(i, i);
+    A_(i, i) = 1.0;
+    for (int j = 0; j <= l; ++j) A_(j, i) = A_(i, j) = 0.0;
+  }
+#undef A_
+}
+
+/* Implicit QL with Wilkinson-type shifts on the tridiagonal (d, e), rotating the columns of Z. */
+static int tridiagonal_ql(double* d, double* e, int n, double* Z) {
+  for (int i = 1; i < n; ++i) e[i - 1] = e[i];
+  e[n - 1] = 0.0;
+  for (int l = 0; l < n; ++l) {
+    int iterations = 0, m;
+    do {
+      for (m = l; m < n - 1; ++m) {
+        const double dd = fabs(d[m]) + fabs(d[m + 1]);
+        if (fabs(e[m]) <= 1e-15 * dd) break;
+      }
+      if (m == l) break;
+      if (++iterations > 60) return 1;
+      double g = (d[l + 1] - d[l]) / (2.0 * e[l]);
+      double r = hypot(g, 1.0);
+      g = d[m] - d[l] + e[l] / (g + (g >= 0.0 ? fabs(r) : -fabs(r)));
+      double s = 1.0, c = 1.0, p = 0.0;
+      int i;
+      for (i = m - 1; i >= l; --i) {
+        double f = s * e[i];
+        const double b = c * e[i];
+        e[i + 1] = r = hypot(f, g);
+        if (r == 0.0) {
+          d[i + 1] -= p;
+          e[m] = 0.0;
+          break;
+        }
+        s = f / r;
+        c = g / r;
+        g = d[i + 1] - p;
+        r = (d[i] - g) * s + 2.0 * c * b;
+        d[i + 1] = g + (p = s * r);
+        g = c * r - b;
+        for (int k = 0; k < n; ++k) {
+          f = F3R_AT(Z, n, k, i + 1);
+          F3R_AT(Z, n, k, i + 1) = s * F3R_AT(Z, n, k, i) + c * f;
+          F3R_AT(Z, n, k, i) = c * F3R_AT(Z, n, k, i) - s * f;
+        }
+      }
+      if (r == 0.0 && i >= l) continue;
+      d[l] -= p;
+      e[l] = g;
+      e[m] = 0.0;
+    } while (m != l);
+  }
+  return 0;
+}
+
+/* Cyclic Jacobi rotations: slower, kept as the fallback should QL not converge. */
+static void jacobi(double* A, int n, double* eig, double* V) {
   if (V)
     for (int j = 0; j < n; ++j)
       for (int i = 0; i < n; ++i) F3R_AT(V, n, i, j) = i == j ? 1.0 : 0.0;
@@ -148,4 +259,24 @@ void f3r_symmetric_eigen(double* A, int n, double* eig, double* V) {
       }
   }
   for (int i = 0; i < n; ++i) eig[i] = F3R_AT(A, n, i, i);
+}
+
+void f3r_symmetric_eigen(double* A, int n, double* eig, double* V) {
+  if (V && n > 1) {
+    double* e = malloc((size_t)n * sizeof(double));
+    double* copy = malloc((size_t)n * n * sizeof(double));
+    if (e && copy) {
+      memcpy(copy, A, (size_t)n * n * sizeof(double));
+      memcpy(V, A, (size_t)n * n * sizeof(double));
+      tridiagonalise(V, n, eig, e);
+      const int failed = tridiagonal_ql(eig, e, n, V);
+      if (!failed) {
+        free(e), free(copy);
+        return;
+      }
+      memcpy(A, copy, (size_t)n * n * sizeof(double));
+    }
+    free(e), free(copy);
+  }
+  jacobi(A, n, eig, V);
 }
