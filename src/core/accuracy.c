@@ -185,10 +185,45 @@ static f3r_status search_init(const f3r_scene* s, unsigned chosen, mode_search* 
     ms->rotation = fmax(ms->rotation, fabs(p[2] - ms->ref[2]));
   }
   ms->far = ms->extent > FAR_SHARE * s->platform_side || ms->rotation > FAR_ROTATION;
-  if (!ms->far) {
-    ms->order = 2;
-    ms->ref_r = 0; /* the first-order reference is no longer the one compared with */
+  if (ms->far) return F3R_OK;
+  /* The second-order remainder oscillates with the vibration itself, so its sampling must
+   * resolve the first elastic mode too (20 samples a period); a run too long for that is
+   * estimated as a far one. */
+  double first = 0.0;
+  {
+    int modes[3];
+    uniform(ms, 1, modes);
+    f3r_model* model = NULL;
+    f3r_linear_model* lin = NULL;
+    st = model_with(s, modes, 0, &model, err);
+    if (st == F3R_OK) st = f3r_linearise(model, &lin, err);
+    if (st == F3R_OK) {
+      const double top = lin->omega2[lin->n - 1];
+      for (int j = 0; j < lin->n && first == 0.0; ++j)
+        if (lin->omega2[j] > 1e-8 * top) first = sqrt(lin->omega2[j]) / (2.0 * M_PI);
+    }
+    f3r_linear_destroy(lin);
+    f3r_model_destroy(model);
+    if (st != F3R_OK) return st;
   }
+  double fine = ms->dt;
+  if (first > 0.0) fine = fmin(fine, 1.0 / (20.0 * first));
+  const double samples = ceil(s->duration / fine - 1e-9) + 1;
+  if (samples > MAX_SAMPLES) {
+    ms->far = 1;
+    return F3R_OK;
+  }
+  if ((int)samples != ms->count) {
+    ms->count = (int)samples;
+    ms->dt = s->duration / (ms->count - 1);
+    free(ms->ref);
+    free(ms->path);
+    ms->ref = malloc((size_t)ms->count * 3 * sizeof(double));
+    ms->path = malloc((size_t)ms->count * 3 * sizeof(double));
+    if (!ms->ref || !ms->path) return f3r_error_set(err, F3R_ERR_MEMORY, "accuracy: out of memory");
+  }
+  ms->order = 2;
+  ms->ref_r = 0; /* the first-order reference is no longer the one compared with */
   return F3R_OK;
 }
 
