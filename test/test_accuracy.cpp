@@ -325,3 +325,37 @@ TEST(Accuracy, TheChoiceMeetsTheRequestAgainstAHighFidelityRun) {
     EXPECT_LE(c.model_error + c.kinematics_error + c.solver_error, request) << c.summary;
   }
 }
+
+// Free vibration drives the unactuated platform away at second order only (0.1 mm at first order,
+// centimetres in 2 s): the knob must see that the path leaves the pose, check it with the pilot and
+// keep the counts uniform (unequal counts change the drift far more than the linear path says).
+TEST(Accuracy, ASecondOrderDriftCountsAsLeavingThePose) {
+  f3r_scene s;
+  f3r_error err{};
+  ASSERT_EQ(f3r_scene_load(ScenePath("free_vibration_long.yaml").c_str(), &s, &err), F3R_OK) << err.message;
+  s.duration = 2.0;
+  for (int i = 0; i < 3; ++i) s.explicit_settings &= ~(F3R_EXPLICIT_MODES << i);
+  f3r_accuracy_choice c;
+  ASSERT_EQ(f3r_accuracy_choose(&s, 1e-3, 0, &c, &err), F3R_OK) << err.message;
+  EXPECT_TRUE(c.pilot) << c.summary;
+  EXPECT_GT(c.extent, 0.01) << c.summary;
+  EXPECT_EQ(c.modes[1], c.modes[0]) << c.summary;
+  EXPECT_EQ(c.modes[2], c.modes[0]) << c.summary;
+  EXPECT_NE(std::strstr(c.summary, "solver: the pilot measures"), nullptr) << c.summary;
+}
+
+// A run longer than the benchmark's scenes has its solver measured by a pilot, as the relations'
+// drift does not carry over to it.
+TEST(Accuracy, ALongRunHasItsSolverMeasured) {
+  f3r_scene s;
+  f3r_error err{};
+  ASSERT_EQ(f3r_scene_load(ScenePath("resonance_damped.yaml").c_str(), &s, &err), F3R_OK) << err.message;
+  for (int i = 0; i < 3; ++i) s.explicit_settings &= ~(F3R_EXPLICIT_MODES << i);
+  f3r_accuracy_choice c;
+  ASSERT_EQ(f3r_accuracy_choose(&s, 1e-4, 0, &c, &err), F3R_OK) << err.message;
+  EXPECT_EQ(std::strstr(c.summary, "longer than the benchmark's scenes"), nullptr) << c.summary;
+  s.duration = 1.0;
+  ASSERT_EQ(f3r_accuracy_choose(&s, 1e-4, 0, &c, &err), F3R_OK) << err.message;
+  EXPECT_FALSE(c.pilot) << c.summary;
+  EXPECT_NE(std::strstr(c.summary, "longer than the benchmark's scenes"), nullptr) << c.summary;
+}
