@@ -162,3 +162,103 @@ TEST(SceneFiles, InvalidSceneCorpusGivesTheExpectedErrors) {
 }
 
 }  // namespace
+
+namespace {
+
+// Loads `path` with the overrides `sets`; the status, the scene and the error.
+f3r_status LoadWith(const std::string& path, std::vector<const char*> sets, f3r_scene* s, f3r_error* err) {
+  f3r_scene_options options{};
+  options.overrides = sets.data();
+  options.override_count = static_cast<int>(sets.size());
+  return f3r_scene_load_with(path.c_str(), &options, s, err);
+}
+
+std::string WriteTemp(const std::string& name, const std::string& text) {
+  const std::string path = ::testing::TempDir() + name;
+  std::ofstream(path) << text;
+  return path;
+}
+
+}  // namespace
+
+// An override gives the scene the same file with the field edited by hand would give (the
+// independent computation here is the edited file), whether the field is in the file or not.
+TEST(SceneOverrides, EqualTheFileEditedByHand) {
+  const std::string base =
+      "links:\n  - {model: fixed_free, modes: 3}\n  - {model: fixed_free, modes: 3}\n"
+      "  - {model: rigid}\nrun: {duration: 0.2}\n";
+  const std::string edited =
+      "links:\n  - {model: fixed_free, modes: 4}\n  - {model: fixed_pinned, modes: 3}\n"
+      "  - {model: rigid}\neffects:\n  payload: {mass: 0.1}\n  gravity: [0, -9.81, 0]\n"
+      "run: {duration: 0.3}\n";
+  f3r_scene a, b;
+  f3r_error err{};
+  ASSERT_EQ(LoadWith(WriteTemp("edited.yaml", edited), {}, &b, &err), F3R_OK) << err.message;
+  ASSERT_EQ(LoadWith(WriteTemp("base.yaml", base),
+                     {"links[0].modes=4", "links[1].model=fixed_pinned", "effects.payload.mass=0.1",
+                      "effects.gravity=[0, -9.81, 0]", "run.duration=0.25", "run.duration=0.3"},
+                     &a, &err),
+            F3R_OK)
+      << err.message;
+  for (int i = 0; i < 3; ++i) {
+    EXPECT_EQ(a.links[i].model, b.links[i].model) << i;
+    EXPECT_EQ(a.links[i].modes, b.links[i].modes) << i;
+  }
+  EXPECT_EQ(a.payload_mass, b.payload_mass);
+  for (int k = 0; k < 3; ++k) EXPECT_EQ(a.gravity[k], b.gravity[k]) << k;
+  EXPECT_EQ(a.duration, b.duration);
+  EXPECT_EQ(a.explicit_settings, b.explicit_settings);
+  EXPECT_EQ(a.links[0].modes, 4);  // and the edit did happen
+  EXPECT_EQ(a.duration, 0.3);
+}
+
+// "links[i]" on one mapping for all three links sets that link only; "links.field" sets all.
+TEST(SceneOverrides, AddressOneLinkOrAll) {
+  const std::string shared = WriteTemp("shared.yaml", "links: {model: fixed_free, modes: 2}\n");
+  f3r_scene s;
+  f3r_error err{};
+  ASSERT_EQ(LoadWith(shared, {"links[1].modes=5"}, &s, &err), F3R_OK) << err.message;
+  EXPECT_EQ(s.links[0].modes, 2);
+  EXPECT_EQ(s.links[1].modes, 5);
+  EXPECT_EQ(s.links[2].modes, 2);
+  EXPECT_EQ(s.links[2].model, F3R_LINK_FIXED_FREE);
+  const std::string list = WriteTemp("list.yaml", "links:\n  - {model: fixed_free, modes: 2}\n"
+                                                  "  - {model: rigid}\n  - {model: fixed_free}\n");
+  ASSERT_EQ(LoadWith(list, {"links.model=fixed_pinned", "links.modes=6"}, &s, &err), F3R_OK) << err.message;
+  for (int i = 0; i < 3; ++i) {
+    EXPECT_EQ(s.links[i].model, F3R_LINK_FIXED_PINNED) << i;
+    EXPECT_EQ(s.links[i].modes, 6) << i;
+  }
+}
+
+// A bad override is refused by the file's own checks, with the override named where a file error
+// names path:line; the file's own errors still name the file.
+TEST(SceneOverrides, ErrorsNameTheOverride) {
+  const std::string path = ScenePath("paper_sim3_fixed_free.yaml");
+  const struct {
+    const char* set;
+    const char* message;
+  } cases[] = {
+      {"links[0].modes=40", "--set links[0].modes=40: links[0].modes: 40 is out of range 1..20"},
+      {"effects.payload.mass=-1", "--set effects.payload.mass=-1: effects.payload.mass: -1 is out of range"},
+      {"links[0].modez=3", "--set links[0].modez=3: links[0].modez: unknown key"},
+      {"foo.bar=1", "--set foo.bar=1: foo: unknown section"},
+      {"links[5].modes=2", "--set links[5].modes=2: links has 3 entries"},
+      {"effects.gravity=[0, 1]", "--set effects.gravity=[0, 1]: effects.gravity: has 2 values, expected 3"},
+      {"run.duration=[1", "--set run.duration=[1: the value is not YAML"},
+      {"links[0].modes=", "--set links[0].modes=: no value"},
+      {"links..modes=1", "--set links..modes=1: expected FIELD=VALUE"},
+      {"run.duration.x=1", "--set run.duration.x=1: run.duration is not a mapping"},
+  };
+  for (const auto& c : cases) {
+    f3r_scene s;
+    f3r_error err{};
+    EXPECT_EQ(LoadWith(path, {c.set}, &s, &err), F3R_ERR_SCENE) << c.set;
+    EXPECT_EQ(std::string(err.message).rfind(c.message, 0), 0u) << c.set << " gave: " << err.message;
+  }
+  f3r_scene s;
+  f3r_error err{};
+  const std::string bad = WriteTemp("bad.yaml", "links: {model: fixed_free, modes: 2}\nrun: {duration: -1}\n");
+  EXPECT_EQ(LoadWith(bad, {"links[0].modes=3"}, &s, &err), F3R_ERR_SCENE);
+  EXPECT_EQ(std::string(err.message).rfind(bad + ":2: run.duration", 0), 0u) << err.message;
+}

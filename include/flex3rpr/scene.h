@@ -171,6 +171,21 @@ f3r_status f3r_scene_load(const char* path, f3r_scene* scene, f3r_error* err);
  * modes to the knob. */
 f3r_status f3r_scene_load_accuracy(const char* path, double accuracy, f3r_scene* scene, f3r_error* err);
 
+/* What comes from outside the file: an accuracy request (> 0: replaces accuracy.end_effector) and
+ * overrides "FIELD=VALUE", applied in order to the parsed document before it is read, so they pass
+ * the same checks as the file; FIELD is the path a message names ("links[0].modes",
+ * "effects.payload.mass"; "links.modes" sets every link), VALUE is YAML ("4", "fixed_free",
+ * "[0, 0, -9.81]"). A missing section or field is added; "links[i]" on one mapping for all three
+ * links turns it into three. An error about an override starts with "--set FIELD=VALUE: ". */
+typedef struct {
+  double accuracy;
+  const char* const* overrides;
+  int override_count;
+} f3r_scene_options;
+
+f3r_status f3r_scene_load_with(const char* path, const f3r_scene_options* options, f3r_scene* scene,
+                               f3r_error* err);
+
 /* Scene name of rigid generalized force `index` (F3R_FORCE_*), e.g. "rho_1", "platform_torque". */
 const char* f3r_input_name(int index);
 

@@ -2,7 +2,7 @@
  *   flex3rpr_sim SCENE.yaml [--out FILE.csv] [--formulation dae|minimal] [--rtol R] [--atol A]
  *                [--output-step DT] [--duration T] [--fd-jacobian] [--dense-linear-solver]
  *                [--exact-kinematics] [--ida | --erk | --dirk] [--table NAME]
- *                [--accuracy METRES] [--linear-path FILE.csv] ...
+ *                [--accuracy METRES] [--linear-path FILE.csv] [--set FIELD=VALUE ...] ...
  *   flex3rpr_sim --modal SCENE.yaml
  *   flex3rpr_sim --geometry SCENE.yaml   (JSON for scripts/make_urdf.py) */
 #include <math.h>
@@ -19,6 +19,7 @@
 #include "flex3rpr/sim.h"
 
 #define MAX_HOLDS 64
+#define MAX_SETS 64
 
 /* A held generalized force from a time on, as a node command would give it. */
 typedef struct {
@@ -43,6 +44,8 @@ typedef struct {
   const char* table;
   int n_holds;
   hold_event holds[MAX_HOLDS];
+  int n_sets;
+  const char* sets[MAX_SETS]; /* "FIELD=VALUE" scene overrides, in order */
 } cli_options;
 
 static void usage(FILE* to) {
@@ -53,6 +56,7 @@ static void usage(FILE* to) {
           "                    [--ida | --erk | --dirk] [--table NAME]\n"
           "                    [--stop-at-outputs] [--hold T:INDEX:VALUE ...]\n"
           "                    [--accuracy METRES] [--linear-path FILE.csv]\n"
+          "                    [--set FIELD=VALUE ...]   (any scene field: --set links[0].modes=4)\n"
           "       flex3rpr_sim --modal SCENE.yaml\n"
           "       flex3rpr_sim --geometry SCENE.yaml\n");
 }
@@ -92,6 +96,14 @@ static int parse_args(int argc, char** argv, cli_options* o) {
         return 0;
       }
       ++o->n_holds;
+      ++k;
+    }
+    else if (!strcmp(a, "--set") && next) {
+      if (o->n_sets >= MAX_SETS) {
+        fprintf(stderr, "flex3rpr_sim: at most %d --set overrides\n", MAX_SETS);
+        return 0;
+      }
+      o->sets[o->n_sets++] = next;
       ++k;
     }
     else if (!strcmp(a, "--out") && next) { o->out_path = next; ++k; }
@@ -241,7 +253,8 @@ int main(int argc, char** argv) {
   }
   f3r_error err = {0};
   f3r_scene scene;
-  if (f3r_scene_load_accuracy(o.scene_path, o.accuracy, &scene, &err) != F3R_OK) {
+  const f3r_scene_options source = {.accuracy = o.accuracy, .overrides = o.sets, .override_count = o.n_sets};
+  if (f3r_scene_load_with(o.scene_path, &source, &scene, &err) != F3R_OK) {
     fprintf(stderr, "flex3rpr_sim: %s\n", err.message);
     return 1;
   }

@@ -15,6 +15,7 @@
 typedef struct {
   char name[128]; /* the field's path, as f3r_scene_validate names it: "inputs.rho_1.table.time[3]" */
   int line;
+  int override;   /* 1 + the override that set it; 0: the file */
 } field_location;
 
 typedef struct {
@@ -25,18 +26,40 @@ typedef struct {
   field_location* fields; /* every field read, in reading order; grown by doubling */
   int n_fields, capacity;
   int out_of_memory;      /* a location could not be stored: reported after the read */
+  /* Overrides ("--set links[0].modes=4"): override k added the document's nodes
+   * first_node[k] .. last_node[k] (ids); a message about one of them names the override. */
+  const char* const* overrides;
+  int override_count;
+  int* first_node;
+  int* last_node;
+  int applying;           /* the override being applied */
 } loader;
 
 static int line_of(const yaml_node_t* node) { return (int)node->start_mark.line + 1; }
 
+/* 1 + the override that added `node`, 0 if the file holds it. */
+static int override_of(const loader* L, const yaml_node_t* node) {
+  if (!node) return 0;
+  const int id = (int)(node - L->doc.nodes.start) + 1;
+  for (int k = 0; k < L->override_count; ++k)
+    if (id >= L->first_node[k] && id <= L->last_node[k]) return k + 1;
+  return 0;
+}
+
+/* Where a message points: "path:line" in the file, or "--set FIELD=VALUE" for an override. */
+static void where(const loader* L, int line, int override, char* out, size_t size) {
+  if (override) snprintf(out, size, "--set %s", L->overrides[override - 1]);
+  else snprintf(out, size, "%s:%d", L->path, line);
+}
+
 static f3r_status fail(loader* L, const yaml_node_t* node, const char* field, const char* fmt, ...) {
-  char what[384];
+  char what[384], at[320];
   va_list args;
   va_start(args, fmt);
   vsnprintf(what, sizeof what, fmt, args);
   va_end(args);
-  return f3r_error_set(L->err, F3R_ERR_SCENE, "%s:%d: %s: %s", L->path, node ? line_of(node) : 0,
-                       field, what);
+  where(L, node ? line_of(node) : 0, override_of(L, node), at, sizeof at);
+  return f3r_error_set(L->err, F3R_ERR_SCENE, "%s: %s: %s", at, field, what);
 }
 
 static void remember(loader* L, const char* field, const yaml_node_t* node) {
@@ -53,23 +76,24 @@ static void remember(loader* L, const char* field, const yaml_node_t* node) {
   field_location* f = &L->fields[L->n_fields++];
   snprintf(f->name, sizeof f->name, "%s", field);
   f->line = line_of(node);
+  f->override = override_of(L, node);
 }
 
-/* The line of `field`: its own, else that of the nearest enclosing field that was read
- * ("links[1]" for "links[1].modes" when the modes were left to their default); 0 if none. */
-static int line_of_field(const loader* L, const char* field) {
-  int line = 0;
+/* The location of `field`: its own, else that of the nearest enclosing field that was read
+ * ("links[1]" for "links[1].modes" when the modes were left to their default); NULL if none. */
+static const field_location* location_of_field(const loader* L, const char* field) {
+  const field_location* found = NULL;
   size_t best = 0;
   for (int k = L->n_fields - 1; k >= 0; --k) {
     const char* name = L->fields[k].name;
     const size_t n = strlen(name);
-    if (!strcmp(name, field)) return L->fields[k].line;
+    if (!strcmp(name, field)) return &L->fields[k];
     if (n > best && !strncmp(field, name, n) && (field[n] == '.' || field[n] == '[')) {
       best = n;
-      line = L->fields[k].line;
+      found = &L->fields[k];
     }
   }
-  return line;
+  return found;
 }
 
 static const char* scalar(const yaml_node_t* n) {
@@ -90,7 +114,7 @@ static f3r_status read_number(loader* L, const yaml_node_t* n, const char* field
 }
 
 static f3r_status read_int(loader* L, const yaml_node_t* n, const char* field, int* out) {
-  double v;
+  double v = 0.0;
   f3r_status st = read_number(L, n, field, &v);
   if (st != F3R_OK) return st;
   if (v != floor(v) || fabs(v) > 1e6) return fail(L, n, field, "%g is not a whole number", v);
@@ -500,13 +524,222 @@ static f3r_status read_root(loader* L, const yaml_node_t* root) {
   return F3R_OK;
 }
 
+/* --- overrides: "--set links[0].modes=4" edits the document before it is read ------------------ */
+
+/* Copies node `id` of `from`, with everything under it, into `to` (which may be `from`), keeping
+ * the marks so that a copied field still points at its line; the new id, 0 when out of memory. */
+static int copy_node(yaml_document_t* to, yaml_document_t* from, int id) {
+  const yaml_node_t* n = yaml_document_get_node(from, id);
+  int copy = 0;
+  if (n->type == YAML_SCALAR_NODE) {
+    copy = yaml_document_add_scalar(to, NULL, n->data.scalar.value, (int)n->data.scalar.length,
+                                    n->data.scalar.style);
+  } else if (n->type == YAML_SEQUENCE_NODE) {
+    const int len = (int)(n->data.sequence.items.top - n->data.sequence.items.start);
+    copy = yaml_document_add_sequence(to, NULL, n->data.sequence.style);
+    for (int k = 0; copy && k < len; ++k) { /* adding nodes may move them: look `n` up again */
+      const int item = copy_node(to, from, yaml_document_get_node(from, id)->data.sequence.items.start[k]);
+      if (!item || !yaml_document_append_sequence_item(to, copy, item)) copy = 0;
+    }
+  } else if (n->type == YAML_MAPPING_NODE) {
+    const int len = (int)(n->data.mapping.pairs.top - n->data.mapping.pairs.start);
+    copy = yaml_document_add_mapping(to, NULL, n->data.mapping.style);
+    for (int k = 0; copy && k < len; ++k) {
+      const int key = copy_node(to, from, yaml_document_get_node(from, id)->data.mapping.pairs.start[k].key);
+      const int value = key ? copy_node(to, from, yaml_document_get_node(from, id)->data.mapping.pairs.start[k].value) : 0;
+      if (!value || !yaml_document_append_mapping_pair(to, copy, key, value)) copy = 0;
+    }
+  }
+  if (copy) {
+    yaml_node_t* c = yaml_document_get_node(to, copy);
+    const yaml_node_t* source = yaml_document_get_node(from, id);
+    c->start_mark = source->start_mark;
+    c->end_mark = source->end_mark;
+  }
+  return copy;
+}
+
+typedef struct {
+  char key[64];
+  int index; /* -1: none */
+} path_step;
+
+/* "links[0].modes" into {links, 0}, {modes, -1}; the number of steps, 0 if malformed. */
+static int parse_path(const char* path, size_t length, path_step* steps, int capacity) {
+  int n = 0;
+  size_t i = 0;
+  while (i < length) {
+    if (n == capacity) return 0;
+    path_step* st = &steps[n++];
+    size_t k = 0;
+    while (i < length && path[i] != '.' && path[i] != '[') {
+      const char c = path[i++];
+      if (!(c == '_' || (c >= 'a' && c <= 'z') || (c >= 'A' && c <= 'Z') || (c >= '0' && c <= '9')) ||
+          k + 1 >= sizeof st->key)
+        return 0;
+      st->key[k++] = c;
+    }
+    st->key[k] = '\0';
+    st->index = -1;
+    if (k == 0) return 0;
+    if (i < length && path[i] == '[') {
+      char* end = NULL;
+      const long index = strtol(path + i + 1, &end, 10);
+      if (end == path + i + 1 || *end != ']' || index < 0 || index > 1000000) return 0;
+      st->index = (int)index;
+      i = (size_t)(end - path) + 1;
+    }
+    if (i < length) {
+      if (path[i] != '.') return 0;
+      if (++i == length) return 0;
+    }
+  }
+  return n;
+}
+
+static int node_count(const yaml_document_t* doc) { return (int)(doc->nodes.top - doc->nodes.start); }
+
+/* From here on, what the document gains is the override's: its value and any field it adds (a
+ * link list made before from the file's shared mapping keeps pointing at the file). */
+static void override_nodes_begin(loader* L) {
+  if (!L->first_node[L->applying]) L->first_node[L->applying] = node_count(&L->doc) + 1;
+}
+
+static int copy_value(loader* L, yaml_document_t* from, int value) {
+  override_nodes_begin(L);
+  return copy_node(&L->doc, from, value);
+}
+
+static int pair_count(const yaml_node_t* map) {
+  return (int)(map->data.mapping.pairs.top - map->data.mapping.pairs.start);
+}
+
+/* Sets the field `steps` names under mapping `node` (a sequence of mappings: each of them) to a
+ * copy of `value` of `from`; missing mappings on the way are made. `field` grows with the path for
+ * messages. */
+static f3r_status set_field(loader* L, int node, const path_step* steps, int count, yaml_document_t* from,
+                            int value, char* field, size_t field_size, const char* text) {
+  const yaml_node_t* n = yaml_document_get_node(&L->doc, node);
+  if (n->type == YAML_SEQUENCE_NODE) { /* "links.modes": every link */
+    const int len = (int)(n->data.sequence.items.top - n->data.sequence.items.start);
+    const size_t mark = strlen(field);
+    for (int k = 0; k < len; ++k) {
+      snprintf(field + mark, field_size - mark, "[%d]", k);
+      const int item = yaml_document_get_node(&L->doc, node)->data.sequence.items.start[k];
+      const f3r_status st = set_field(L, item, steps, count, from, value, field, field_size, text);
+      if (st != F3R_OK) return st;
+    }
+    field[mark] = '\0';
+    return F3R_OK;
+  }
+  if (n->type != YAML_MAPPING_NODE)
+    return f3r_error_set(L->err, F3R_ERR_SCENE, "--set %s: %s is not a mapping in %s", text,
+                         field[0] ? field : "the scene", L->path);
+  const path_step* step = &steps[0];
+  const size_t mark = strlen(field);
+  snprintf(field + mark, field_size - mark, "%s%s", field[0] ? "." : "", step->key);
+  int found = -1;
+  for (int k = 0; k < pair_count(n) && found < 0; ++k) {
+    const char* key = scalar(yaml_document_get_node(&L->doc, n->data.mapping.pairs.start[k].key));
+    if (key && !strcmp(key, step->key)) found = k;
+  }
+  const int last = count == 1;
+  if (found < 0) { /* a field the file leaves to its default */
+    if (step->index >= 0)
+      return f3r_error_set(L->err, F3R_ERR_SCENE, "--set %s: %s is not in %s, so [%d] has nothing to index",
+                           text, field, L->path, step->index);
+    override_nodes_begin(L);
+    const int key = yaml_document_add_scalar(&L->doc, NULL, (yaml_char_t*)step->key, -1, YAML_PLAIN_SCALAR_STYLE);
+    const int child = !key ? 0 : last ? copy_value(L, from, value)
+                                      : yaml_document_add_mapping(&L->doc, NULL, YAML_BLOCK_MAPPING_STYLE);
+    if (!child || !yaml_document_append_mapping_pair(&L->doc, node, key, child))
+      return f3r_error_set(L->err, F3R_ERR_MEMORY, "--set %s: out of memory", text);
+    if (!last) return set_field(L, child, steps + 1, count - 1, from, value, field, field_size, text);
+    return F3R_OK;
+  }
+  int child = n->data.mapping.pairs.start[found].value;
+  if (step->index >= 0) {
+    const yaml_node_t* c = yaml_document_get_node(&L->doc, child);
+    if (c->type == YAML_MAPPING_NODE && !strcmp(step->key, "links") && mark == 0) {
+      /* one mapping for all three links: three copies, of which one is set */
+      const int list = yaml_document_add_sequence(&L->doc, NULL, YAML_BLOCK_SEQUENCE_STYLE);
+      for (int k = 0; list && k < 3; ++k) {
+        const int copy = copy_node(&L->doc, &L->doc, child);
+        if (!copy || !yaml_document_append_sequence_item(&L->doc, list, copy))
+          return f3r_error_set(L->err, F3R_ERR_MEMORY, "--set %s: out of memory", text);
+      }
+      if (!list) return f3r_error_set(L->err, F3R_ERR_MEMORY, "--set %s: out of memory", text);
+      yaml_document_get_node(&L->doc, node)->data.mapping.pairs.start[found].value = list;
+      child = list;
+      c = yaml_document_get_node(&L->doc, child);
+    }
+    if (c->type != YAML_SEQUENCE_NODE)
+      return f3r_error_set(L->err, F3R_ERR_SCENE, "--set %s: %s in %s is not a list", text, field, L->path);
+    const int len = (int)(c->data.sequence.items.top - c->data.sequence.items.start);
+    if (step->index >= len)
+      return f3r_error_set(L->err, F3R_ERR_SCENE, "--set %s: %s has %d entries in %s (index 0..%d)", text,
+                           field, len, L->path, len - 1);
+    snprintf(field + strlen(field), field_size - strlen(field), "[%d]", step->index);
+    if (last) {
+      const int copy = copy_value(L, from, value);
+      if (!copy) return f3r_error_set(L->err, F3R_ERR_MEMORY, "--set %s: out of memory", text);
+      yaml_document_get_node(&L->doc, child)->data.sequence.items.start[step->index] = copy;
+      return F3R_OK;
+    }
+    child = c->data.sequence.items.start[step->index];
+  } else if (last) {
+    const int copy = copy_value(L, from, value);
+    if (!copy) return f3r_error_set(L->err, F3R_ERR_MEMORY, "--set %s: out of memory", text);
+    yaml_document_get_node(&L->doc, node)->data.mapping.pairs.start[found].value = copy;
+    return F3R_OK;
+  }
+  return set_field(L, child, steps + 1, count - 1, from, value, field, field_size, text);
+}
+
+/* Applies override k, "FIELD=VALUE" (VALUE is YAML: a number, a word, a [flow, list]). */
+static f3r_status apply_override(loader* L, int root, int k) {
+  const char* text = L->overrides[k];
+  const char* eq = strchr(text, '=');
+  path_step steps[16];
+  const int count = eq ? parse_path(text, (size_t)(eq - text), steps, 16) : 0;
+  if (!count)
+    return f3r_error_set(L->err, F3R_ERR_SCENE,
+                         "--set %s: expected FIELD=VALUE with FIELD like links[0].modes or effects.payload.mass",
+                         text);
+  if (!eq[1]) return f3r_error_set(L->err, F3R_ERR_SCENE, "--set %s: no value after '='", text);
+  yaml_parser_t parser;
+  yaml_document_t value;
+  yaml_parser_initialize(&parser);
+  yaml_parser_set_input_string(&parser, (const unsigned char*)(eq + 1), strlen(eq + 1));
+  if (!yaml_parser_load(&parser, &value)) {
+    const f3r_status st = f3r_error_set(L->err, F3R_ERR_SCENE, "--set %s: the value is not YAML: %s", text,
+                                        parser.problem ? parser.problem : "?");
+    yaml_parser_delete(&parser);
+    return st;
+  }
+  f3r_status st = F3R_OK;
+  if (!yaml_document_get_root_node(&value)) {
+    st = f3r_error_set(L->err, F3R_ERR_SCENE, "--set %s: no value after '='", text);
+  } else {
+    char field[256] = "";
+    L->applying = k;
+    L->first_node[k] = 0;
+    st = set_field(L, root, steps, count, &value, 1, field, sizeof field, text);
+    L->last_node[k] = L->first_node[k] ? node_count(&L->doc) : -1;
+  }
+  yaml_document_delete(&value);
+  yaml_parser_delete(&parser);
+  return st;
+}
+
 /* Prefixes a validation message with the file and the line of the field it names. A field the
  * file does not hold (a default that another value puts out of range) gets the line of its
  * section, or 0 when the file has no part of it. */
 static f3r_status locate_validation_error(loader* L, f3r_error* err) {
-  const int line = line_of_field(L, err->field);
-  char message[sizeof err->message], field[sizeof err->field];
-  snprintf(message, sizeof message, "%s:%d: %s", L->path, line, err->message);
+  const field_location* at = location_of_field(L, err->field);
+  char message[sizeof err->message], field[sizeof err->field], place[320];
+  where(L, at ? at->line : 0, at ? at->override : 0, place, sizeof place);
+  snprintf(message, sizeof message, "%s: %s", place, err->message);
   snprintf(field, sizeof field, "%s", err->field);
   f3r_error_set(err, err->code, "%s", message);
   snprintf(err->field, sizeof err->field, "%s", field);
@@ -518,7 +751,15 @@ f3r_status f3r_scene_load(const char* path, f3r_scene* scene, f3r_error* err) {
 }
 
 f3r_status f3r_scene_load_accuracy(const char* path, double accuracy, f3r_scene* scene, f3r_error* err) {
-  if (!path || !scene) return f3r_error_set(err, F3R_ERR_ARGUMENT, "f3r_scene_load: NULL argument");
+  const f3r_scene_options options = {.accuracy = accuracy};
+  return f3r_scene_load_with(path, &options, scene, err);
+}
+
+f3r_status f3r_scene_load_with(const char* path, const f3r_scene_options* options, f3r_scene* scene,
+                               f3r_error* err) {
+  if (!path || !scene || !options || (options->override_count > 0 && !options->overrides))
+    return f3r_error_set(err, F3R_ERR_ARGUMENT, "f3r_scene_load: NULL argument");
+  const double accuracy = options->accuracy;
   FILE* file = fopen(path, "rb");
   if (!file) return f3r_error_set(err, F3R_ERR_SCENE, "%s: cannot open: %s", path, strerror(errno));
   loader* L = calloc(1, sizeof *L);
@@ -528,6 +769,17 @@ f3r_status f3r_scene_load_accuracy(const char* path, double accuracy, f3r_scene*
   }
   L->path = path;
   L->err = err;
+  L->overrides = options->overrides;
+  L->override_count = options->override_count > 0 ? options->override_count : 0;
+  if (L->override_count) {
+    L->first_node = calloc((size_t)L->override_count, sizeof *L->first_node);
+    L->last_node = calloc((size_t)L->override_count, sizeof *L->last_node);
+    if (!L->first_node || !L->last_node) {
+      free(L->first_node), free(L->last_node), free(L);
+      fclose(file);
+      return f3r_error_set(err, F3R_ERR_MEMORY, "%s: out of memory", path);
+    }
+  }
   f3r_scene parsed = f3r_default_scene();
   L->scene = &parsed;
   yaml_parser_t parser;
@@ -539,12 +791,13 @@ f3r_status f3r_scene_load_accuracy(const char* path, double accuracy, f3r_scene*
                        (int)parser.problem_mark.line + 1, parser.problem ? parser.problem : "?");
     yaml_parser_delete(&parser);
     fclose(file);
-    free(L);
+    free(L->first_node), free(L->last_node), free(L);
     return st;
   }
-  const yaml_node_t* root = yaml_document_get_root_node(&L->doc);
-  if (!root) st = f3r_error_set(err, F3R_ERR_SCENE, "%s:1: the file holds no scene", path);
-  else st = read_root(L, root);
+  st = yaml_document_get_root_node(&L->doc) ? F3R_OK
+                                            : f3r_error_set(err, F3R_ERR_SCENE, "%s:1: the file holds no scene", path);
+  for (int k = 0; st == F3R_OK && k < L->override_count; ++k) st = apply_override(L, 1, k);
+  if (st == F3R_OK) st = read_root(L, yaml_document_get_root_node(&L->doc));
   if (st == F3R_OK && L->out_of_memory)
     st = f3r_error_set(err, F3R_ERR_MEMORY, "%s: out of memory", path);
   if (st == F3R_OK && accuracy > 0.0) parsed.accuracy = accuracy;
@@ -557,6 +810,6 @@ f3r_status f3r_scene_load_accuracy(const char* path, double accuracy, f3r_scene*
   yaml_parser_delete(&parser);
   fclose(file);
   free(L->fields);
-  free(L);
+  free(L->first_node), free(L->last_node), free(L);
   return st;
 }
