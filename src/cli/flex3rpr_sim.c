@@ -4,7 +4,8 @@
  *                [--exact-kinematics] [--ida | --erk | --dirk] [--table NAME]
  *                [--accuracy METRES] [--linear-path FILE.csv] [--set FIELD=VALUE ...] ...
  *   flex3rpr_sim --modal SCENE.yaml
- *   flex3rpr_sim --geometry SCENE.yaml   (JSON for scripts/make_urdf.py) */
+ *   flex3rpr_sim --geometry SCENE.yaml   (JSON for scripts/make_urdf.py)
+ *   flex3rpr_sim --check SCENE.yaml [--set ...]   (loads and builds the model only) */
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -33,6 +34,7 @@ typedef struct {
   const char* out_path;
   int modal;
   int geometry;
+  int check;
   int fd_jacobian;
   int dense_linear_solver;
   int exact_kinematics;
@@ -58,7 +60,8 @@ static void usage(FILE* to) {
           "                    [--accuracy METRES] [--linear-path FILE.csv]\n"
           "                    [--set FIELD=VALUE ...]   (any scene field: --set links[0].modes=4)\n"
           "       flex3rpr_sim --modal SCENE.yaml\n"
-          "       flex3rpr_sim --geometry SCENE.yaml\n");
+          "       flex3rpr_sim --geometry SCENE.yaml\n"
+          "       flex3rpr_sim --check SCENE.yaml [--set FIELD=VALUE ...]   (load and build only)\n");
 }
 
 static int parse_number(const char* flag, const char* text, double* out) {
@@ -80,6 +83,7 @@ static int parse_args(int argc, char** argv, cli_options* o) {
     const char* next = k + 1 < argc ? argv[k + 1] : NULL;
     if (!strcmp(a, "--modal")) o->modal = 1;
     else if (!strcmp(a, "--geometry")) o->geometry = 1;
+    else if (!strcmp(a, "--check")) o->check = 1;
     else if (!strcmp(a, "--fd-jacobian")) o->fd_jacobian = 1;
     else if (!strcmp(a, "--dense-linear-solver")) o->dense_linear_solver = 1;
     else if (!strcmp(a, "--exact-kinematics")) o->exact_kinematics = 1;
@@ -293,6 +297,11 @@ int main(int argc, char** argv) {
     fprintf(stderr, "flex3rpr_sim: %s: %s\n", o.scene_path, err.message);
     return 1;
   }
+  if (o.check) { /* the scene, its overrides and the model are valid: what a sweep checks first */
+    printf("ok: %s, nq %d\n", o.scene_path, model->nq);
+    f3r_model_destroy(model);
+    return 0;
+  }
   if (o.geometry) {
     print_geometry(model);
     f3r_model_destroy(model);
@@ -345,6 +354,15 @@ int main(int argc, char** argv) {
   }
   const long steps = (long)llround(scene.duration / scene.output_step);
   double max_constraint = 0.0, max_energy_error = 0.0, max_energy = 0.0;
+  double max_deflection = 0.0, max_tip = 0.0; /* |w| over the beam stations, and at the tips */
+  static double shapes[3][101][F3R_MAX_MODES]; /* mode shapes at the stations (beam_points <= 101) */
+  for (int i = 0; i < 3; ++i)
+    for (int k = 0; k < scene.beam_points; ++k)
+      for (int j = 0; j < model->link[i].modes; ++j) {
+        double dpsi;
+        f3r_beam_mode_eval((f3r_beam_end)model->link[i].model, model->link[i].alpha[j],
+                           (double)k / (scene.beam_points - 1), &shapes[i][k][j], &dpsi, NULL);
+      }
   int rc = 0;
   const double start = cpu_seconds();
   double cpu_integrating = 0.0, cpu_outputs = 0.0;
@@ -379,6 +397,16 @@ int main(int argc, char** argv) {
     max_constraint = fmax(max_constraint, out->constraint_residual);
     max_energy_error = fmax(max_energy_error, out->energy_balance_error);
     max_energy = fmax(max_energy, out->kinetic_energy + out->potential_energy);
+    for (int i = 0; i < 3; ++i) {
+      const f3r_link_params* lp = &model->link[i];
+      if (!lp->modes) continue;
+      max_tip = fmax(max_tip, fabs(out->tip_deflection[i]));
+      for (int k = 0; k < scene.beam_points; ++k) {
+        double w = 0.0;
+        for (int j = 0; j < lp->modes; ++j) w += shapes[i][k][j] * out->q[lp->eta_index + j];
+        max_deflection = fmax(max_deflection, fabs(w));
+      }
+    }
   }
   const double cpu_total = cpu_seconds() - start;
   const f3r_outputs* out = f3r_sim_outputs(sim);
@@ -407,6 +435,8 @@ int main(int argc, char** argv) {
   printf("max constraint res  %.3e m\n", max_constraint);
   printf("energy balance err  %.3e J (%.3e of max T+V)\n", max_energy_error,
          max_energy > 0 ? max_energy_error / max_energy : 0.0);
+  printf("max deflection      %.6e m (largest |w| at %d stations a link; at the tips %.6e m)\n",
+         max_deflection, scene.beam_points, max_tip);
   printf("final pose          x_p %.9f y_p %.9f phi_p %.9f\n", out->q[F3R_Q_X], out->q[F3R_Q_Y], out->q[F3R_Q_PHI]);
   if (o.out_path) printf("csv                 %s\n", o.out_path);
   f3r_sim_destroy(sim);

@@ -1,0 +1,89 @@
+"""What the sweep tests share: the 24-run spec, running scripts/sweep, reading results, JUnit."""
+import csv
+import os
+import subprocess
+import sys
+import time
+import unittest
+import xml.etree.ElementTree as ET
+
+ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
+SWEEP = os.path.join(ROOT, "scripts", "sweep")
+TIMING_COLUMNS = {"cpu_time_s", "wall_time_s", "host"}
+
+# 4 diameters x 2 boundary models x 3 random platform masses, 0.02 s of paper simulation 3 each
+SPEC24 = """\
+base: {root}/config/scenes/paper_sim3_fixed_free.yaml
+args: [--rtol, 1.0e-6, --duration, {duration}, --output-step, 1.0e-3]
+parameters:
+  link.diameter: {{range: [0.008, 0.012, 4]}}
+  links.model: [fixed_free, fixed_pinned]
+  platform.mass: {{random: normal, mean: 0.2, sd: 0.01, count: 3}}
+seed: 7
+reference: {{links.modes: 6}}
+timeout: 3600
+keep_runs: true
+slurm: {{array_size: 6, time: "00:30:00", mem: 500M}}
+"""
+
+
+def write_spec(directory, name, text):
+    os.makedirs(directory, exist_ok=True)
+    path = os.path.join(directory, name)
+    with open(path, "w") as f:
+        f.write(text)
+    return path
+
+
+def sweep(*args, sim, timeout=3600, **kwargs):
+    """Runs scripts/sweep to its end: (exit code, stderr)."""
+    env = dict(os.environ, F3R_SIM=sim)
+    p = subprocess.run(["/usr/bin/python3", SWEEP, *args], capture_output=True, text=True, env=env,
+                       timeout=timeout, **kwargs)
+    return p.returncode, p.stderr
+
+
+def read_results(out_dir):
+    with open(os.path.join(out_dir, "results.csv")) as f:
+        return list(csv.DictReader(f))
+
+
+def without_timing(rows):
+    return [{k: v for k, v in r.items() if k not in TIMING_COLUMNS} for r in rows]
+
+
+def wait_for(predicate, timeout=1800, step=0.05):
+    end = time.monotonic() + timeout
+    while time.monotonic() < end:
+        if predicate():
+            return True
+        time.sleep(step)
+    return predicate()
+
+
+def run_junit(test_case_classes, junit_path, suite_name):
+    """Runs the cases, prints unittest's report, writes JUnit XML; exit code 0 when all pass."""
+    loader = unittest.TestLoader()
+    suite = unittest.TestSuite(loader.loadTestsFromTestCase(c) for c in test_case_classes)
+    ids = [t.id() for t in suite_tests(suite)]  # the suite lets go of its tests as they run
+    result = unittest.TextTestRunner(verbosity=2, stream=sys.stdout).run(suite)
+    if junit_path:
+        root = ET.Element("testsuite", name=suite_name, tests=str(result.testsRun),
+                          failures=str(len(result.failures)), errors=str(len(result.errors)))
+        bad = {t.id(): text for t, text in result.failures + result.errors}
+        for test_id in ids:
+            parts = test_id.split(".")
+            case = ET.SubElement(root, "testcase", classname=f"{suite_name}.{parts[-2]}", name=parts[-1])
+            if test_id in bad:
+                ET.SubElement(case, "failure", message=bad[test_id][-2000:])
+        os.makedirs(os.path.dirname(junit_path), exist_ok=True)
+        ET.ElementTree(root).write(junit_path)
+    return 0 if result.wasSuccessful() else 1
+
+
+def suite_tests(suite):
+    for t in suite:
+        if isinstance(t, unittest.TestSuite):
+            yield from suite_tests(t)
+        else:
+            yield t
