@@ -59,7 +59,7 @@ class LocalAndSsh(unittest.TestCase):
         diameters = sorted({float(r["link.diameter"]) for r in rows})
         self.assertEqual(len(diameters), 4)
         for got, want in zip(diameters, [0.008, 0.008 + 0.004 / 3, 0.008 + 0.008 / 3, 0.012]):
-            self.assertAlmostEqual(got, want, delta=1e-15)
+            self.assertAlmostEqual(got, want, delta=1e-14)
         self.assertEqual({r["links.model"] for r in rows}, {"fixed_free", "fixed_pinned"})
         masses = {r["platform.mass"] for r in rows}
         self.assertEqual(len(masses), 3, "three draws, each combined with every other value")
