@@ -76,6 +76,10 @@ def run_junit(test_case_classes, junit_path, suite_name):
             case = ET.SubElement(root, "testcase", classname=f"{suite_name}.{parts[-2]}", name=parts[-1])
             if test_id in bad:
                 ET.SubElement(case, "failure", message=bad[test_id][-2000:])
+        for test_id, text in bad.items():  # a failed setUpClass or tearDownClass belongs to no test
+            if test_id not in ids:
+                case = ET.SubElement(root, "testcase", classname=suite_name, name=test_id.split(" ")[0])
+                ET.SubElement(case, "failure", message=text[-2000:])
         os.makedirs(os.path.dirname(junit_path), exist_ok=True)
         ET.ElementTree(root).write(junit_path)
     return 0 if result.wasSuccessful() else 1
