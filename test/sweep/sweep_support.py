@@ -1,8 +1,10 @@
 """What the sweep tests share: the 24-run spec, running scripts/sweep, reading results, JUnit."""
+import argparse
 import csv
 import os
 import subprocess
 import sys
+import tempfile
 import time
 import unittest
 import xml.etree.ElementTree as ET
@@ -91,3 +93,14 @@ def suite_tests(suite):
             yield from suite_tests(t)
         else:
             yield t
+
+
+def parse_args(prefix):
+    """The sweep tests' command line: --sim FLEX3RPR_SIM [--junit FILE] [--work DIR]."""
+    ap = argparse.ArgumentParser()
+    ap.add_argument("--sim", required=True)
+    ap.add_argument("--junit")
+    ap.add_argument("--work")
+    args = ap.parse_args()
+    args.work = os.path.abspath(args.work or tempfile.mkdtemp(prefix=prefix))
+    return args

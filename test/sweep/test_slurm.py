@@ -13,13 +13,11 @@ in one directory (root only: the daemons run as root). Then:
 - running the same sweep again submits nothing.
 The cluster is stopped at the end, whatever happened.
 """
-import argparse
 import os
 import re
 import shutil
 import subprocess
 import sys
-import tempfile
 import unittest
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
@@ -126,14 +124,7 @@ class SlurmEngine(unittest.TestCase):
 
 def main():
     global ARGS
-    ap = argparse.ArgumentParser()
-    ap.add_argument("--sim", required=True)
-    ap.add_argument("--junit")
-    ap.add_argument("--work")
-    ARGS = ap.parse_args()
-    if not ARGS.work:
-        ARGS.work = tempfile.mkdtemp(prefix="f3r_slurm_test_")
-    ARGS.work = os.path.abspath(ARGS.work)
+    ARGS = S.parse_args("f3r_slurm_test_")
     return S.run_junit([SlurmEngine], ARGS.junit, "sweep_slurm")
 
 

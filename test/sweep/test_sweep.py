@@ -12,7 +12,6 @@ usage: test_sweep.py --sim FLEX3RPR_SIM [--junit FILE] [--work DIR]
 - an interrupted sweep, resumed, runs only the points it had not finished;
 - a bad spec stops before any run, naming the file and the field.
 """
-import argparse
 import json
 import math
 import os
@@ -21,7 +20,6 @@ import shutil
 import signal
 import subprocess
 import sys
-import tempfile
 import unittest
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
@@ -207,13 +205,7 @@ timeout: 20
 
 def main():
     global ARGS
-    ap = argparse.ArgumentParser()
-    ap.add_argument("--sim", required=True)
-    ap.add_argument("--junit")
-    ap.add_argument("--work")
-    ARGS = ap.parse_args()
-    if not ARGS.work:
-        ARGS.work = tempfile.mkdtemp(prefix="f3r_sweep_test_")
+    ARGS = S.parse_args("f3r_sweep_test_")
     return S.run_junit([LocalAndSsh, Faults], ARGS.junit, "sweep")
 
 
