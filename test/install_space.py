@@ -8,8 +8,10 @@
                        duration and exits cleanly
   catkin_build         the same from `catkin build` with an install space in a fresh workspace
                        (catkin_tools; skipped with --no-catkin-build)
-  catkin_lint          `catkin_lint --strict` finds nothing
+  catkin_lint          `catkin_lint --strict` on the source tree finds nothing, and the scripts it
+                       is told to ignore as uninstalled are exactly the checkout's own tools
   roslaunch_check      roslaunch-check on every launch file: each package it uses is a dependency
+  launch_clock         every launch file sets /use_sim_time true by default
   rosdep_keys          each package.xml dependency is a ROS package or a known rosdep key whose
                        Debian package is installed
 
@@ -64,6 +66,14 @@ def check_install(prefix):
         ("rosmsg show flex3rpr/SimStatus", "outside_stroke"),
         ("rosrun flex3rpr flex3rpr_sim --geometry $(rospack find flex3rpr)/config/scenes/rest.yaml", "stroke_max"),
         ("rosrun flex3rpr make_urdf.py --beam-points 4 --prefix r1", "r1/leg_3_beam_3"),
+        # the bag, sweep and Slurm tools, with their package files found in share/flex3rpr
+        ("rosrun flex3rpr render_bag --help | tr -d '\\n '", f"{share}/config/flex3rpr.rviz"),
+        ("rosrun flex3rpr plot_bag --help", "usage"),
+        ("rosrun flex3rpr sweep --help", "Slurm"),
+        ("rosrun flex3rpr plot_sweep --help", "usage"),
+        ("rosrun flex3rpr slurm_cluster status /tmp/f3r_no_such_cluster || true", "no such directory"),
+        ("ls $(rospack find flex3rpr)/config/flex3rpr.rviz $(rospack find flex3rpr)/launch/paper_sim1.launch",
+         "paper_sim1.launch"),
     ]
     for command, expect in checks:
         rc, out = clean_shell(setup, command, 300)
@@ -112,11 +122,26 @@ def case_catkin_build():
         shutil.rmtree(ws, ignore_errors=True)
 
 
-def case_catkin_lint(workspace):
-    p = subprocess.run(["catkin_lint", "--strict", os.path.join(workspace, "src", "flex3rpr")],
-                       capture_output=True, text=True, timeout=600)
-    if p.returncode != 0:
+# scripts/ that work on the source tree and its build/ folder and so are not installed; the
+# pragma in CMakeLists.txt silences catkin_lint on exactly these.
+CHECKOUT_TOOLS = {"install_deps", "build", "build_sundials", "count_results.py", "fuzz", "demo", "bench",
+                  "bench_accuracy", "solver_table.py", "scene_table.py", "paper_timings", "node_speed",
+                  "compare_cores"}
+
+
+def case_catkin_lint():
+    """catkin_lint --strict on the source tree itself (the workspace's package is a folder of
+    links, which catkin_lint does not walk into), and the only uninstalled executables it
+    ignores are the checkout's own tools."""
+    p = subprocess.run(["catkin_lint", "--strict", ROOT], capture_output=True, text=True, timeout=600)
+    if p.returncode != 0 or "found 0 problems" not in p.stdout + p.stderr:
         return "catkin_lint --strict:\n" + p.stdout + p.stderr
+    p = subprocess.run(["catkin_lint", "--strict", "--show-ignored", ROOT], capture_output=True, text=True,
+                       timeout=600)
+    ignored = set(re.findall(r"file 'scripts/([^']+)' is executable but not installed", p.stdout + p.stderr))
+    if ignored != CHECKOUT_TOOLS:
+        return (f"uninstalled executables: {sorted(ignored - CHECKOUT_TOOLS)} are not checkout tools (install "
+                f"them), {sorted(CHECKOUT_TOOLS - ignored)} are no longer uninstalled executables (update the list)")
     return ""
 
 
@@ -146,6 +171,22 @@ def case_rosdep_keys():
     return ""
 
 
+def case_launch_clock():
+    """Every launch file runs on simulated time by default: /use_sim_time is true in the
+    parameters roslaunch would set (--dump-params, no master needed)."""
+    import glob
+    import yaml
+    for path in sorted(glob.glob(os.path.join(ROOT, "launch", "*.launch"))):
+        p = subprocess.run(["roslaunch", "--dump-params", path, "bag:=/tmp/none.bag"], capture_output=True,
+                           text=True, timeout=600)
+        params = yaml.safe_load(p.stdout) if p.returncode == 0 else None
+        if not isinstance(params, dict) or params.get("/use_sim_time") is not True:
+            return (f"{os.path.basename(path)}: /use_sim_time is "
+                    f"{params.get('/use_sim_time') if isinstance(params, dict) else '?'} by default, not true\n"
+                    + p.stdout[-2000:] + p.stderr[-2000:])
+    return ""
+
+
 def case_roslaunch_check():
     """Every launch file's packages are dependencies in package.xml (rviz with rviz:=true)."""
     import glob
@@ -163,8 +204,9 @@ def main():
     a.add_argument("--workspace", required=True)
     a.add_argument("--no-catkin-build", action="store_true")
     args = a.parse_args()
-    cases = [("catkin_lint", lambda: case_catkin_lint(args.workspace)),
+    cases = [("catkin_lint", case_catkin_lint),
              ("roslaunch_check", case_roslaunch_check),
+             ("launch_clock", case_launch_clock),
              ("rosdep_keys", case_rosdep_keys),
              ("catkin_make_install", lambda: case_catkin_make_install(args.workspace))]
     if not args.no_catkin_build:

@@ -74,6 +74,19 @@ bool Positive(const char* name, T value, std::string* error) {
   return false;
 }
 
+// A tf2 frame id (or, with prefix, a tf_prefix, whose slashes are trimmed): tf2 rejects ids
+// that start with '/', and a space or a control character would only fail later, in a lookup.
+bool FrameName(const char* name, const std::string& value, std::string* error, bool prefix = false) {
+  std::string why;
+  if (value.empty() && !prefix) why = "must not be empty";
+  else if (!prefix && value[0] == '/') why = "must not start with '/' (tf2 frame ids are relative)";
+  for (unsigned char c : value)
+    if (c <= ' ' || c == 0x7f) why = "must not contain spaces or control characters";
+  if (why.empty()) return true;
+  *error = "parameter ~" + std::string(name) + ": '" + value + "' " + why;
+  return false;
+}
+
 bool NonNegative(const char* name, double value, std::string* error) {
   if (value >= 0 && std::isfinite(value)) return true;
   std::ostringstream os;
@@ -136,6 +149,14 @@ bool LoadParams(const ros::NodeHandle& pnh, NodeParams* p, std::string* error) {
     return false;
   if (p->end_stops) p->scene.end_stops = 1;  // the scene's stroke becomes hard
   if (f3r_scene_validate(&p->scene, &err) != F3R_OK) {
+    // name the parameter that set the field, where one did
+    const std::string field = err.field;
+    for (const char* name : {"rtol", "atol", "table"}) {
+      if (field == std::string("solver.") + name && pnh.hasParam(name)) {
+        *error = std::string("parameter ~") + name + ": " + err.message;
+        return false;
+      }
+    }
     *error = std::string("parameters override the scene badly: ") + err.message;
     return false;
   }
@@ -188,16 +209,23 @@ bool LoadParams(const ros::NodeHandle& pnh, NodeParams* p, std::string* error) {
     *error = "parameter ~beam_points: " + std::to_string(p->beam_points) + " is out of range 2..101";
     return false;
   }
-  if (p->world_frame.empty() || p->base_frame.empty()) {
-    *error = "parameter ~world_frame and ~base_frame must not be empty";
+  if (!FrameName("tf_prefix", p->tf_prefix, error, true) || !FrameName("world_frame", p->world_frame, error) ||
+      !FrameName("base_frame", p->base_frame, error))
     return false;
-  }
   p->tf_prefix = NormalisePrefix(p->tf_prefix);
   p->frames = MakeFrameNames(p->tf_prefix, p->world_frame, p->base_frame, p->beam_points);
   // One clock: stamps follow /use_sim_time (simulated time, with /clock from this node, as
   // gazebo_ros does), unless ~stamps says otherwise.
   bool use_sim_time = false;
-  ros::param::get("/use_sim_time", use_sim_time);
+  if (ros::param::has("/use_sim_time")) {
+    XmlRpc::XmlRpcValue value;
+    ros::param::get("/use_sim_time", value);
+    if (value.getType() != XmlRpc::XmlRpcValue::TypeBoolean) {
+      *error = "parameter /use_sim_time: not a boolean";
+      return false;
+    }
+    use_sim_time = static_cast<bool>(value);
+  }
   std::string stamps;
   if (!Read(pnh, "stamps", std::string(use_sim_time ? "sim" : "wall"), &stamps, error) ||
       !Read(pnh, "publish_clock", use_sim_time, &p->publish_clock, error))

@@ -37,7 +37,11 @@ bool SimNode::Init() {
   }
   model_.reset(model);
   std::string urdf;
-  const bool described = nh_.getParam("robot_description", urdf);
+  const bool described = nh_.hasParam("robot_description");
+  if (described && !nh_.getParam("robot_description", urdf)) {
+    ROS_ERROR("flex3rpr_node: parameter robot_description: not a string (a URDF)");
+    return false;
+  }
   if (!described) {
     const std::string path = ros::package::getPath("flex3rpr") + "/urdf/flex3rpr.urdf";
     if (!ReadFile(path, &urdf)) {
@@ -116,6 +120,18 @@ static ros::WallDuration SpinFor(double seconds) {
   return ros::WallTime::now() - from;
 }
 
+// Publishes the state; a state whose time was published already (the last good state after an
+// integration error is often the last output) goes out without /tf, which would otherwise repeat
+// a stamp (TF_REPEATED_DATA).
+void SimNode::PublishAt(const f3r_outputs& out) {
+  if (out.t > last_published_t_) {
+    outputs_->Publish(out, info_);
+    last_published_t_ = out.t;
+  } else {
+    outputs_->PublishPaused(out, info_);
+  }
+}
+
 bool SimNode::Step(double period) {
   f3r_error err{};
   const double t = f3r_sim_time(sim_.get());
@@ -167,7 +183,7 @@ int SimNode::Run() {
   control_.paused = params_.start_paused;
   info_.paused = control_.paused;
   info_.requested_realtime_factor = params_.realtime_factor;
-  outputs_->Publish(*f3r_sim_outputs(sim_.get()), info_);
+  PublishAt(*f3r_sim_outputs(sim_.get()));
   if (control_.paused) ROS_INFO("flex3rpr_node: paused at the start (~paused); ~resume or ~step runs it");
   int exit_code = 0;
   while (ros::ok()) {
@@ -183,7 +199,8 @@ int SimNode::Run() {
       info_.last_error.clear();
       info_.outside_stroke = {};
       outputs_->RestartCount();
-      outputs_->Publish(*f3r_sim_outputs(sim_.get()), info_);
+      last_published_t_ = -1.0;  // time starts over
+      PublishAt(*f3r_sim_outputs(sim_.get()));
     }
     if (now - last_diagnostics >= kDiagnosticsSeconds) {
       info_.rejected_commands = inputs_->rejected();
@@ -210,7 +227,7 @@ int SimNode::Run() {
     if (!Step(period)) {  // the node outlives its physics: it pauses and keeps serving
       if (params_.duration > 0.0) {  // a scripted run (a recording) ends instead of waiting
         exit_code = 2;
-        outputs_->Publish(*f3r_sim_outputs(sim_.get()), info_);
+        PublishAt(*f3r_sim_outputs(sim_.get()));
         break;
       }
       control_.paused = true;
@@ -218,7 +235,7 @@ int SimNode::Run() {
       info_.paused = true;
       was_running = false;
       info_.rejected_commands = inputs_->rejected();
-      outputs_->Publish(*f3r_sim_outputs(sim_.get()), info_);
+      PublishAt(*f3r_sim_outputs(sim_.get()));
       continue;
     }
     const f3r_outputs& out = *f3r_sim_outputs(sim_.get());
@@ -229,7 +246,7 @@ int SimNode::Run() {
     ReportPace();
     CheckStroke(out);
     info_.rejected_commands = inputs_->rejected();
-    outputs_->Publish(out, info_);
+    PublishAt(out);
     if (grace_pending) {
       grace_pending = false;
       held += SpinFor(params_.subscriber_grace).toSec();

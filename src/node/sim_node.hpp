@@ -34,6 +34,7 @@ class SimNode {
   static constexpr double kDiagnosticsSeconds = 1.0;     // wall s between /diagnostics
 
   bool Step(double period);
+  void PublishAt(const f3r_outputs& out);
   // Into ~status and a throttled warning while the achieved factor is short of the request.
   void ReportPace();
   // rho_i outside the scene's stroke: into ~status, and a warning once per excursion.
@@ -51,6 +52,7 @@ class SimNode {
   std::unique_ptr<Pacer> pacer_;
   double phi_p_ = 0.0;
   long periods_ = 0;
+  double last_published_t_ = -1.0;  // simulated time of the last full Publish (with /tf)
 };
 
 }  // namespace flex3rpr

@@ -224,6 +224,9 @@ class NodeConventions(unittest.TestCase):
                      "the platform to move after: " + command)
         wait_for(lambda: math.hypot(self.rec.odom[-1].twist.twist.linear.x,
                                     self.rec.odom[-1].twist.twist.linear.y) < 1e-4, 600, "the platform to rest")
+        # the node is still alive and running: a status from later simulated time arrives
+        rested = self.rec.latest_status().sim_time
+        wait_for(lambda: self.rec.latest_status().sim_time > rested, 600, "a ~status after the examples")
         status = self.rec.latest_status()
         self.assertEqual(status.last_error, "")
         self.assertFalse(status.paused)

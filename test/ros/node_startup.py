@@ -14,6 +14,14 @@ import rostest
 PKG = rospkg.RosPack().get_path("flex3rpr")
 
 
+def wait_until(predicate, timeout=600):
+    """True once predicate holds; the bound only catches a hang."""
+    end = time.time() + timeout
+    while time.time() < end and not predicate():
+        time.sleep(0.05)
+    return predicate()
+
+
 def run_node(*args, timeout=300):
     p = subprocess.run(["rosrun", "flex3rpr", "flex3rpr_node", *args], capture_output=True,
                        text=True, timeout=timeout)
@@ -38,6 +46,26 @@ class NodeStartup(unittest.TestCase):
             code, out = run_node("__name:=bad_type_" + name, "_%s:=%s" % (name, value))
             self.assertNotEqual(code, 0, out[-2000:])
             self.assertIn("parameter ~%s: not %s" % (name, kind), out)
+
+    def test_values_out_of_range_are_named_by_their_parameter(self):
+        for name, value, message in (
+                ("rtol", "0.5", "parameter ~rtol: solver.rtol: 0.5 is out of range"),
+                ("atol", "-1.0", "parameter ~atol: solver.atol: -1 is out of range"),
+                ("world_frame", "/world", "parameter ~world_frame: '/world' must not start with '/'"),
+                ("base_frame", "robot\tbase", "parameter ~base_frame: 'robot\tbase' must not contain spaces"),
+                ("tf_prefix", "robot 1", "parameter ~tf_prefix: 'robot 1' must not contain spaces")):
+            code, out = run_node("__name:=bad_value_" + name, "_%s:=%s" % (name, value))
+            self.assertNotEqual(code, 0, out[-2000:])
+            self.assertIn(message, out)
+
+    def test_use_sim_time_of_the_wrong_type_is_named(self):
+        rospy.set_param("/use_sim_time", "yes")
+        try:
+            code, out = run_node("__name:=bad_sim_time")
+        finally:
+            rospy.delete_param("/use_sim_time")
+        self.assertNotEqual(code, 0, out[-2000:])
+        self.assertIn("parameter /use_sim_time: not a boolean", out)
 
     def test_accuracy_out_of_range_is_named(self):
         code, out = run_node("__name:=bad_accuracy", "_accuracy:=5.0")
@@ -132,12 +160,17 @@ class NodeStartup(unittest.TestCase):
     def test_b_a_collapsed_leg_pauses_the_node_which_resets_and_runs_on(self):
         """A held command drives leg 1 into the collapse guard: the node pauses at the last good
         state with the error in ~status, keeps serving, and ~reset and ~resume run it on."""
+        from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus
         from flex3rpr.msg import EffortCommand, SimStatus
+        from sensor_msgs.msg import JointState
         from std_srvs.srv import Empty, Trigger
-        seen = []
-        sub = rospy.Subscriber("/survivor/status", SimStatus, seen.append, queue_size=100000)
+        seen, joints, diagnostics = [], [], []
+        subs = [rospy.Subscriber("/survivor/status", SimStatus, seen.append, queue_size=100000),
+                rospy.Subscriber("/joint_states_survivor", JointState, joints.append, queue_size=100000),
+                rospy.Subscriber("/diagnostics", DiagnosticArray, diagnostics.append, queue_size=100000)]
         pub = rospy.Publisher("/survivor/command", EffortCommand, queue_size=10)
         proc = subprocess.Popen(["stdbuf", "-oL", "rosrun", "flex3rpr", "flex3rpr_node", "__name:=survivor",
+                                 "joint_states:=/joint_states_survivor",
                                  "_scene:=" + PKG + "/test/scenes/idle_rigid.yaml", "_realtime_factor:=0.0",
                                  "_publish_rate:=100.0"],
                                 stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
@@ -154,6 +187,12 @@ class NodeStartup(unittest.TestCase):
             time.sleep(0.5)
             self.assertTrue(all(m.paused and m.sim_time == t_stop for m in seen[-3:]),
                             "paused at the last good state, still publishing ~status")
+            # every topic goes on while it waits: joint_states at the stopped state, /diagnostics at ERROR
+            held = len(joints)
+            self.assertTrue(wait_until(lambda: len(joints) > held + 1), "joint_states stopped with the error")
+            self.assertTrue(wait_until(lambda: any(
+                s.name == "/survivor: simulation" and s.level == DiagnosticStatus.ERROR and "collapsed" in s.message
+                for m in diagnostics for s in m.status)), "/diagnostics does not report the error")
             rospy.wait_for_service("/survivor/reset", timeout=120)
             self.assertTrue(rospy.ServiceProxy("/survivor/reset", Trigger)().success)
             rospy.ServiceProxy("/survivor/resume", Empty)()
@@ -165,7 +204,8 @@ class NodeStartup(unittest.TestCase):
                             "after ~reset and ~resume the simulation runs on without an error")
             self.assertIsNone(proc.poll())
         finally:
-            sub.unregister()
+            for sub in subs:
+                sub.unregister()
             proc.terminate()
             out, _ = proc.communicate(timeout=120)
         self.assertIn("leg 1 collapsed", out)
