@@ -424,6 +424,36 @@ TEST(CommandHold, ExplicitStagesAtARestartTakeTheNewForce) {
   }
 }
 
+// Outputs that do not fall on the scripted inputs' breakpoints: the step taken to reach an output
+// just before a breakpoint must not cross it (found by the accuracy knob's pilot, whose samples
+// fell off end_stop_impact's table times: IDASetStopTime was then behind the solver's time).
+// Every integrator, unpaced and against the same run sampled on the breakpoints.
+TEST(HardCases, OutputsOffTheBreakpointsNeverStepAcrossOne) {
+  f3r_scene scene = SceneFromText("links: {model: fixed_free, modes: 2}\ninputs:\n  rho_1:\n    table:\n"
+                                  "      time:  [0.0, 0.001, 0.010, 0.011]\n"
+                                  "      value: [0.0, 20.0, 20.0, 0.0]\nrun: {duration: 0.03}\n");
+  for (f3r_integrator integrator : {F3R_INTEGRATOR_IDA, F3R_INTEGRATOR_ERK, F3R_INTEGRATOR_DIRK}) {
+    f3r_solver_settings set = f3r_solver_settings_from_scene(&scene);
+    set.integrator = integrator;
+    set.rtol = 1e-4;  // long steps: each crosses the next breakpoint unless it is told not to
+    set.atol = 1e-6;
+    ModelPtr model = MakeModel(scene);
+    f3r_sim* raw = nullptr;
+    f3r_error err{};
+    ASSERT_EQ(f3r_sim_create(model.get(), &set, &raw, &err), F3R_OK) << err.message;
+    SimPtr sim(raw);
+    for (double t : {0.0009999, 0.0099999, 0.0109999, 0.03}) {
+      ASSERT_EQ(f3r_sim_advance(raw, t, &err), F3R_OK) << integrator << " to " << t << ": " << err.message;
+    }
+    const f3r_outputs end = *f3r_sim_outputs(raw);
+    Outcome on_grid = Simulate(scene, 1e-3, &set);  // outputs on every breakpoint
+    ASSERT_EQ(on_grid.status, F3R_OK) << on_grid.error;
+    const f3r_outputs& ref = on_grid.samples.back();
+    EXPECT_LT(std::hypot(end.q[F3R_Q_X] - ref.q[F3R_Q_X], end.q[F3R_Q_Y] - ref.q[F3R_Q_Y]), 1e-5) << integrator;
+    EXPECT_GE(end.stats.restarts, 3) << integrator << ": a restart at each breakpoint";
+  }
+}
+
 class LegCollapse : public ::testing::TestWithParam<std::tuple<f3r_formulation, f3r_integrator>> {};
 
 TEST_P(LegCollapse, StopsWithASpecificErrorAndAGoodState) {

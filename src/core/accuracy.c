@@ -91,9 +91,12 @@ static f3r_status pilot_path(const f3r_scene* base, const int modes[3], int exac
   }
   f3r_sim_destroy(sim);
   f3r_model_destroy(model);
-  if (st != F3R_OK)
+  if (st != F3R_OK) {
+    char why[sizeof err->message] = "failed"; /* a copy: the message is rewritten from itself */
+    if (err) snprintf(why, sizeof why, "%s", err->message);
     return f3r_error_set(err, st, "accuracy: pilot run at %d, %d, %d modes: %s", modes[0], modes[1],
-                         modes[2], err ? err->message : "failed");
+                         modes[2], why);
+  }
   return F3R_OK;
 }
 

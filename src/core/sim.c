@@ -204,10 +204,16 @@ f3r_status f3r_sim_advance(f3r_sim* s, double t_out, f3r_error* err) {
     }
     double t_stop = t_out;
     const int at_break = f3r_event_next_breakpoint(m, s->t, t_out, &t_stop);
+    /* Where the solver must stop: here, or, where the output may be interpolated, at the next
+     * breakpoint beyond it. A step past that breakpoint would integrate across a jump in the
+     * forces and leave the solver ahead of the stop the next call needs. */
+    double limit = t_stop;
+    if (!at_break && !s->settings.stop_at_outputs &&
+        !f3r_event_next_breakpoint(m, s->t, INFINITY, &limit))
+      limit = 1e300;
     double t_reached = s->t;
     int event = 0;
-    f3r_status st = s->ops->advance(&s->stepper, t_stop, at_break || s->settings.stop_at_outputs,
-                                    s->y, s->yp, &t_reached, &event, err);
+    f3r_status st = s->ops->advance(&s->stepper, t_stop, limit, s->y, s->yp, &t_reached, &event, err);
     if (st != F3R_OK) {
       s->t = t_reached;
       return st;

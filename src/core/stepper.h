@@ -50,9 +50,10 @@ typedef struct {
   f3r_status (*restart)(f3r_stepper* st, N_Vector y, N_Vector yp, double t, f3r_error* err);
   /* Integrates to tout; y (and y', unless it sets yp_stale) receive the state there, or the
    * last good one on failure.
-   * exact: never step past tout (a force changes there). *event = 1 when it stopped early at an
-   * end stop (root_info says which). */
-  f3r_status (*advance)(f3r_stepper* st, double tout, int exact, N_Vector y, N_Vector yp,
+   * tstop >= tout: never step past it (a force changes there); tstop = tout stops exactly at
+   * tout, a later one lets the output at tout be interpolated. *event = 1 when it stopped early
+   * at an end stop (root_info says which). */
+  f3r_status (*advance)(f3r_stepper* st, double tout, double tstop, N_Vector y, N_Vector yp,
                         double* t_reached, int* event, f3r_error* err);
   /* Statistics since creation (base plus the current solver's counters). */
   void (*stats)(const f3r_stepper* st, f3r_sim_stats* out);

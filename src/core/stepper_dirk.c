@@ -128,10 +128,10 @@ static f3r_status dirk_restart(f3r_stepper* st, N_Vector y, N_Vector yp, double 
   return F3R_OK;
 }
 
-static f3r_status dirk_advance(f3r_stepper* st, double tout, int exact, N_Vector y, N_Vector yp,
+static f3r_status dirk_advance(f3r_stepper* st, double tout, double tstop, N_Vector y, N_Vector yp,
                                double* t_reached, int* event, f3r_error* err) {
   (void)yp; /* y' costs a right-hand side: the simulation evaluates it when outputs need it */
-  CHECK(ARKStepSetStopTime(st->mem, exact ? tout : 1e300)); /* see stepper_ida.c */
+  CHECK(ARKStepSetStopTime(st->mem, tstop)); /* see stepper_ida.c */
   realtype t = *t_reached;
   const int flag = ARKStepEvolve(st->mem, tout, y, &t, ARK_NORMAL);
   *t_reached = t;

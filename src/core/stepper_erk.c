@@ -82,9 +82,9 @@ static f3r_status erk_restart(f3r_stepper* st, N_Vector y, N_Vector yp, double t
   return F3R_OK;
 }
 
-static f3r_status erk_advance(f3r_stepper* st, double tout, int exact, N_Vector y, N_Vector yp,
+static f3r_status erk_advance(f3r_stepper* st, double tout, double tstop, N_Vector y, N_Vector yp,
                               double* t_reached, int* event, f3r_error* err) {
-  CHECK(ERKStepSetStopTime(st->mem, exact ? tout : 1e300)); /* see stepper_ida.c */
+  CHECK(ERKStepSetStopTime(st->mem, tstop)); /* see stepper_ida.c */
   realtype t = *t_reached;
   const int flag = ERKStepEvolve(st->mem, tout, y, &t, ARK_NORMAL);
   *t_reached = t;

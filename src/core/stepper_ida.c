@@ -141,11 +141,12 @@ static f3r_status ida_restart(f3r_stepper* st, N_Vector y, N_Vector yp, double t
   return F3R_OK;
 }
 
-static f3r_status ida_advance(f3r_stepper* st, double tout, int exact, N_Vector y, N_Vector yp,
+static f3r_status ida_advance(f3r_stepper* st, double tout, double tstop, N_Vector y, N_Vector yp,
                               double* t_reached, int* event, f3r_error* err) {
   /* A stop time outlives a restart in SUNDIALS 6.4 (there is no IDAClearStopTime): always set
-   * one, far ahead when the step may pass tout. */
-  CHECK(IDASetStopTime(st->mem, exact ? tout : 1e300));
+   * one, the next breakpoint (or far ahead) when the step may pass tout. */
+  const int exact = tstop <= tout;
+  CHECK(IDASetStopTime(st->mem, tstop));
   realtype t = *t_reached;
   const int flag = IDASolve(st->mem, tout, &t, y, yp, IDA_NORMAL);
   *t_reached = t;
