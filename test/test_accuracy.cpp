@@ -359,3 +359,22 @@ TEST(Accuracy, ALongRunHasItsSolverMeasured) {
   EXPECT_FALSE(c.pilot) << c.summary;
   EXPECT_NE(std::strstr(c.summary, "longer than the benchmark's scenes"), nullptr) << c.summary;
 }
+
+// Impacts at the end stops are outside the estimate (a path with impacts need not converge in
+// the mode count): the choice says so, in the summary and in the one-line brief, and only then.
+TEST(Accuracy, ImpactsAreSaidToBeOutsideTheEstimate) {
+  f3r_scene s;
+  f3r_error err{};
+  ASSERT_EQ(f3r_scene_load(ScenePath("end_stop_impact.yaml").c_str(), &s, &err), F3R_OK) << err.message;
+  ASSERT_TRUE(s.end_stops);
+  s.duration = 0.05;
+  for (int i = 0; i < 3; ++i) s.explicit_settings &= ~(F3R_EXPLICIT_MODES << i);
+  f3r_accuracy_choice c;
+  ASSERT_EQ(f3r_accuracy_choose(&s, 1e-3, 0, &c, &err), F3R_OK) << err.message;
+  EXPECT_NE(std::strstr(c.summary, "end stops: impacts are outside this estimate"), nullptr) << c.summary;
+  EXPECT_NE(std::strstr(c.brief, "without the impacts"), nullptr) << c.brief;
+  s.end_stops = 0;
+  ASSERT_EQ(f3r_accuracy_choose(&s, 1e-3, 0, &c, &err), F3R_OK) << err.message;
+  EXPECT_EQ(std::strstr(c.summary, "impacts"), nullptr) << c.summary;
+  EXPECT_EQ(std::strstr(c.brief, "impacts"), nullptr) << c.brief;
+}
