@@ -12,6 +12,7 @@
                        is told to ignore as uninstalled are exactly the checkout's own tools
   roslaunch_check      roslaunch-check on every launch file: each package it uses is a dependency
   launch_clock         every launch file sets /use_sim_time true by default
+  launch_arguments     sim.launch's end_stops, paused, accuracy and tf_prefix reach the node
   rosdep_keys          each package.xml dependency is a ROS package or a known rosdep key whose
                        Debian package is installed
 
@@ -187,6 +188,23 @@ def case_launch_clock():
     return ""
 
 
+def case_launch_arguments():
+    """sim.launch hands its arguments to the node's parameters that the rostests exercise
+    (end stops, start paused, the accuracy knob, the frame prefix)."""
+    import yaml
+    args = {"end_stops": ("true", True), "paused": ("true", True), "accuracy": ("1e-4", 1e-4),
+            "tf_prefix": ("robot1", "robot1")}
+    p = subprocess.run(["roslaunch", "--dump-params", os.path.join(ROOT, "launch", "sim.launch")] +
+                       [f"{k}:={v}" for k, (v, _) in args.items()], capture_output=True, text=True, timeout=600)
+    params = yaml.safe_load(p.stdout) if p.returncode == 0 else None
+    if not isinstance(params, dict):
+        return "roslaunch --dump-params sim.launch failed:\n" + p.stdout[-2000:] + p.stderr[-2000:]
+    for k, (_, want) in args.items():
+        if params.get("/flex3rpr_node/" + k) != want:
+            return f"sim.launch {k}:= gives ~{k} = {params.get('/flex3rpr_node/' + k)!r}, not {want!r}"
+    return ""
+
+
 def case_roslaunch_check():
     """Every launch file's packages are dependencies in package.xml (rviz with rviz:=true)."""
     import glob
@@ -207,6 +225,7 @@ def main():
     cases = [("catkin_lint", case_catkin_lint),
              ("roslaunch_check", case_roslaunch_check),
              ("launch_clock", case_launch_clock),
+             ("launch_arguments", case_launch_arguments),
              ("rosdep_keys", case_rosdep_keys),
              ("catkin_make_install", lambda: case_catkin_make_install(args.workspace))]
     if not args.no_catkin_build:

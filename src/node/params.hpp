@@ -30,7 +30,7 @@ FrameNames MakeFrameNames(const std::string& prefix, const std::string& world, c
 std::string NormalisePrefix(const std::string& prefix);
 
 struct NodeParams {
-  std::string scene_path;             // ~scene, default: the package's paper_sim3_fixed_free.yaml
+  std::string scene_path;             // ~scene, default: the package's rest.yaml
   f3r_scene scene;                    // loaded and overridden
   f3r_solver_settings settings;       // ~formulation, ~integrator, ~rtol, ~atol
   f3r_accuracy_choice accuracy{};     // ~accuracy or the scene's: what the knob chose, and why
