@@ -28,7 +28,8 @@ import tempfile
 import time
 import xml.sax.saxutils
 
-ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+# the repository itself, not the workspace's folder of links to it (catkin_lint does not walk links)
+ROOT = os.path.dirname(os.path.dirname(os.path.realpath(__file__)))
 # The sanitizers' settings pass into the clean environment (an instrumented node needs them).
 KEEP = ("HOME", "ROS_HOME", "ASAN_OPTIONS", "LSAN_OPTIONS", "UBSAN_OPTIONS")
 
