@@ -173,33 +173,35 @@ def case_rosdep_keys():
     return ""
 
 
-def case_launch_clock():
-    """Every launch file runs on simulated time by default: /use_sim_time is true in the
-    parameters roslaunch would set (--dump-params, no master needed)."""
-    import glob
+def dump_params(path, *args):
+    """The parameters roslaunch would set for a launch file (--dump-params, no master needed):
+    a dict, or the failure's output as a string."""
     import yaml
+    p = subprocess.run(["roslaunch", "--dump-params", path, *args], capture_output=True, text=True, timeout=600)
+    params = yaml.safe_load(p.stdout) if p.returncode == 0 else None
+    return params if isinstance(params, dict) else (p.stdout[-2000:] + p.stderr[-2000:])
+
+
+def case_launch_clock():
+    """Every launch file runs on simulated time by default: /use_sim_time is true."""
+    import glob
     for path in sorted(glob.glob(os.path.join(ROOT, "launch", "*.launch"))):
-        p = subprocess.run(["roslaunch", "--dump-params", path, "bag:=/tmp/none.bag"], capture_output=True,
-                           text=True, timeout=600)
-        params = yaml.safe_load(p.stdout) if p.returncode == 0 else None
-        if not isinstance(params, dict) or params.get("/use_sim_time") is not True:
-            return (f"{os.path.basename(path)}: /use_sim_time is "
-                    f"{params.get('/use_sim_time') if isinstance(params, dict) else '?'} by default, not true\n"
-                    + p.stdout[-2000:] + p.stderr[-2000:])
+        params = dump_params(path, "bag:=/tmp/none.bag")
+        if not isinstance(params, dict):
+            return f"roslaunch --dump-params {os.path.basename(path)} failed:\n{params}"
+        if params.get("/use_sim_time") is not True:
+            return f"{os.path.basename(path)}: /use_sim_time is {params.get('/use_sim_time')} by default, not true"
     return ""
 
 
 def case_launch_arguments():
     """sim.launch hands its arguments to the node's parameters that the rostests exercise
     (end stops, start paused, the accuracy knob, the frame prefix)."""
-    import yaml
     args = {"end_stops": ("true", True), "paused": ("true", True), "accuracy": ("1e-4", 1e-4),
             "tf_prefix": ("robot1", "robot1")}
-    p = subprocess.run(["roslaunch", "--dump-params", os.path.join(ROOT, "launch", "sim.launch")] +
-                       [f"{k}:={v}" for k, (v, _) in args.items()], capture_output=True, text=True, timeout=600)
-    params = yaml.safe_load(p.stdout) if p.returncode == 0 else None
+    params = dump_params(os.path.join(ROOT, "launch", "sim.launch"), *[f"{k}:={v}" for k, (v, _) in args.items()])
     if not isinstance(params, dict):
-        return "roslaunch --dump-params sim.launch failed:\n" + p.stdout[-2000:] + p.stderr[-2000:]
+        return "roslaunch --dump-params sim.launch failed:\n" + params
     for k, (_, want) in args.items():
         if params.get("/flex3rpr_node/" + k) != want:
             return f"sim.launch {k}:= gives ~{k} = {params.get('/flex3rpr_node/' + k)!r}, not {want!r}"

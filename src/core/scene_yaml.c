@@ -11,6 +11,7 @@
 #include <yaml.h>
 
 #include "flex3rpr/scene.h"
+#include "scene_overrides.h"
 
 typedef struct {
   char name[128]; /* the field's path, as f3r_scene_validate names it: "inputs.rho_1.table.time[3]" */
@@ -32,7 +33,6 @@ typedef struct {
   int override_count;
   int* first_node;
   int* last_node;
-  int applying;           /* the override being applied */
 } loader;
 
 static int line_of(const yaml_node_t* node) { return (int)node->start_mark.line + 1; }
@@ -524,214 +524,6 @@ static f3r_status read_root(loader* L, const yaml_node_t* root) {
   return F3R_OK;
 }
 
-/* --- overrides: "--set links[0].modes=4" edits the document before it is read ------------------ */
-
-/* Copies node `id` of `from`, with everything under it, into `to` (which may be `from`), keeping
- * the marks so that a copied field still points at its line; the new id, 0 when out of memory. */
-static int copy_node(yaml_document_t* to, yaml_document_t* from, int id) {
-  const yaml_node_t* n = yaml_document_get_node(from, id);
-  int copy = 0;
-  if (n->type == YAML_SCALAR_NODE) {
-    copy = yaml_document_add_scalar(to, NULL, n->data.scalar.value, (int)n->data.scalar.length,
-                                    n->data.scalar.style);
-  } else if (n->type == YAML_SEQUENCE_NODE) {
-    const int len = (int)(n->data.sequence.items.top - n->data.sequence.items.start);
-    copy = yaml_document_add_sequence(to, NULL, n->data.sequence.style);
-    for (int k = 0; copy && k < len; ++k) { /* adding nodes may move them: look `n` up again */
-      const int item = copy_node(to, from, yaml_document_get_node(from, id)->data.sequence.items.start[k]);
-      if (!item || !yaml_document_append_sequence_item(to, copy, item)) copy = 0;
-    }
-  } else if (n->type == YAML_MAPPING_NODE) {
-    const int len = (int)(n->data.mapping.pairs.top - n->data.mapping.pairs.start);
-    copy = yaml_document_add_mapping(to, NULL, n->data.mapping.style);
-    for (int k = 0; copy && k < len; ++k) {
-      const int key = copy_node(to, from, yaml_document_get_node(from, id)->data.mapping.pairs.start[k].key);
-      const int value = key ? copy_node(to, from, yaml_document_get_node(from, id)->data.mapping.pairs.start[k].value) : 0;
-      if (!value || !yaml_document_append_mapping_pair(to, copy, key, value)) copy = 0;
-    }
-  }
-  if (copy) {
-    yaml_node_t* c = yaml_document_get_node(to, copy);
-    const yaml_node_t* source = yaml_document_get_node(from, id);
-    c->start_mark = source->start_mark;
-    c->end_mark = source->end_mark;
-  }
-  return copy;
-}
-
-typedef struct {
-  char key[64];
-  int index; /* -1: none */
-} path_step;
-
-/* "links[0].modes" into {links, 0}, {modes, -1}; the number of steps, 0 if malformed. */
-static int parse_path(const char* path, size_t length, path_step* steps, int capacity) {
-  int n = 0;
-  size_t i = 0;
-  while (i < length) {
-    if (n == capacity) return 0;
-    path_step* st = &steps[n++];
-    size_t k = 0;
-    while (i < length && path[i] != '.' && path[i] != '[') {
-      const char c = path[i++];
-      if (!(c == '_' || (c >= 'a' && c <= 'z') || (c >= 'A' && c <= 'Z') || (c >= '0' && c <= '9')) ||
-          k + 1 >= sizeof st->key)
-        return 0;
-      st->key[k++] = c;
-    }
-    st->key[k] = '\0';
-    st->index = -1;
-    if (k == 0) return 0;
-    if (i < length && path[i] == '[') {
-      char* end = NULL;
-      const long index = strtol(path + i + 1, &end, 10);
-      if (end == path + i + 1 || *end != ']' || index < 0 || index > 1000000) return 0;
-      st->index = (int)index;
-      i = (size_t)(end - path) + 1;
-    }
-    if (i < length) {
-      if (path[i] != '.') return 0;
-      if (++i == length) return 0;
-    }
-  }
-  return n;
-}
-
-static int node_count(const yaml_document_t* doc) { return (int)(doc->nodes.top - doc->nodes.start); }
-
-/* From here on, what the document gains is the override's: its value and any field it adds (a
- * link list made before from the file's shared mapping keeps pointing at the file). */
-static void override_nodes_begin(loader* L) {
-  if (!L->first_node[L->applying]) L->first_node[L->applying] = node_count(&L->doc) + 1;
-}
-
-static int copy_value(loader* L, yaml_document_t* from, int value) {
-  override_nodes_begin(L);
-  return copy_node(&L->doc, from, value);
-}
-
-static int pair_count(const yaml_node_t* map) {
-  return (int)(map->data.mapping.pairs.top - map->data.mapping.pairs.start);
-}
-
-/* Sets the field `steps` names under mapping `node` (a sequence of mappings: each of them) to a
- * copy of `value` of `from`; missing mappings on the way are made. `field` grows with the path for
- * messages. */
-static f3r_status set_field(loader* L, int node, const path_step* steps, int count, yaml_document_t* from,
-                            int value, char* field, size_t field_size, const char* text) {
-  const yaml_node_t* n = yaml_document_get_node(&L->doc, node);
-  if (n->type == YAML_SEQUENCE_NODE) { /* "links.modes": every link */
-    const int len = (int)(n->data.sequence.items.top - n->data.sequence.items.start);
-    const size_t mark = strlen(field);
-    for (int k = 0; k < len; ++k) {
-      snprintf(field + mark, field_size - mark, "[%d]", k);
-      const int item = yaml_document_get_node(&L->doc, node)->data.sequence.items.start[k];
-      const f3r_status st = set_field(L, item, steps, count, from, value, field, field_size, text);
-      if (st != F3R_OK) return st;
-    }
-    field[mark] = '\0';
-    return F3R_OK;
-  }
-  if (n->type != YAML_MAPPING_NODE)
-    return f3r_error_set(L->err, F3R_ERR_SCENE, "--set %s: %s is not a mapping in %s", text,
-                         field[0] ? field : "the scene", L->path);
-  const path_step* step = &steps[0];
-  const size_t mark = strlen(field);
-  snprintf(field + mark, field_size - mark, "%s%s", field[0] ? "." : "", step->key);
-  int found = -1;
-  for (int k = 0; k < pair_count(n) && found < 0; ++k) {
-    const char* key = scalar(yaml_document_get_node(&L->doc, n->data.mapping.pairs.start[k].key));
-    if (key && !strcmp(key, step->key)) found = k;
-  }
-  const int last = count == 1;
-  if (found < 0) { /* a field the file leaves to its default */
-    if (step->index >= 0)
-      return f3r_error_set(L->err, F3R_ERR_SCENE, "--set %s: %s is not in %s, so [%d] has nothing to index",
-                           text, field, L->path, step->index);
-    override_nodes_begin(L);
-    const int key = yaml_document_add_scalar(&L->doc, NULL, (yaml_char_t*)step->key, -1, YAML_PLAIN_SCALAR_STYLE);
-    const int child = !key ? 0 : last ? copy_value(L, from, value)
-                                      : yaml_document_add_mapping(&L->doc, NULL, YAML_BLOCK_MAPPING_STYLE);
-    if (!child || !yaml_document_append_mapping_pair(&L->doc, node, key, child))
-      return f3r_error_set(L->err, F3R_ERR_MEMORY, "--set %s: out of memory", text);
-    if (!last) return set_field(L, child, steps + 1, count - 1, from, value, field, field_size, text);
-    return F3R_OK;
-  }
-  int child = n->data.mapping.pairs.start[found].value;
-  if (step->index >= 0) {
-    const yaml_node_t* c = yaml_document_get_node(&L->doc, child);
-    if (c->type == YAML_MAPPING_NODE && !strcmp(step->key, "links") && mark == 0) {
-      /* one mapping for all three links: three copies, of which one is set */
-      const int list = yaml_document_add_sequence(&L->doc, NULL, YAML_BLOCK_SEQUENCE_STYLE);
-      for (int k = 0; list && k < 3; ++k) {
-        const int copy = copy_node(&L->doc, &L->doc, child);
-        if (!copy || !yaml_document_append_sequence_item(&L->doc, list, copy))
-          return f3r_error_set(L->err, F3R_ERR_MEMORY, "--set %s: out of memory", text);
-      }
-      if (!list) return f3r_error_set(L->err, F3R_ERR_MEMORY, "--set %s: out of memory", text);
-      yaml_document_get_node(&L->doc, node)->data.mapping.pairs.start[found].value = list;
-      child = list;
-      c = yaml_document_get_node(&L->doc, child);
-    }
-    if (c->type != YAML_SEQUENCE_NODE)
-      return f3r_error_set(L->err, F3R_ERR_SCENE, "--set %s: %s in %s is not a list", text, field, L->path);
-    const int len = (int)(c->data.sequence.items.top - c->data.sequence.items.start);
-    if (step->index >= len)
-      return f3r_error_set(L->err, F3R_ERR_SCENE, "--set %s: %s has %d entries in %s (index 0..%d)", text,
-                           field, len, L->path, len - 1);
-    snprintf(field + strlen(field), field_size - strlen(field), "[%d]", step->index);
-    if (last) {
-      const int copy = copy_value(L, from, value);
-      if (!copy) return f3r_error_set(L->err, F3R_ERR_MEMORY, "--set %s: out of memory", text);
-      yaml_document_get_node(&L->doc, child)->data.sequence.items.start[step->index] = copy;
-      return F3R_OK;
-    }
-    child = c->data.sequence.items.start[step->index];
-  } else if (last) {
-    const int copy = copy_value(L, from, value);
-    if (!copy) return f3r_error_set(L->err, F3R_ERR_MEMORY, "--set %s: out of memory", text);
-    yaml_document_get_node(&L->doc, node)->data.mapping.pairs.start[found].value = copy;
-    return F3R_OK;
-  }
-  return set_field(L, child, steps + 1, count - 1, from, value, field, field_size, text);
-}
-
-/* Applies override k, "FIELD=VALUE" (VALUE is YAML: a number, a word, a [flow, list]). */
-static f3r_status apply_override(loader* L, int root, int k) {
-  const char* text = L->overrides[k];
-  const char* eq = strchr(text, '=');
-  path_step steps[16];
-  const int count = eq ? parse_path(text, (size_t)(eq - text), steps, 16) : 0;
-  if (!count)
-    return f3r_error_set(L->err, F3R_ERR_SCENE,
-                         "--set %s: expected FIELD=VALUE with FIELD like links[0].modes or effects.payload.mass",
-                         text);
-  if (!eq[1]) return f3r_error_set(L->err, F3R_ERR_SCENE, "--set %s: no value after '='", text);
-  yaml_parser_t parser;
-  yaml_document_t value;
-  yaml_parser_initialize(&parser);
-  yaml_parser_set_input_string(&parser, (const unsigned char*)(eq + 1), strlen(eq + 1));
-  if (!yaml_parser_load(&parser, &value)) {
-    const f3r_status st = f3r_error_set(L->err, F3R_ERR_SCENE, "--set %s: the value is not YAML: %s", text,
-                                        parser.problem ? parser.problem : "?");
-    yaml_parser_delete(&parser);
-    return st;
-  }
-  f3r_status st = F3R_OK;
-  if (!yaml_document_get_root_node(&value)) {
-    st = f3r_error_set(L->err, F3R_ERR_SCENE, "--set %s: no value after '='", text);
-  } else {
-    char field[256] = "";
-    L->applying = k;
-    L->first_node[k] = 0;
-    st = set_field(L, root, steps, count, &value, 1, field, sizeof field, text);
-    L->last_node[k] = L->first_node[k] ? node_count(&L->doc) : -1;
-  }
-  yaml_document_delete(&value);
-  yaml_parser_delete(&parser);
-  return st;
-}
-
 /* Prefixes a validation message with the file and the line of the field it names. A field the
  * file does not hold (a default that another value puts out of range) gets the line of its
  * section, or 0 when the file has no part of it. */
@@ -796,7 +588,8 @@ f3r_status f3r_scene_load_with(const char* path, const f3r_scene_options* option
   }
   st = yaml_document_get_root_node(&L->doc) ? F3R_OK
                                             : f3r_error_set(err, F3R_ERR_SCENE, "%s:1: the file holds no scene", path);
-  for (int k = 0; st == F3R_OK && k < L->override_count; ++k) st = apply_override(L, 1, k);
+  for (int k = 0; st == F3R_OK && k < L->override_count; ++k)
+    st = f3r_scene_apply_override(&L->doc, path, L->overrides[k], &L->first_node[k], &L->last_node[k], err);
   if (st == F3R_OK) st = read_root(L, yaml_document_get_root_node(&L->doc));
   if (st == F3R_OK && L->out_of_memory)
     st = f3r_error_set(err, F3R_ERR_MEMORY, "%s: out of memory", path);

@@ -1,0 +1,80 @@
+/* The accuracy knob's parts (accuracy.c chooses; accuracy_search.c searches the mode counts on
+ * the linearised model; accuracy_pilot.c checks them with short nonlinear runs). Internal to
+ * the core. */
+#ifndef F3R_ACCURACY_PARTS_H
+#define F3R_ACCURACY_PARTS_H
+
+#include "flex3rpr/accuracy.h"
+#include "flex3rpr/sim.h"
+
+#define F3R_PILOT_SHARE 0.1 /* of the duration: the window a pilot runs over */
+
+static inline int f3r_is_flexible(const f3r_scene* s, int i) { return s->links[i].model != F3R_LINK_RIGID; }
+
+/* The scene with fixed mode counts, no accuracy request: a model the caller must destroy. */
+f3r_status f3r_model_with_modes(const f3r_scene* base, const int modes[3], int exact_kinematics,
+                                f3r_model** model, f3r_error* err);
+/* The linearised end-effector path (x, y, phi a sample) at t_k = k dt, k < count; order 1, or 2
+ * with the second-order correction. */
+f3r_status f3r_linear_path(const f3r_scene* s, const int modes[3], double dt, int count, int order,
+                           double* pose, f3r_error* err);
+/* Largest end-effector distance between two pose paths (3 values a sample) over count samples. */
+double f3r_max_distance(const double* a, const double* b, int count);
+
+/* What the mode search shares: the sampling, the links chosen, their least counts (the initial
+ * state's highest mode), the order of the linear path (2 near the initial pose, where the
+ * second-order correction holds; 1 where the path leaves it and the pilot checks instead) and the
+ * current reference path. */
+typedef struct {
+  double dt;
+  int count;
+  unsigned chosen;
+  int low[3];
+  int fixed[3];     /* the modes of the links not chosen */
+  int order;
+  int ref_r;        /* the uniform count the reference in ref has on the chosen links, 0: none */
+  double* ref;      /* 3 count */
+  double* path;     /* 3 count, scratch */
+  double extent;    /* m: largest distance of the linearised end effector from its start */
+  double rotation;  /* rad: largest linearised platform rotation from its start */
+  int far;          /* the first- or second-order path leaves the initial pose far */
+  int at_rest;
+  int evaluations;
+} f3r_mode_search;
+
+/* Sampling, links and the order of the estimate for a scene; f3r_mode_search_free after. */
+f3r_status f3r_mode_search_init(const f3r_scene* s, unsigned chosen, f3r_mode_search* ms, f3r_error* err);
+/* The fewest modes whose linear path stays within target of its reference (estimate: that
+ * distance). */
+f3r_status f3r_mode_search_run(const f3r_scene* s, f3r_mode_search* ms, double target, int modes[3],
+                               double* estimate, f3r_error* err);
+void f3r_mode_search_free(f3r_mode_search* ms);
+
+/* The nonlinear pilot: runs over the first F3R_PILOT_SHARE of the duration at the linear estimate's
+ * modes r, with a tolerance whose measured error is a tenth of the model's share. */
+typedef struct {
+  int count;         /* samples in the window */
+  double grow;       /* duration / window */
+  double noise;      /* m: the pilot's own solver error */
+  f3r_solver_settings tight;
+  int modes[3];
+  double* a;         /* the path at r, tight */
+  double* b;         /* scratch */
+} f3r_pilot;
+
+/* Runs the tight pilot at modes over the window (kind: the solver relations' kind; resolution:
+ * the error the pilot's own solver may have). f3r_pilot_free after, whatever it returns. */
+f3r_status f3r_pilot_start(const f3r_scene* s, const f3r_mode_search* ms, const int modes[3],
+                           const char* kind, double resolution, f3r_pilot* p, f3r_error* err);
+/* The nonlinear difference of r and r + 1 modes carried to the whole run, and the linear one. */
+f3r_status f3r_pilot_pair(const f3r_scene* s, f3r_mode_search* ms, f3r_pilot* p, double* nonlinear,
+                          double* linear, f3r_error* err);
+/* The effect of exact kinematics at the pilot's modes, carried to the whole run. */
+f3r_status f3r_pilot_kinematics(const f3r_scene* s, const f3r_mode_search* ms, f3r_pilot* p,
+                                double* effect, f3r_error* err);
+/* A solver's error against the tight pilot, carried to the whole run. */
+f3r_status f3r_pilot_solver(const f3r_scene* s, const f3r_mode_search* ms, f3r_pilot* p,
+                            const f3r_solver_settings* solver, double* error, f3r_error* err);
+void f3r_pilot_free(f3r_pilot* p);
+
+#endif
