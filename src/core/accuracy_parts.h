@@ -49,30 +49,36 @@ f3r_status f3r_mode_search_init(const f3r_scene* s, unsigned chosen, f3r_mode_se
 f3r_status f3r_mode_search_run(const f3r_scene* s, f3r_mode_search* ms, double target, int modes[3],
                                double* estimate, f3r_error* err);
 void f3r_mode_search_free(f3r_mode_search* ms);
+/* The least mode counts the search may give: one mode, or the initial state's highest, on each
+ * chosen link; the other links keep theirs. */
+void f3r_mode_search_least(const f3r_mode_search* ms, int modes[3]);
 
-/* The nonlinear pilot: runs over the first F3R_PILOT_SHARE of the duration at the linear estimate's
- * modes r, with a tolerance whose measured error is a tenth of the model's share. */
+/* The nonlinear pilot: short runs over the first F3R_PILOT_SHARE of the duration, at the least
+ * mode counts (where the mode-count differences stand far above the pilot's own solver error),
+ * with a tolerance whose measured error is a tenth of the model's share. */
 typedef struct {
   int count;         /* samples in the window */
   double grow;       /* duration / window */
   double noise;      /* m: the pilot's own solver error */
   f3r_solver_settings tight;
   int modes[3];
-  double* a;         /* the path at r, tight */
+  double* a;         /* the path at modes, tight */
   double* b;         /* scratch */
 } f3r_pilot;
 
 /* Runs the tight pilot at modes over the window (kind: the solver relations' kind; resolution:
- * the error the pilot's own solver may have). f3r_pilot_free after, whatever it returns. */
+ * the error the pilot's own solver may have; capped: never looser than rtol 1e-6). f3r_pilot_free
+ * after, whatever it returns. */
 f3r_status f3r_pilot_start(const f3r_scene* s, const f3r_mode_search* ms, const int modes[3],
-                           const char* kind, double resolution, f3r_pilot* p, f3r_error* err);
-/* The nonlinear difference of r and r + 1 modes carried to the whole run, and the linear one. */
+                           const char* kind, double resolution, int capped, f3r_pilot* p, f3r_error* err);
+/* The nonlinear difference of the pilot's modes and one more on each chosen link, carried to the
+ * whole run, and the linear one over the whole run. */
 f3r_status f3r_pilot_pair(const f3r_scene* s, f3r_mode_search* ms, f3r_pilot* p, double* nonlinear,
                           double* linear, f3r_error* err);
 /* The effect of exact kinematics at the pilot's modes, carried to the whole run. */
 f3r_status f3r_pilot_kinematics(const f3r_scene* s, const f3r_mode_search* ms, f3r_pilot* p,
                                 double* effect, f3r_error* err);
-/* A solver's error against the tight pilot, carried to the whole run. */
+/* A solver's error at the pilot's modes against the tight pilot, carried to the whole run. */
 f3r_status f3r_pilot_solver(const f3r_scene* s, const f3r_mode_search* ms, f3r_pilot* p,
                             const f3r_solver_settings* solver, double* error, f3r_error* err);
 void f3r_pilot_free(f3r_pilot* p);

@@ -32,18 +32,17 @@ static f3r_status pilot_path(const f3r_scene* base, const int modes[3], int exac
   return F3R_OK;
 }
 
-/* The loosest tolerance of minimal IDA, at most 1e-6, whose measured error stays below `error`
- * (1e-6 if none), and that error: the pilot's noise. Never looser than the baseline 1e-6, as the
- * pilot checks solvers too, and the benchmark's relations can be short on a scene unlike its own
- * (a long run). */
-static double pilot_rtol(const char* kind, double error, double* noise) {
+/* The loosest tolerance of minimal IDA whose measured error stays below `error` (1e-6 if none),
+ * and that error: the pilot's noise. capped: never looser than the baseline 1e-6, for a run
+ * longer than the benchmark's scenes, where the relations can be short. */
+static double pilot_rtol(const char* kind, double error, int capped, double* noise) {
   double best = 0.0;
   *noise = error;
   for (int k = 0; k < f3r_solver_relation_count; ++k) {
     const f3r_solver_relation* r = &f3r_solver_relations[k];
     if (!strcmp(r->kind, kind) && r->formulation == F3R_FORMULATION_MINIMAL &&
         r->integrator == F3R_INTEGRATOR_IDA && r->error <= error && r->rtol > best &&
-        r->rtol <= 1e-6 * (1.0 + 1e-9)) {
+        (!capped || r->rtol <= 1e-6 * (1.0 + 1e-9))) {
       best = r->rtol;
       *noise = r->error;
     }
@@ -67,7 +66,7 @@ static double extrapolate(const f3r_pilot* p, const double* x, const double* y) 
 }
 
 f3r_status f3r_pilot_start(const f3r_scene* s, const f3r_mode_search* ms, const int modes[3],
-                              const char* kind, double resolution, f3r_pilot* p, f3r_error* err) {
+                           const char* kind, double resolution, int capped, f3r_pilot* p, f3r_error* err) {
   memset(p, 0, sizeof *p);
   const double window = fmax(F3R_PILOT_SHARE * s->duration, ms->dt);
   p->count = ms->count < (int)ceil(window / ms->dt) + 1 ? ms->count : (int)ceil(window / ms->dt) + 1;
@@ -75,7 +74,7 @@ f3r_status f3r_pilot_start(const f3r_scene* s, const f3r_mode_search* ms, const 
   p->tight = f3r_solver_settings_from_scene(s);
   p->tight.formulation = F3R_FORMULATION_MINIMAL;
   p->tight.integrator = F3R_INTEGRATOR_IDA;
-  p->tight.rtol = pilot_rtol(kind, resolution, &p->noise);
+  p->tight.rtol = pilot_rtol(kind, resolution, capped, &p->noise);
   p->tight.atol = fmin(1e-2 * p->tight.rtol, s->atol); /* positions resolved from the start */
   p->tight.rk_table[0] = '\0';
   memcpy(p->modes, modes, sizeof p->modes);
@@ -117,10 +116,10 @@ f3r_status f3r_pilot_kinematics(const f3r_scene* s, const f3r_mode_search* ms, f
   return st;
 }
 
-/* The error of a solver at r against the tight pilot, carried to the whole run (0 when within the
- * pilot's own noise). */
+/* The error of a solver at the pilot's modes against the tight pilot, carried to the whole run (0
+ * when within the pilot's own noise). */
 f3r_status f3r_pilot_solver(const f3r_scene* s, const f3r_mode_search* ms, f3r_pilot* p,
-                               const f3r_solver_settings* solver, double* error, f3r_error* err) {
+                            const f3r_solver_settings* solver, double* error, f3r_error* err) {
   *error = 0.0;
   const f3r_status st = pilot_path(s, p->modes, 0, solver, ms->dt, p->count, p->b, err);
   if (st == F3R_OK && f3r_max_distance(p->a, p->b, p->count) > 3.0 * p->noise) *error = extrapolate(p, p->a, p->b);

@@ -85,6 +85,8 @@ static void uniform(const f3r_mode_search* ms, int r, int modes[3]) {
   for (int i = 0; i < 3; ++i) modes[i] = (ms->chosen >> i & 1) ? (r > ms->low[i] ? r : ms->low[i]) : ms->fixed[i];
 }
 
+void f3r_mode_search_least(const f3r_mode_search* ms, int modes[3]) { uniform(ms, 1, modes); }
+
 static f3r_status path_at(const f3r_scene* s, f3r_mode_search* ms, const int modes[3], int order,
                           double* pose, f3r_error* err) {
   ++ms->evaluations;
