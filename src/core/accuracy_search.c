@@ -70,6 +70,12 @@ static int at_rest(const f3r_scene* s) {
   return 1;
 }
 
+static int any_flexible(const f3r_scene* s) {
+  for (int i = 0; i < 3; ++i)
+    if (f3r_is_flexible(s, i)) return 1;
+  return 0;
+}
+
 /* The reference the mode count r is compared with: "larger r", three times r and three more, so
  * that a slowly converging fixed-free link is compared with modes well beyond it; 20 from r = 6. */
 static int reference_modes(int r) { return 3 * r + 3 < F3R_MAX_MODES ? 3 * r + 3 : F3R_MAX_MODES; }
@@ -132,6 +138,12 @@ f3r_status f3r_mode_search_init(const f3r_scene* s, unsigned chosen, f3r_mode_se
   ms->order = 1;
   ms->at_rest = at_rest(s);
   if (ms->at_rest) return F3R_OK;
+  if (!ms->chosen && !any_flexible(s)) {
+    /* Nothing for a linear model to choose: the path is taken to leave the pose, so that a
+     * solver whose relation nears its budget is checked by a pilot. */
+    ms->far = 1;
+    return F3R_OK;
+  }
   ms->ref = malloc((size_t)ms->count * 3 * sizeof(double));
   ms->path = malloc((size_t)ms->count * 3 * sizeof(double));
   if (!ms->ref || !ms->path) {
