@@ -134,12 +134,7 @@ f3r_status f3r_accuracy_choose(const f3r_scene* scene, double request, int comma
   if (pair || kinematics) {
     int least[3];
     f3r_mode_search_least(&ms, least);
-    /* The pilot's own error: a tenth of the model's share, and small enough that an exact-kinematics
-     * effect at its limit, carried from the window to the whole run, stands 3 times above it. */
-    double resolution = 0.1 * model_target;
-    if (kinematics)
-      resolution = fmin(resolution, F3R_ACCURACY_KINEMATICS_SHARE * request * F3R_PILOT_SHARE / 3.0);
-    st = f3r_pilot_start(&s, &ms, least, kind, resolution, long_run, &pilot, err);
+    st = f3r_pilot_start(&s, &ms, least, kind, 0.1 * model_target, long_run, &pilot, err);
     pilot_started = 1;
     c->pilot = st == F3R_OK;
     /* The nonlinear difference of the least mode counts and one more, over the linear one of the

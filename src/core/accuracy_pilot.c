@@ -107,12 +107,14 @@ f3r_status f3r_pilot_pair(const f3r_scene* s, f3r_mode_search* ms, f3r_pilot* p,
   return st;
 }
 
-/* The effect of exact kinematics at r, carried to the whole run. */
+/* The effect of exact kinematics at the pilot's modes, carried to the whole run. Not gated by the
+ * pilot's noise: both runs take the same solver and nearly the same steps, so their difference
+ * holds little of it, and an effect below the noise can still exceed the kinematics' share. */
 f3r_status f3r_pilot_kinematics(const f3r_scene* s, const f3r_mode_search* ms, f3r_pilot* p,
                                    double* effect, f3r_error* err) {
   *effect = 0.0;
   const f3r_status st = pilot_path(s, p->modes, 1, &p->tight, ms->dt, p->count, p->b, err);
-  if (st == F3R_OK && f3r_max_distance(p->a, p->b, p->count) > 3.0 * p->noise) *effect = extrapolate(p, p->a, p->b);
+  if (st == F3R_OK) *effect = extrapolate(p, p->a, p->b);
   return st;
 }
 
