@@ -233,7 +233,7 @@ f3r_status f3r_accuracy_choose(const f3r_scene* scene, double request, int comma
     const double explicit_scale = most > BENCHMARK_MODES ? (double)(most * most) / (BENCHMARK_MODES * BENCHMARK_MODES) : 1.0;
     int checked = 0;
     const f3r_solver_relation* r = NULL;
-    for (int attempt = 0; attempt < 3; ++attempt) {
+    for (int attempt = 0; attempt < 4; ++attempt) {
       const f3r_solver_relation* next = pick_solver(scene, kind, limit, explicit_scale);
       if (!next || next == r) break;
       r = next;
@@ -259,7 +259,9 @@ f3r_status f3r_accuracy_choose(const f3r_scene* scene, double request, int comma
         fprintf(stderr, "solver check: rtol %g table %s relation %g measured %g budget %g\n", r->rtol, r->table,
                 r->error, measured, budget);
       if (measured <= budget) break;
-      limit = r->error * budget / measured; /* the relation is short by measured / error here */
+      /* The relation is short by measured / error here; a decade at a most per attempt, as the
+       * pilot's least modes can make it look shorter than it is at the chosen ones. */
+      limit = fmax(r->error * budget / measured, 0.1 * r->error);
     }
     if (st != F3R_OK) {
       f3r_pilot_free(&pilot);
