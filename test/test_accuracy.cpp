@@ -361,8 +361,8 @@ TEST(Accuracy, ALongRunHasItsSolverMeasured) {
 }
 
 // Impacts at the end stops are outside the estimate (a path with impacts need not converge in
-// the mode count, and they amplify the solver's error): the knob takes the most faithful model and
-// a tolerance for the budget over the amplification, and says so in the summary and the brief.
+// the mode count, and they amplify the solver's error up to 1e5 times): the knob takes the most
+// faithful model and a tolerance for the budget over 1e5, and says so in the summary and the brief.
 TEST(Accuracy, ImpactsTakeTheMostFaithfulModelAndSayWhy) {
   f3r_scene s;
   f3r_error err{};
@@ -375,7 +375,7 @@ TEST(Accuracy, ImpactsTakeTheMostFaithfulModelAndSayWhy) {
   for (int i = 0; i < 3; ++i)
     if (s.links[i].model != F3R_LINK_RIGID) EXPECT_EQ(c.modes[i], F3R_MAX_MODES) << c.summary;
   EXPECT_EQ(c.exact_kinematics, 1) << c.summary;
-  EXPECT_LE(c.solver_error, 1e-3 / 1e4) << c.summary;
+  EXPECT_LE(c.solver_error, 1e-3 / 1e5) << c.summary;
   EXPECT_EQ(c.linear_evaluations, 1) << "only the extent's reference: " << c.summary;
   EXPECT_NE(std::strstr(c.summary, "impacts are outside the linear estimate"), nullptr) << c.summary;
   EXPECT_NE(std::strstr(c.brief, "without the impacts"), nullptr) << c.brief;
