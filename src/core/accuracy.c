@@ -144,9 +144,6 @@ f3r_status f3r_accuracy_choose(const f3r_scene* scene, double request, int comma
      * the search runs again with the target shrunk by it. */
     double nonlinear = 0.0, linear = 0.0;
     if (st == F3R_OK && pair) st = f3r_pilot_pair(&s, &ms, &pilot, &nonlinear, &linear, err);
-    if (getenv("F3R_ACCURACY_DEBUG"))
-      fprintf(stderr, "pilot: nonlinear %g linear %g linear_error %g noise %g rtol %g\n", nonlinear, linear,
-              linear_error, pilot.noise, pilot.tight.rtol);
     const double ratio = linear > 0.0 ? nonlinear / linear : 1.0;
     if (st == F3R_OK && ratio > 1.0) {
       c->pilot_ratio = ratio;
@@ -256,9 +253,6 @@ f3r_status f3r_accuracy_choose(const f3r_scene* scene, double request, int comma
        * scene's own modes, checked on this scene's motion at a fraction of the cost. */
       if ((st = f3r_pilot_solver(&s, &ms, &pilot, &settings, &measured, err)) != F3R_OK) break;
       checked = 1;
-      if (getenv("F3R_ACCURACY_DEBUG"))
-        fprintf(stderr, "solver check: rtol %g table %s relation %g measured %g budget %g\n", r->rtol, r->table,
-                r->error, measured, budget);
       if (measured <= budget) break;
       /* The relation is short by measured / error here; a decade at a most per attempt, as the
        * pilot's least modes can make it look shorter than it is at the chosen ones. */
