@@ -8,6 +8,7 @@
 #include "flex3rpr/sim.h"
 
 #define F3R_PILOT_SHARE 0.1 /* of the duration: the window a pilot runs over */
+#define F3R_PATH_MEMO 12    /* linear paths the mode search keeps */
 
 static inline int f3r_is_flexible(const f3r_scene* s, int i) { return s->links[i].model != F3R_LINK_RIGID; }
 
@@ -39,11 +40,23 @@ typedef struct {
   double rotation;  /* rad: largest linearised platform rotation from its start */
   int far;          /* the first- or second-order path leaves the initial pose far */
   int at_rest;
-  int evaluations;
+  int evaluations;  /* linear models built and solved (a path found in the memo is not one) */
+  /* The paths computed so far, by mode counts and order, at the current sampling: the search runs
+   * again after the pilot, and the pilot's pair needs paths the search has made. */
+  struct {
+    int modes[3];
+    int order;
+    double* pose; /* 3 count */
+  } memo[F3R_PATH_MEMO];
+  int memo_used, memo_next;
 } f3r_mode_search;
 
 /* Sampling, links and the order of the estimate for a scene; f3r_mode_search_free after. */
 f3r_status f3r_mode_search_init(const f3r_scene* s, unsigned chosen, f3r_mode_search* ms, f3r_error* err);
+/* The linear path (order 1 or 2) at modes, at the search's sampling, from the memo or computed
+ * into it: pose gets 3 count values. */
+f3r_status f3r_mode_search_path(const f3r_scene* s, f3r_mode_search* ms, const int modes[3], int order,
+                                double* pose, f3r_error* err);
 /* The fewest modes whose linear path stays within target of its reference (estimate: that
  * distance). */
 f3r_status f3r_mode_search_run(const f3r_scene* s, f3r_mode_search* ms, double target, int modes[3],

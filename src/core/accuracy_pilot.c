@@ -96,9 +96,8 @@ f3r_status f3r_pilot_pair(const f3r_scene* s, f3r_mode_search* ms, f3r_pilot* p,
   double* lb = malloc((size_t)ms->count * 3 * sizeof(double));
   f3r_status st = la && lb ? F3R_OK : f3r_error_set(err, F3R_ERR_MEMORY, "accuracy: out of memory");
   if (st == F3R_OK && (st = pilot_path(s, more, 0, &p->tight, ms->dt, p->count, p->b, err)) == F3R_OK &&
-      (st = f3r_linear_path(s, p->modes, ms->dt, ms->count, 1, la, err)) == F3R_OK &&
-      (st = f3r_linear_path(s, more, ms->dt, ms->count, 1, lb, err)) == F3R_OK) {
-    ms->evaluations += 2;
+      (st = f3r_mode_search_path(s, ms, p->modes, 1, la, err)) == F3R_OK &&
+      (st = f3r_mode_search_path(s, ms, more, 1, lb, err)) == F3R_OK) {
     *linear = f3r_max_distance(la, lb, ms->count);
     /* Below three times the pilot's own solver error the difference says nothing. */
     if (f3r_max_distance(p->a, p->b, p->count) > 3.0 * p->noise) *nonlinear = extrapolate(p, p->a, p->b);

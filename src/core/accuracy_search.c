@@ -82,9 +82,18 @@ static int reference_modes(int r) { return 3 * r + 3 < F3R_MAX_MODES ? 3 * r + 3
 
 
 
+static void memo_clear(f3r_mode_search* ms) {
+  for (int k = 0; k < ms->memo_used; ++k) {
+    free(ms->memo[k].pose);
+    ms->memo[k].pose = NULL;
+  }
+  ms->memo_used = ms->memo_next = 0;
+}
+
 void f3r_mode_search_free(f3r_mode_search* ms) {
   free(ms->ref);
   free(ms->path);
+  memo_clear(ms);
 }
 
 static void uniform(const f3r_mode_search* ms, int r, int modes[3]) {
@@ -93,10 +102,38 @@ static void uniform(const f3r_mode_search* ms, int r, int modes[3]) {
 
 void f3r_mode_search_least(const f3r_mode_search* ms, int modes[3]) { uniform(ms, 1, modes); }
 
+f3r_status f3r_mode_search_path(const f3r_scene* s, f3r_mode_search* ms, const int modes[3], int order,
+                                double* pose, f3r_error* err) {
+  const size_t bytes = (size_t)ms->count * 3 * sizeof(double);
+  for (int k = 0; k < ms->memo_used; ++k)
+    if (ms->memo[k].order == order && !memcmp(ms->memo[k].modes, modes, sizeof ms->memo[k].modes)) {
+      memcpy(pose, ms->memo[k].pose, bytes);
+      return F3R_OK;
+    }
+  ++ms->evaluations;
+  const f3r_status st = f3r_linear_path(s, modes, ms->dt, ms->count, order, pose, err);
+  if (st != F3R_OK) return st;
+  int k = ms->memo_used; /* a free entry, or the oldest one */
+  if (ms->memo_used < F3R_PATH_MEMO) {
+    ++ms->memo_used;
+  } else {
+    k = ms->memo_next;
+    ms->memo_next = (ms->memo_next + 1) % F3R_PATH_MEMO;
+  }
+  if (!ms->memo[k].pose) ms->memo[k].pose = malloc(bytes);
+  if (ms->memo[k].pose) { /* without memory the memo just forgets */
+    memcpy(ms->memo[k].modes, modes, sizeof ms->memo[k].modes);
+    ms->memo[k].order = order;
+    memcpy(ms->memo[k].pose, pose, bytes);
+  } else {
+    ms->memo[k].order = -1;
+  }
+  return F3R_OK;
+}
+
 static f3r_status path_at(const f3r_scene* s, f3r_mode_search* ms, const int modes[3], int order,
                           double* pose, f3r_error* err) {
-  ++ms->evaluations;
-  return f3r_linear_path(s, modes, ms->dt, ms->count, order, pose, err);
+  return f3r_mode_search_path(s, ms, modes, order, pose, err);
 }
 
 static f3r_status reference_for(const f3r_scene* s, f3r_mode_search* ms, int r, f3r_error* err) {
@@ -183,6 +220,7 @@ f3r_status f3r_mode_search_init(const f3r_scene* s, unsigned chosen, f3r_mode_se
     return F3R_OK;
   }
   if ((int)samples != ms->count) {
+    memo_clear(ms); /* paths at the old sampling */
     ms->count = (int)samples;
     ms->dt = s->duration / (ms->count - 1);
     free(ms->ref);
