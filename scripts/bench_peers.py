@@ -56,7 +56,7 @@ CMAKE_LIB = os.path.join(ROOT, "build/ws/devel/lib/libf3r_peer.so")
 LOCAL_LIB = os.path.join(ROOT, "build/peer/libf3r_peer.so")
 PEER_SOURCE = os.path.join(ROOT, "src/bench/f3r_peer.c")
 CORE_SOURCES = ["beam_modes", "constraints", "dense", "dynamics", "effects", "form_dae", "form_minimal", "forward",
-                "impact", "modal", "model", "residual", "scene", "scene_overrides", "scene_yaml", "status"]
+                "impact", "modal", "model", "residual", "scene", "scene_overrides", "scene_yaml", "scene_yaml_reader", "status"]
 R_SCRIPT = os.path.join(ROOT, "scripts/bench_daspk.R")
 MEBDFI_SCRIPT = os.path.join(ROOT, "scripts/bench_mebdfi.R")
 R_LOCAL_LIBRARY = os.path.join(ROOT, "build/rlib")  # where a deTestSet built here is installed

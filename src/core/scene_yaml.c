@@ -4,7 +4,6 @@
  * 1024-point table is 2048 of them) so that those messages carry it too. */
 #include <errno.h>
 #include <math.h>
-#include <stdarg.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -12,226 +11,48 @@
 
 #include "flex3rpr/scene.h"
 #include "scene_overrides.h"
-
-typedef struct {
-  char name[128]; /* the field's path, as f3r_scene_validate names it: "inputs.rho_1.table.time[3]" */
-  int line;
-  int override;   /* 1 + the override that set it; 0: the file */
-} field_location;
-
-typedef struct {
-  const char* path;
-  yaml_document_t doc;
-  f3r_scene* scene;
-  f3r_error* err;
-  field_location* fields; /* every field read, in reading order; grown by doubling */
-  int n_fields, capacity;
-  int out_of_memory;      /* a location could not be stored: reported after the read */
-  /* Overrides ("--set links[0].modes=4"): override k added the document's nodes
-   * first_node[k] .. last_node[k] (ids); a message about one of them names the override. */
-  const char* const* overrides;
-  int override_count;
-  int* first_node;
-  int* last_node;
-} loader;
-
-static int line_of(const yaml_node_t* node) { return (int)node->start_mark.line + 1; }
-
-/* 1 + the override that added `node`, 0 if the file holds it. */
-static int override_of(const loader* L, const yaml_node_t* node) {
-  if (!node) return 0;
-  const int id = (int)(node - L->doc.nodes.start) + 1;
-  for (int k = 0; k < L->override_count; ++k)
-    if (id >= L->first_node[k] && id <= L->last_node[k]) return k + 1;
-  return 0;
-}
-
-/* Where a message points: "path:line" in the file, or "--set FIELD=VALUE" for an override. */
-static void where(const loader* L, int line, int override, char* out, size_t size) {
-  if (override) snprintf(out, size, "--set %s", L->overrides[override - 1]);
-  else snprintf(out, size, "%s:%d", L->path, line);
-}
-
-static f3r_status fail(loader* L, const yaml_node_t* node, const char* field, const char* fmt, ...) {
-  char what[384], at[320];
-  va_list args;
-  va_start(args, fmt);
-  vsnprintf(what, sizeof what, fmt, args);
-  va_end(args);
-  where(L, node ? line_of(node) : 0, override_of(L, node), at, sizeof at);
-  return f3r_error_set(L->err, F3R_ERR_SCENE, "%s: %s: %s", at, field, what);
-}
-
-static void remember(loader* L, const char* field, const yaml_node_t* node) {
-  if (L->n_fields == L->capacity) {
-    const int capacity = L->capacity ? 2 * L->capacity : 64;
-    field_location* grown = realloc(L->fields, (size_t)capacity * sizeof *grown);
-    if (!grown) {
-      L->out_of_memory = 1;
-      return;
-    }
-    L->fields = grown;
-    L->capacity = capacity;
-  }
-  field_location* f = &L->fields[L->n_fields++];
-  snprintf(f->name, sizeof f->name, "%s", field);
-  f->line = line_of(node);
-  f->override = override_of(L, node);
-}
-
-/* The location of `field`: its own, else that of the nearest enclosing field that was read
- * ("links[1]" for "links[1].modes" when the modes were left to their default); NULL if none. */
-static const field_location* location_of_field(const loader* L, const char* field) {
-  const field_location* found = NULL;
-  size_t best = 0;
-  for (int k = L->n_fields - 1; k >= 0; --k) {
-    const char* name = L->fields[k].name;
-    const size_t n = strlen(name);
-    if (!strcmp(name, field)) return &L->fields[k];
-    if (n > best && !strncmp(field, name, n) && (field[n] == '.' || field[n] == '[')) {
-      best = n;
-      found = &L->fields[k];
-    }
-  }
-  return found;
-}
-
-static const char* scalar(const yaml_node_t* n) {
-  return n->type == YAML_SCALAR_NODE ? (const char*)n->data.scalar.value : NULL;
-}
-
-static f3r_status read_number(loader* L, const yaml_node_t* n, const char* field, double* out) {
-  const char* s = scalar(n);
-  if (!s) return fail(L, n, field, "expected a number");
-  char* end = NULL;
-  errno = 0;
-  const double v = strtod(s, &end);
-  if (end == s || *end != '\0' || errno == ERANGE || !isfinite(v))
-    return fail(L, n, field, "'%s' is not a finite number", s);
-  *out = v;
-  remember(L, field, n);
-  return F3R_OK;
-}
-
-static f3r_status read_int(loader* L, const yaml_node_t* n, const char* field, int* out) {
-  double v = 0.0;
-  f3r_status st = read_number(L, n, field, &v);
-  if (st != F3R_OK) return st;
-  if (v != floor(v) || fabs(v) > 1e6) return fail(L, n, field, "%g is not a whole number", v);
-  *out = (int)v;
-  return F3R_OK;
-}
-
-static f3r_status read_bool(loader* L, const yaml_node_t* n, const char* field, int* out) {
-  const char* s = scalar(n);
-  if (s && (!strcmp(s, "true") || !strcmp(s, "on") || !strcmp(s, "yes"))) *out = 1;
-  else if (s && (!strcmp(s, "false") || !strcmp(s, "off") || !strcmp(s, "no"))) *out = 0;
-  else return fail(L, n, field, "expected true or false");
-  remember(L, field, n);
-  return F3R_OK;
-}
-
-static f3r_status read_vector(loader* L, const yaml_node_t* n, const char* field, double* out,
-                              int count) {
-  if (n->type != YAML_SEQUENCE_NODE) return fail(L, n, field, "expected a list of %d numbers", count);
-  const int len = (int)(n->data.sequence.items.top - n->data.sequence.items.start);
-  if (len != count) return fail(L, n, field, "has %d values, expected %d", len, count);
-  for (int k = 0; k < len; ++k) {
-    char name[96];
-    snprintf(name, sizeof name, "%s[%d]", field, k);
-    const yaml_node_t* item = yaml_document_get_node(&L->doc, n->data.sequence.items.start[k]);
-    f3r_status st = read_number(L, item, name, &out[k]);
-    if (st != F3R_OK) return st;
-  }
-  remember(L, field, n);
-  return F3R_OK;
-}
-
-/* Iterates the pairs of a mapping node; KEY is the key string, VALUE the value node. */
-#define FOR_EACH_PAIR(L, map, KEY, VALUE)                                                   \
-  for (yaml_node_pair_t* pair_ = (map)->data.mapping.pairs.start;                           \
-       pair_ < (map)->data.mapping.pairs.top; ++pair_)                                      \
-    for (int once_ = 1; once_; once_ = 0)                                                   \
-      for (const yaml_node_t *key_node_ = yaml_document_get_node(&(L)->doc, pair_->key),    \
-                             *VALUE = yaml_document_get_node(&(L)->doc, pair_->value);      \
-           once_; once_ = 0)                                                                \
-        for (const char* KEY = scalar(key_node_) ? scalar(key_node_) : ""; once_; once_ = 0)
-
-static f3r_status expect_mapping(loader* L, const yaml_node_t* n, const char* field) {
-  return n->type == YAML_MAPPING_NODE ? F3R_OK : fail(L, n, field, "expected a mapping");
-}
-
-typedef struct {
-  const char* key;
-  double* target;
-} number_field;
-
-/* Reads a mapping whose keys are all numbers from `fields`. */
-static f3r_status read_numbers(loader* L, const yaml_node_t* map, const char* section,
-                               const number_field* fields, int count) {
-  f3r_status st = expect_mapping(L, map, section);
-  if (st != F3R_OK) return st;
-  FOR_EACH_PAIR(L, map, key, value) {
-    char name[96];
-    snprintf(name, sizeof name, "%s.%s", section, key);
-    int found = 0;
-    for (int k = 0; k < count && !found; ++k)
-      if (!strcmp(key, fields[k].key)) {
-        found = 1;
-        if ((st = read_number(L, value, name, fields[k].target)) != F3R_OK) return st;
-      }
-    if (!found) {
-      char allowed[256] = "";
-      for (int k = 0; k < count; ++k) {
-        strncat(allowed, fields[k].key, sizeof allowed - strlen(allowed) - 1);
-        if (k + 1 < count) strncat(allowed, ", ", sizeof allowed - strlen(allowed) - 1);
-      }
-      return fail(L, value, name, "unknown key (allowed: %s)", allowed);
-    }
-  }
-  return F3R_OK;
-}
+#include "scene_yaml_reader.h"
 
 static f3r_status read_link(loader* L, const yaml_node_t* map, int i) {
   char section[32];
   snprintf(section, sizeof section, "links[%d]", i);
-  f3r_status st = expect_mapping(L, map, section);
+  f3r_status st = f3r_yaml_mapping(L, map, section);
   if (st != F3R_OK) return st;
-  remember(L, section, map);
+  f3r_yaml_remember(L, section, map);
   f3r_link_scene* link = &L->scene->links[i];
   FOR_EACH_PAIR(L, map, key, value) {
     char name[96];
     snprintf(name, sizeof name, "%s.%s", section, key);
     if (!strcmp(key, "model")) {
-      const char* s = scalar(value);
+      const char* s = f3r_yaml_scalar(value);
       if (s && !strcmp(s, "rigid")) link->model = F3R_LINK_RIGID;
       else if (s && !strcmp(s, "fixed_pinned")) link->model = F3R_LINK_FIXED_PINNED;
       else if (s && !strcmp(s, "fixed_free")) link->model = F3R_LINK_FIXED_FREE;
-      else return fail(L, value, name, "'%s' is not one of rigid, fixed_pinned, fixed_free", s ? s : "?");
-      remember(L, name, value);
+      else return f3r_yaml_fail(L, value, name, "'%s' is not one of rigid, fixed_pinned, fixed_free", s ? s : "?");
+      f3r_yaml_remember(L, name, value);
     } else if (!strcmp(key, "modes")) {
-      const char* v = scalar(value);
+      const char* v = f3r_yaml_scalar(value);
       if (v && !strcmp(v, "auto")) {
         link->modes = F3R_MODES_AUTO;
-        remember(L, name, value);
-      } else if ((st = read_int(L, value, name, &link->modes)) != F3R_OK) {
-        return fail(L, value, name, "expected 1..%d or auto", F3R_MAX_MODES);
+        f3r_yaml_remember(L, name, value);
+      } else if ((st = f3r_yaml_int(L, value, name, &link->modes)) != F3R_OK) {
+        return f3r_yaml_fail(L, value, name, "expected 1..%d or auto", F3R_MAX_MODES);
       } else {
         L->scene->explicit_settings |= F3R_EXPLICIT_MODES << i;
       }
     } else if (!strcmp(key, "auto_tolerance")) {
-      if ((st = read_number(L, value, name, &link->auto_tolerance)) != F3R_OK) return st;
+      if ((st = f3r_yaml_number(L, value, name, &link->auto_tolerance)) != F3R_OK) return st;
     } else if (!strcmp(key, "damping_ratio")) {
-      if ((st = read_number(L, value, name, &link->damping_ratio)) != F3R_OK) return st;
+      if ((st = f3r_yaml_number(L, value, name, &link->damping_ratio)) != F3R_OK) return st;
     } else if (!strcmp(key, "initial_deflection") || !strcmp(key, "initial_rate")) {
       double* target = key[8] == 'd' ? link->eta0 : link->eta_rate0;
-      if (value->type != YAML_SEQUENCE_NODE) return fail(L, value, name, "expected a list");
+      if (value->type != YAML_SEQUENCE_NODE) return f3r_yaml_fail(L, value, name, "expected a list");
       const int len = (int)(value->data.sequence.items.top - value->data.sequence.items.start);
       if (len > F3R_MAX_MODES)
-        return fail(L, value, name, "has %d values, at most %d allowed", len, F3R_MAX_MODES);
-      if ((st = read_vector(L, value, name, target, len)) != F3R_OK) return st;
+        return f3r_yaml_fail(L, value, name, "has %d values, at most %d allowed", len, F3R_MAX_MODES);
+      if ((st = f3r_yaml_vector(L, value, name, target, len)) != F3R_OK) return st;
     } else {
-      return fail(L, value, name,
+      return f3r_yaml_fail(L, value, name,
                   "unknown key (allowed: model, modes, auto_tolerance, damping_ratio, "
                   "initial_deflection, initial_rate)");
     }
@@ -247,9 +68,9 @@ static f3r_status read_links(loader* L, const yaml_node_t* n) {
     }
     return F3R_OK;
   }
-  if (n->type != YAML_SEQUENCE_NODE) return fail(L, n, "links", "expected a list of 3 links or one mapping for all");
+  if (n->type != YAML_SEQUENCE_NODE) return f3r_yaml_fail(L, n, "links", "expected a list of 3 links or one mapping for all");
   const int len = (int)(n->data.sequence.items.top - n->data.sequence.items.start);
-  if (len != 3) return fail(L, n, "links", "has %d entries, expected 3", len);
+  if (len != 3) return f3r_yaml_fail(L, n, "links", "has %d entries, expected 3", len);
   for (int i = 0; i < 3; ++i) {
     f3r_status st = read_link(L, yaml_document_get_node(&L->doc, n->data.sequence.items.start[i]), i);
     if (st != F3R_OK) return st;
@@ -260,49 +81,49 @@ static f3r_status read_links(loader* L, const yaml_node_t* n) {
 /* A mapping {key: number} into the fields named in `fields`; every key must be known. */
 static f3r_status read_shape(loader* L, const yaml_node_t* map, const char* name,
                              const number_field* fields, int count) {
-  return read_numbers(L, map, name, fields, count);
+  return f3r_yaml_numbers(L, map, name, fields, count);
 }
 
 static f3r_status read_table(loader* L, const yaml_node_t* map, const char* name, f3r_input* in) {
-  f3r_status st = expect_mapping(L, map, name);
+  f3r_status st = f3r_yaml_mapping(L, map, name);
   if (st != F3R_OK) return st;
   int n_time = -1, n_value = -1;
   FOR_EACH_PAIR(L, map, key, value) {
     char field[128];
     snprintf(field, sizeof field, "%s.%s", name, key);
     if (!strcmp(key, "interpolation")) {
-      const char* v = scalar(value);
+      const char* v = f3r_yaml_scalar(value);
       if (v && !strcmp(v, "linear")) in->table_hold = 0;
       else if (v && !strcmp(v, "hold")) in->table_hold = 1;
-      else return fail(L, value, field, "'%s' is not allowed (linear or hold)", v ? v : "?");
+      else return f3r_yaml_fail(L, value, field, "'%s' is not allowed (linear or hold)", v ? v : "?");
       continue;
     }
     double* target = !strcmp(key, "time") ? in->table_time : !strcmp(key, "value") ? in->table_value : NULL;
-    if (!target) return fail(L, value, field, "unknown key (allowed: time, value, interpolation)");
-    if (value->type != YAML_SEQUENCE_NODE) return fail(L, value, field, "expected a list of numbers");
+    if (!target) return f3r_yaml_fail(L, value, field, "unknown key (allowed: time, value, interpolation)");
+    if (value->type != YAML_SEQUENCE_NODE) return f3r_yaml_fail(L, value, field, "expected a list of numbers");
     const int len = (int)(value->data.sequence.items.top - value->data.sequence.items.start);
     if (len < 2 || len > F3R_MAX_TABLE)
-      return fail(L, value, field, "has %d values, allowed 2..%d", len, F3R_MAX_TABLE);
-    if ((st = read_vector(L, value, field, target, len)) != F3R_OK) return st;
+      return f3r_yaml_fail(L, value, field, "has %d values, allowed 2..%d", len, F3R_MAX_TABLE);
+    if ((st = f3r_yaml_vector(L, value, field, target, len)) != F3R_OK) return st;
     *(target == in->table_time ? &n_time : &n_value) = len;
   }
-  if (n_time < 0 || n_value < 0) return fail(L, map, name, "needs both time and value lists");
+  if (n_time < 0 || n_value < 0) return f3r_yaml_fail(L, map, name, "needs both time and value lists");
   if (n_time != n_value)
-    return fail(L, map, name, "time has %d values but value has %d", n_time, n_value);
+    return f3r_yaml_fail(L, map, name, "time has %d values but value has %d", n_time, n_value);
   in->table_size = n_time;
-  remember(L, name, map);
+  f3r_yaml_remember(L, name, map);
   return F3R_OK;
 }
 
 static f3r_status read_input(loader* L, const yaml_node_t* map, const char* name, f3r_input* in) {
-  f3r_status st = expect_mapping(L, map, name);
+  f3r_status st = f3r_yaml_mapping(L, map, name);
   if (st != F3R_OK) return st;
-  remember(L, name, map);
+  f3r_yaml_remember(L, name, map);
   /* A shaped input is a one-key mapping naming its shape. */
   if (map->data.mapping.pairs.top - map->data.mapping.pairs.start == 1) {
     const yaml_node_t* key_node = yaml_document_get_node(&L->doc, map->data.mapping.pairs.start->key);
     const yaml_node_t* value = yaml_document_get_node(&L->doc, map->data.mapping.pairs.start->value);
-    const char* key = scalar(key_node) ? scalar(key_node) : "";
+    const char* key = f3r_yaml_scalar(key_node) ? f3r_yaml_scalar(key_node) : "";
     char field[128];
     snprintf(field, sizeof field, "%s.%s", name, key);
     if (!strcmp(key, "step")) {
@@ -339,22 +160,22 @@ static f3r_status read_input(loader* L, const yaml_node_t* map, const char* name
                      : !strcmp(key, "frequency") ? &frequency
                                                  : NULL;
     if (!target)
-      return fail(L, value, field,
+      return f3r_yaml_fail(L, value, field,
                   "unknown key (allowed: offset, amplitude, frequency, omega, phase; or one of "
                   "step, ramp, chirp, table)");
-    if ((st = read_number(L, value, field, target)) != F3R_OK) return st;
+    if ((st = f3r_yaml_number(L, value, field, target)) != F3R_OK) return st;
     if (target != &in->offset) in->kind = F3R_INPUT_HARMONIC;
   }
   if (!isnan(frequency)) {
-    if (in->omega != 0.0) return fail(L, map, name, "give frequency (Hz) or omega (rad/s), not both");
-    if (frequency < 0.0) return fail(L, map, name, "frequency: %g Hz must not be negative", frequency);
+    if (in->omega != 0.0) return f3r_yaml_fail(L, map, name, "give frequency (Hz) or omega (rad/s), not both");
+    if (frequency < 0.0) return f3r_yaml_fail(L, map, name, "frequency: %g Hz must not be negative", frequency);
     in->omega = 2.0 * M_PI * frequency;
   }
   return F3R_OK;
 }
 
 static f3r_status read_inputs(loader* L, const yaml_node_t* map) {
-  f3r_status st = expect_mapping(L, map, "inputs");
+  f3r_status st = f3r_yaml_mapping(L, map, "inputs");
   if (st != F3R_OK) return st;
   FOR_EACH_PAIR(L, map, key, value) {
     char name[96];
@@ -363,7 +184,7 @@ static f3r_status read_inputs(loader* L, const yaml_node_t* map) {
     for (int k = 0; k < F3R_RIGID_FORCES; ++k)
       if (!strcmp(key, f3r_input_name(k))) index = k;
     if (index < 0)
-      return fail(L, value, name,
+      return f3r_yaml_fail(L, value, name,
                   "unknown input (allowed: rho_1..3, theta_1..3, platform_force_x, "
                   "platform_force_y, platform_torque)");
     if ((st = read_input(L, value, name, &L->scene->inputs[index])) != F3R_OK) return st;
@@ -372,50 +193,50 @@ static f3r_status read_inputs(loader* L, const yaml_node_t* map) {
 }
 
 static f3r_status read_solver(loader* L, const yaml_node_t* map) {
-  f3r_status st = expect_mapping(L, map, "solver");
+  f3r_status st = f3r_yaml_mapping(L, map, "solver");
   if (st != F3R_OK) return st;
   f3r_scene* s = L->scene;
   FOR_EACH_PAIR(L, map, key, value) {
     char name[96];
     snprintf(name, sizeof name, "solver.%s", key);
     if (!strcmp(key, "formulation")) {
-      const char* v = scalar(value);
+      const char* v = f3r_yaml_scalar(value);
       if (v && !strcmp(v, "dae")) s->formulation = F3R_FORMULATION_DAE;
       else if (v && !strcmp(v, "minimal")) s->formulation = F3R_FORMULATION_MINIMAL;
-      else return fail(L, value, name, "'%s' is not one of dae, minimal", v ? v : "?");
+      else return f3r_yaml_fail(L, value, name, "'%s' is not one of dae, minimal", v ? v : "?");
       s->explicit_settings |= F3R_EXPLICIT_FORMULATION;
-      remember(L, name, value);
+      f3r_yaml_remember(L, name, value);
     } else if (!strcmp(key, "integrator")) {
-      const char* v = scalar(value);
+      const char* v = f3r_yaml_scalar(value);
       if (v && !strcmp(v, "ida")) s->integrator = F3R_INTEGRATOR_IDA;
       else if (v && !strcmp(v, "erk")) s->integrator = F3R_INTEGRATOR_ERK;
       else if (v && !strcmp(v, "dirk")) s->integrator = F3R_INTEGRATOR_DIRK;
-      else return fail(L, value, name, "'%s' is not one of ida, erk, dirk", v ? v : "?");
+      else return f3r_yaml_fail(L, value, name, "'%s' is not one of ida, erk, dirk", v ? v : "?");
       s->explicit_settings |= F3R_EXPLICIT_INTEGRATOR;
-      remember(L, name, value);
+      f3r_yaml_remember(L, name, value);
     } else if (!strcmp(key, "table")) {
-      const char* v = scalar(value);
+      const char* v = f3r_yaml_scalar(value);
       if (!v || !*v || strlen(v) >= sizeof s->table)
-        return fail(L, value, name, "needs a Butcher table's name (at most %d characters)",
+        return f3r_yaml_fail(L, value, name, "needs a Butcher table's name (at most %d characters)",
                     (int)sizeof s->table - 1);
       snprintf(s->table, sizeof s->table, "%s", v);
       s->explicit_settings |= F3R_EXPLICIT_TABLE;
-      remember(L, name, value);
+      f3r_yaml_remember(L, name, value);
     } else if (!strcmp(key, "rtol")) {
-      st = read_number(L, value, name, &s->rtol);
+      st = f3r_yaml_number(L, value, name, &s->rtol);
       s->explicit_settings |= F3R_EXPLICIT_RTOL;
     } else if (!strcmp(key, "atol")) {
-      st = read_number(L, value, name, &s->atol);
+      st = f3r_yaml_number(L, value, name, &s->atol);
       s->explicit_settings |= F3R_EXPLICIT_ATOL;
-    } else if (!strcmp(key, "max_step")) { st = read_number(L, value, name, &s->max_step);
+    } else if (!strcmp(key, "max_step")) { st = f3r_yaml_number(L, value, name, &s->max_step);
     } else if (!strcmp(key, "max_order")) {
       double order = 0.0;
-      st = read_number(L, value, name, &order);
+      st = f3r_yaml_number(L, value, name, &order);
       if (st == F3R_OK && (order != floor(order) || order < 1 || order > 5))
-        return fail(L, value, name, "%g is out of range 1..5 (an integer)", order);
+        return f3r_yaml_fail(L, value, name, "%g is out of range 1..5 (an integer)", order);
       s->max_order = (int)order;
     } else {
-      return fail(L, value, name, "unknown key (allowed: formulation, integrator, table, rtol, atol, max_step, max_order)");
+      return f3r_yaml_fail(L, value, name, "unknown key (allowed: formulation, integrator, table, rtol, atol, max_step, max_order)");
     }
     if (st != F3R_OK) return st;
   }
@@ -424,76 +245,76 @@ static f3r_status read_solver(loader* L, const yaml_node_t* map) {
 
 static f3r_status read_root(loader* L, const yaml_node_t* root) {
   f3r_scene* s = L->scene;
-  f3r_status st = expect_mapping(L, root, "scene");
+  f3r_status st = f3r_yaml_mapping(L, root, "scene");
   if (st != F3R_OK) return st;
   FOR_EACH_PAIR(L, root, key, value) {
     if (!strcmp(key, "geometry")) {
       const number_field f[] = {{"base_side", &s->base_side}, {"platform_side", &s->platform_side},
                                 {"stroke_min", &s->stroke_min}, {"stroke_max", &s->stroke_max}};
-      st = read_numbers(L, value, "geometry", f, 4);
+      st = f3r_yaml_numbers(L, value, "geometry", f, 4);
     } else if (!strcmp(key, "platform")) {
       const number_field f[] = {{"mass", &s->platform_mass}, {"inertia", &s->platform_inertia}};
-      st = read_numbers(L, value, "platform", f, 2);
+      st = f3r_yaml_numbers(L, value, "platform", f, 2);
     } else if (!strcmp(key, "link")) {
       const number_field f[] = {{"length", &s->link_length}, {"diameter", &s->link_diameter},
                                 {"density", &s->link_density},
                                 {"youngs_modulus", &s->link_youngs_modulus}};
-      st = read_numbers(L, value, "link", f, 4);
+      st = f3r_yaml_numbers(L, value, "link", f, 4);
     } else if (!strcmp(key, "cylinder")) {
       const number_field f[] = {{"length", &s->cylinder_length},
                                 {"inner_diameter", &s->cylinder_inner_diameter},
                                 {"outer_diameter", &s->cylinder_outer_diameter},
                                 {"density", &s->cylinder_density}};
-      st = read_numbers(L, value, "cylinder", f, 4);
+      st = f3r_yaml_numbers(L, value, "cylinder", f, 4);
     } else if (!strcmp(key, "links")) {
       st = read_links(L, value);
     } else if (!strcmp(key, "effects")) {
-      if ((st = expect_mapping(L, value, "effects")) != F3R_OK) return st;
+      if ((st = f3r_yaml_mapping(L, value, "effects")) != F3R_OK) return st;
       FOR_EACH_PAIR(L, value, ekey, evalue) {
         char name[96];
         snprintf(name, sizeof name, "effects.%s", ekey);
         if (!strcmp(ekey, "exact_kinematics")) {
-          st = read_bool(L, evalue, name, &s->exact_kinematics);
+          st = f3r_yaml_bool(L, evalue, name, &s->exact_kinematics);
           s->explicit_settings |= F3R_EXPLICIT_EXACT_KINEMATICS;
         } else if (!strcmp(ekey, "gravity")) {
-          st = read_vector(L, evalue, name, s->gravity, 3);
+          st = f3r_yaml_vector(L, evalue, name, s->gravity, 3);
         } else if (!strcmp(ekey, "payload")) {
           const number_field f[] = {{"mass", &s->payload_mass}, {"inertia", &s->payload_inertia}};
-          st = read_numbers(L, evalue, name, f, 2);
+          st = f3r_yaml_numbers(L, evalue, name, f, 2);
         } else if (!strcmp(ekey, "end_stops")) {
           const number_field f[] = {{"min", &s->stroke_min}, {"max", &s->stroke_max},
                                     {"restitution", &s->restitution}};
           s->end_stops = 1;
-          st = read_numbers(L, evalue, name, f, 3);
+          st = f3r_yaml_numbers(L, evalue, name, f, 3);
         } else if (!strcmp(ekey, "actuator_lag")) {
           const number_field f[] = {{"time_constant", &s->actuator_lag}};
-          st = read_numbers(L, evalue, name, f, 1);
+          st = f3r_yaml_numbers(L, evalue, name, f, 1);
         } else if (!strcmp(ekey, "joint_friction")) {
-          if ((st = expect_mapping(L, evalue, name)) != F3R_OK) return st;
+          if ((st = f3r_yaml_mapping(L, evalue, name)) != F3R_OK) return st;
           FOR_EACH_PAIR(L, evalue, fkey, fvalue) {
             char field[128];
             snprintf(field, sizeof field, "%s.%s", name, fkey);
             double* target = !strcmp(fkey, "prismatic") ? s->friction_prismatic
                              : !strcmp(fkey, "revolute") ? s->friction_revolute : NULL;
-            if (!target) return fail(L, fvalue, field, "unknown key (allowed: prismatic, revolute)");
-            if ((st = read_vector(L, fvalue, field, target, 3)) != F3R_OK) return st;
+            if (!target) return f3r_yaml_fail(L, fvalue, field, "unknown key (allowed: prismatic, revolute)");
+            if ((st = f3r_yaml_vector(L, fvalue, field, target, 3)) != F3R_OK) return st;
           }
         } else {
-          return fail(L, evalue, name,
+          return f3r_yaml_fail(L, evalue, name,
                       "unknown effect (allowed: exact_kinematics, gravity, payload, joint_friction, "
                       "actuator_lag, end_stops)");
         }
         if (st != F3R_OK) return st;
       }
     } else if (!strcmp(key, "initial")) {
-      if ((st = expect_mapping(L, value, "initial")) != F3R_OK) return st;
+      if ((st = f3r_yaml_mapping(L, value, "initial")) != F3R_OK) return st;
       FOR_EACH_PAIR(L, value, ikey, ivalue) {
         char name[96];
         snprintf(name, sizeof name, "initial.%s", ikey);
-        if (!strcmp(ikey, "platform_pose")) st = read_vector(L, ivalue, name, s->platform_pose0, 3);
+        if (!strcmp(ikey, "platform_pose")) st = f3r_yaml_vector(L, ivalue, name, s->platform_pose0, 3);
         else if (!strcmp(ikey, "platform_velocity"))
-          st = read_vector(L, ivalue, name, s->platform_velocity0, 3);
-        else return fail(L, ivalue, name, "unknown key (allowed: platform_pose, platform_velocity)");
+          st = f3r_yaml_vector(L, ivalue, name, s->platform_velocity0, 3);
+        else return f3r_yaml_fail(L, ivalue, name, "unknown key (allowed: platform_pose, platform_velocity)");
         if (st != F3R_OK) return st;
       }
     } else if (!strcmp(key, "inputs")) {
@@ -502,20 +323,20 @@ static f3r_status read_root(loader* L, const yaml_node_t* root) {
       st = read_solver(L, value);
     } else if (!strcmp(key, "accuracy")) {
       const number_field f[] = {{"end_effector", &s->accuracy}};
-      st = read_numbers(L, value, "accuracy", f, 1);
+      st = f3r_yaml_numbers(L, value, "accuracy", f, 1);
     } else if (!strcmp(key, "run")) {
-      if ((st = expect_mapping(L, value, "run")) != F3R_OK) return st;
+      if ((st = f3r_yaml_mapping(L, value, "run")) != F3R_OK) return st;
       FOR_EACH_PAIR(L, value, rkey, rvalue) {
         char name[96];
         snprintf(name, sizeof name, "run.%s", rkey);
-        if (!strcmp(rkey, "duration")) st = read_number(L, rvalue, name, &s->duration);
-        else if (!strcmp(rkey, "output_step")) st = read_number(L, rvalue, name, &s->output_step);
-        else if (!strcmp(rkey, "beam_points")) st = read_int(L, rvalue, name, &s->beam_points);
-        else return fail(L, rvalue, name, "unknown key (allowed: duration, output_step, beam_points)");
+        if (!strcmp(rkey, "duration")) st = f3r_yaml_number(L, rvalue, name, &s->duration);
+        else if (!strcmp(rkey, "output_step")) st = f3r_yaml_number(L, rvalue, name, &s->output_step);
+        else if (!strcmp(rkey, "beam_points")) st = f3r_yaml_int(L, rvalue, name, &s->beam_points);
+        else return f3r_yaml_fail(L, rvalue, name, "unknown key (allowed: duration, output_step, beam_points)");
         if (st != F3R_OK) return st;
       }
     } else {
-      return fail(L, value, key,
+      return f3r_yaml_fail(L, value, key,
                   "unknown section (allowed: geometry, platform, link, cylinder, links, effects, "
                   "initial, inputs, solver, accuracy, run)");
     }
@@ -528,9 +349,9 @@ static f3r_status read_root(loader* L, const yaml_node_t* root) {
  * file does not hold (a default that another value puts out of range) gets the line of its
  * section, or 0 when the file has no part of it. */
 static f3r_status locate_validation_error(loader* L, f3r_error* err) {
-  const field_location* at = location_of_field(L, err->field);
+  const field_location* at = f3r_yaml_location(L, err->field);
   char message[sizeof err->message], field[sizeof err->field], place[320];
-  where(L, at ? at->line : 0, at ? at->override : 0, place, sizeof place);
+  f3r_yaml_where(L, at ? at->line : 0, at ? at->override : 0, place, sizeof place);
   snprintf(message, sizeof message, "%s: %s", place, err->message);
   snprintf(field, sizeof field, "%s", err->field);
   f3r_error_set(err, err->code, "%s", message);
