@@ -6,8 +6,9 @@
  *  - model error: the end-effector path of the linearised model (linear.h) with r modes against
  *    the same with F3R_MAX_MODES on every link being chosen, over the scene's own inputs,
  *    duration and initial state; r is raised uniformly until it fits, then trimmed per link;
- *  - pilot check: when the linear path leaves the initial pose far, a short nonlinear run at r
- *    and at r + 1 (and one with exact kinematics) measures what the linearisation cannot;
+ *  - pilot check: when the linear path leaves the initial pose far, short nonlinear runs at the
+ *    least mode counts and one more (and one with exact kinematics) measure what the
+ *    linearisation cannot; with end stops the knob takes 20 modes and exact kinematics instead;
  *  - solver error: the benchmark's measured relation of error to tolerance (solver_table.c).
  * modes: auto without an accuracy request asks the linear estimate for auto_tolerance of the
  * path's extent. */

@@ -36,6 +36,7 @@
 static const f3r_solver_relation* pick_solver(const f3r_scene* s, const char* kind, double budget,
                                               double explicit_scale) {
   const f3r_solver_relation* best = NULL;
+  double best_cost = 0.0;
   const unsigned fixed = s->explicit_settings;
   for (int k = 0; k < f3r_solver_relation_count; ++k) {
     const f3r_solver_relation* r = &f3r_solver_relations[k];
@@ -45,8 +46,10 @@ static const f3r_solver_relation* pick_solver(const f3r_scene* s, const char* ki
     if ((fixed & F3R_EXPLICIT_RTOL) && r->rtol != s->rtol) continue;
     if ((fixed & F3R_EXPLICIT_TABLE) && strcmp(r->table, s->table)) continue;
     const double cost = r->integrator == F3R_INTEGRATOR_ERK ? r->cost * explicit_scale : r->cost;
-    const double best_cost = !best ? 0.0 : best->integrator == F3R_INTEGRATOR_ERK ? best->cost * explicit_scale : best->cost;
-    if (!best || cost < best_cost || (cost == best_cost && r->rtol > best->rtol)) best = r;
+    if (!best || cost < best_cost || (cost == best_cost && r->rtol > best->rtol)) {
+      best = r;
+      best_cost = cost;
+    }
   }
   return best;
 }

@@ -131,18 +131,13 @@ f3r_status f3r_mode_search_path(const f3r_scene* s, f3r_mode_search* ms, const i
   return F3R_OK;
 }
 
-static f3r_status path_at(const f3r_scene* s, f3r_mode_search* ms, const int modes[3], int order,
-                          double* pose, f3r_error* err) {
-  return f3r_mode_search_path(s, ms, modes, order, pose, err);
-}
-
 static f3r_status reference_for(const f3r_scene* s, f3r_mode_search* ms, int r, f3r_error* err) {
   const int R = reference_modes(r);
   if (ms->ref_r == R) return F3R_OK;
   int modes[3];
   uniform(ms, R, modes);
   ms->ref_r = 0;
-  const f3r_status st = path_at(s, ms, modes, ms->order, ms->ref, err);
+  const f3r_status st = f3r_mode_search_path(s, ms, modes, ms->order, ms->ref, err);
   if (st == F3R_OK) ms->ref_r = R;
   return st;
 }
@@ -264,7 +259,7 @@ f3r_status f3r_mode_search_run(const f3r_scene* s, f3r_mode_search* ms, double t
     int trial[3];
     uniform(ms, r, trial);
     if ((st = reference_for(s, ms, r, err)) != F3R_OK ||
-        (st = path_at(s, ms, trial, ms->order, ms->path, err)) != F3R_OK)
+        (st = f3r_mode_search_path(s, ms, trial, ms->order, ms->path, err)) != F3R_OK)
       return st;
     const double e = f3r_max_distance(ms->path, ms->ref, ms->count);
     if (e <= target) {
@@ -281,7 +276,7 @@ f3r_status f3r_mode_search_run(const f3r_scene* s, f3r_mode_search* ms, double t
       const int mid = (lo + hi) / 2;
       int trial[3];
       uniform(ms, mid, trial);
-      if ((st = path_at(s, ms, trial, ms->order, ms->path, err)) != F3R_OK) return st;
+      if ((st = f3r_mode_search_path(s, ms, trial, ms->order, ms->path, err)) != F3R_OK) return st;
       const double e = f3r_max_distance(ms->path, ms->ref, ms->count);
       if (e <= target) {
         hi = mid;
@@ -305,7 +300,7 @@ f3r_status f3r_mode_search_run(const f3r_scene* s, f3r_mode_search* ms, double t
     if (!(ms->chosen >> i & 1)) continue;
     while (modes[i] > ms->low[i]) {
       --modes[i];
-      if ((st = path_at(s, ms, modes, ms->order, ms->path, err)) != F3R_OK) return st;
+      if ((st = f3r_mode_search_path(s, ms, modes, ms->order, ms->path, err)) != F3R_OK) return st;
       const double e = f3r_max_distance(ms->path, ms->ref, ms->count);
       if (e > target) {
         ++modes[i];
