@@ -207,6 +207,31 @@ TEST(BeamModes, MomentsMatchClosedForms) {
   }
 }
 
+// The model's constants (closed form, double) against the quadrature and the printed forms in
+// multiple precision; the stiffness alpha^4 against the quadrature's int psi''^2.
+TEST(BeamModes, ModelConstantsMatchQuadratureAndPrintedForms) {
+  for (auto end : kEnds) {
+    double alpha[kR], mean[kR], first[kR], tip[kR];
+    double q_mean[kR], q_first[kR], q_tip[kR], bending[kR * kR];
+    ASSERT_EQ(f3r_beam_mode_constants(end, kR, alpha, mean, first, tip), 0);
+    ASSERT_EQ(f3r_beam_modal_integrals(end, kR, q_mean, q_first, nullptr, bending, q_tip), 0);
+    for (int j = 0; j < kR; ++j) {
+      double m, f;
+      PrintedMoments(end, alpha[j], &m, &f);
+      EXPECT_NEAR(mean[j], m, 1e-14) << "end " << end << " mode " << j + 1;
+      EXPECT_NEAR(first[j], f, 1e-14) << "end " << end << " mode " << j + 1;
+      EXPECT_NEAR(mean[j], q_mean[j], 1e-14) << "end " << end << " mode " << j + 1;
+      EXPECT_NEAR(first[j], q_first[j], 1e-14) << "end " << end << " mode " << j + 1;
+      EXPECT_EQ(tip[j], q_tip[j]) << "end " << end << " mode " << j + 1;
+      const double a4 = std::pow(alpha[j], 4);
+      EXPECT_NEAR(bending[j * kR + j] / a4, 1.0, 1e-12) << "end " << end << " mode " << j + 1;
+    }
+  }
+  double alpha[1];
+  EXPECT_EQ(f3r_beam_mode_constants(F3R_BEAM_FIXED_FREE, 0, alpha, nullptr, nullptr, nullptr), -1);
+  EXPECT_EQ(f3r_beam_mode_constants(F3R_BEAM_FIXED_FREE, kR + 1, alpha, nullptr, nullptr, nullptr), -1);
+}
+
 TEST(BeamModes, FewerModesGiveTheLeadingBlock) {
   for (auto end : kEnds) {
     const int r = 5;

@@ -38,6 +38,14 @@ void f3r_beam_mode_eval(f3r_beam_end end, double alpha, double xi, double* psi, 
 int f3r_beam_modal_integrals(f3r_beam_end end, int count, double* mean, double* first_moment,
                              double* gram, double* bending, double* tip);
 
+/* The constants a link's model needs of its first `count` modes, in closed form (no quadrature):
+ * alpha[j], mean[j] = int psi_j, first_moment[j] = int xi psi_j, tip[j] = psi_j(1), all from the
+ * cancellation-free form of f3r_beam_mode_eval; int psi_j''^2 = alpha_j^4 needs no output. Equal to
+ * f3r_beam_modal_integrals' to rounding, and ~100x cheaper at 20 modes. Every output but alpha
+ * may be NULL. Returns 0, or -1 for a bad count. */
+int f3r_beam_mode_constants(f3r_beam_end end, int count, double* alpha, double* mean,
+                            double* first_moment, double* tip);
+
 /* Nodes and weights of the n-point Gauss-Legendre rule on [0, 1] (n <= 64). Returns 0 or -1. */
 int f3r_gauss_legendre(int n, double* nodes, double* weights);
 

@@ -1,5 +1,6 @@
 /* Assumed modes of the clamped beam: frequency-equation roots, cancellation-free evaluation and
- * modal integrals by composite Gauss-Legendre quadrature. See include/flex3rpr/beam_modes.h.
+ * modal integrals in closed form (what the model needs) and by composite Gauss-Legendre
+ * quadrature (Gram and bending matrices; the closed forms' check). See include/flex3rpr/beam_modes.h.
  *
  * With s = +1 (fixed-free) or -1 (fixed-pinned) and a = alpha, multiplying numerator and
  * denominator of sigma by 2 e^-a gives
@@ -68,6 +69,36 @@ void f3r_beam_mode_eval(f3r_beam_end end, double a, double xi, double* psi, doub
   if (psi) *psi = c - sigma * sn - e1 - e2;
   if (dpsi) *dpsi = a * (-sn - sigma * c - e1 + e2);
   if (ddpsi) *ddpsi = a * a * (-c + sigma * sn - e1 - e2);
+}
+
+/* psi = cos a xi - sigma sin a xi - K1 e^(a (xi - 1)) - K2 e^(-a xi) (the form above), integrated
+ * term by term; every term is O(1/a) and every exponential decays, so nothing cancels:
+ *   int cos = sin a / a                     int xi cos = sin a / a + (cos a - 1) / a^2
+ *   int sin = (1 - cos a) / a               int xi sin = -cos a / a + sin a / a^2
+ *   int e^(a (xi - 1)) = (1 - e^-a) / a     int xi e^(a (xi - 1)) = 1/a - (1 - e^-a) / a^2
+ *   int e^(-a xi) = (1 - e^-a) / a          int xi e^(-a xi) = (1 - e^-a) / a^2 - e^-a / a */
+int f3r_beam_mode_constants(f3r_beam_end end, int count, double* alpha, double* mean,
+                            double* first_moment, double* tip) {
+  if (f3r_beam_roots(end, count, alpha)) return -1;
+  const double s = end == F3R_BEAM_FIXED_FREE ? 1.0 : -1.0;
+  for (int j = 0; j < count; ++j) {
+    const double a = alpha[j], ca = cos(a), sa = sin(a), em = exp(-a), em2 = em * em;
+    const double den = 2.0 * sa * em + s * (1.0 - em2);
+    const double sigma = (2.0 * ca * em + s * (1.0 + em2)) / den;
+    const double k1 = (sa - ca - s * em) / den, k2 = 0.5 * (1.0 + sigma);
+    const double decay = (1.0 - em) / a, decay2 = (1.0 - em) / (a * a);
+    if (mean) mean[j] = sa / a - sigma * (1.0 - ca) / a - k1 * decay - k2 * decay;
+    if (first_moment)
+      first_moment[j] = sa / a + (ca - 1.0) / (a * a) - sigma * (-ca / a + sa / (a * a)) -
+                        k1 * (1.0 / a - decay2) - k2 * (decay2 - em / a);
+    if (tip) {
+      if (end == F3R_BEAM_FIXED_PINNED) /* the pin: exact, not a rounded ~1e-16 */
+        tip[j] = 0.0;
+      else
+        f3r_beam_mode_eval(end, a, 1.0, &tip[j], NULL, NULL);
+    }
+  }
+  return 0;
 }
 
 /* Legendre P_n(z) and P_n'(z) by the three-term recurrence (|z| < 1). */

@@ -114,37 +114,17 @@ f3r_status f3r_model_create(const f3r_scene* scene, f3r_model** out, f3r_error* 
     lp->eta_index = next;
     next += lp->modes;
     if (!lp->modes) continue;
-    /* Each mode's constants depend on the boundary model and its index only: a link with the
-     * model and no more modes than an earlier one copies them (the quadrature is most of the
-     * cost of a model). */
-    int same = -1;
-    for (int k = 0; k < i; ++k)
-      if (m->link[k].model == lp->model && m->link[k].modes >= lp->modes) same = k;
-    if (same >= 0) {
-      const f3r_link_params* from = &m->link[same];
-      for (int j = 0; j < lp->modes; ++j) {
-        lp->alpha[j] = from->alpha[j];
-        lp->mean[j] = from->mean[j];
-        lp->first_moment[j] = from->first_moment[j];
-        lp->tip[j] = from->tip[j];
-        lp->stiffness[j] = from->stiffness[j];
-        lp->omega_clamped[j] = from->omega_clamped[j];
-      }
-      continue;
-    }
-    const f3r_beam_end end = (f3r_beam_end)lp->model;
-    double bending[F3R_MAX_MODES * F3R_MAX_MODES];
-    if (f3r_beam_roots(end, lp->modes, lp->alpha) ||
-        f3r_beam_modal_integrals(end, lp->modes, lp->mean, lp->first_moment, NULL, bending,
-                                 lp->tip)) {
+    if (f3r_beam_mode_constants((f3r_beam_end)lp->model, lp->modes, lp->alpha, lp->mean,
+                                lp->first_moment, lp->tip)) {
       const int modes = lp->modes;
       free(m);
       return f3r_error_set(err, F3R_ERR_SCENE, "links[%d].modes: %d is out of range 1..%d", i,
                            modes, F3R_MAX_MODES);
     }
     for (int j = 0; j < lp->modes; ++j) {
-      lp->stiffness[j] = EI_l3 * bending[j * lp->modes + j];
-      lp->omega_clamped[j] = lp->alpha[j] * lp->alpha[j] * sqrt(EI_l3 / m->link_mass);
+      const double a2 = lp->alpha[j] * lp->alpha[j];
+      lp->stiffness[j] = EI_l3 * a2 * a2; /* int psi_j''^2 = alpha_j^4 (beam_modes.h) */
+      lp->omega_clamped[j] = a2 * sqrt(EI_l3 / m->link_mass);
     }
   }
   m->nq = next;
