@@ -200,6 +200,39 @@ TEST(Linear, SecondOrderCorrectionFollowsTheResonantDrift) {
   EXPECT_LT(e2, 0.5 * e1) << "first order " << e1 << ", second order " << e2;
 }
 
+// Exact kinematics adds forces second order in the motion (the axial velocity -w theta_dot); their
+// linear response along the linear path must follow the difference of two nonlinear runs, with and
+// without it, at small amplitude, and grow as the amplitude squared. A model against itself adds
+// nothing.
+TEST(Linear, DifferenceResponseFollowsExactKinematicsAtSmallAmplitude) {
+  const int count = 501;
+  auto effects = [&](double scale, double* linear, double* nonlinear) {
+    f3r_scene s = SmallScene(F3R_LINK_FIXED_FREE, 2);
+    for (f3r_input& in : s.inputs) in.amplitude *= scale;
+    f3r_scene exact = s;
+    exact.exact_kinematics = 1;
+    const double dt = s.duration / (count - 1);
+    ModelPtr m = MakeModel(s), e = MakeModel(exact);
+    LinearPtr lin = Linearise(m.get());
+    std::vector<double> pose(3 * count), zero(3 * count, 0.0);
+    f3r_error err{};
+    ASSERT_EQ(f3r_linear_difference_response(lin.get(), m.get(), e.get(), dt, count, pose.data(), nullptr, &err), F3R_OK)
+        << err.message;
+    *linear = MaxDistance(pose, zero);
+    if (nonlinear) *nonlinear = MaxDistance(NonlinearPath(s, dt, count, 1e-11), NonlinearPath(exact, dt, count, 1e-11));
+    ASSERT_EQ(f3r_linear_difference_response(lin.get(), m.get(), m.get(), dt, count, pose.data(), nullptr, &err), F3R_OK);
+    EXPECT_EQ(MaxDistance(pose, zero), 0.0);
+  };
+  double linear = 0, nonlinear = 0, doubled = 0;
+  effects(100.0, &linear, &nonlinear);
+  effects(200.0, &doubled, nullptr);
+  std::printf("exact kinematics' effect: linear estimate %.4g m, nonlinear runs %.4g m; at twice the amplitude %.4g m\n",
+              linear, nonlinear, doubled);
+  EXPECT_GT(linear, 0.0);
+  EXPECT_NEAR(linear / nonlinear, 1.0, 0.2);
+  EXPECT_NEAR(doubled / linear, 4.0, 0.04);
+}
+
 TEST(Accuracy, ModeSearchStopsWhereTheLinearPathIsWithinTheTarget) {
   f3r_scene s;
   f3r_error err{};
@@ -409,6 +442,37 @@ TEST(Accuracy, ThePilotPairRunsWhereTheLinearEstimateComesNearTheShare) {
   EXPECT_GT(c.pilot_ratio, 10.0) << c.summary;
   EXPECT_GT(c.modes[0], linear_only[0]) << c.summary;
   EXPECT_EQ(c.exact_kinematics, 1) << "its effect is 1.7e-4 m at every r: " << c.summary;
+}
+
+// Paper simulation 3 leaves its initial pose, so exact kinematics needs an estimate: with fixed-pinned
+// links its linear estimate (2.3e-7 m) is far below the share of 1e-3 m (2e-4 m), the mode estimate
+// too, and no pilot runs; at 1e-5 m (share 2e-6 m) the pilot measures it. With fixed-free links the
+// pilot pair runs and measures it as well.
+TEST(Accuracy, ANegligibleLinearKinematicsEstimateSparesThePilot) {
+  f3r_error err{};
+  f3r_scene pinned, free_links;
+  ASSERT_EQ(f3r_scene_load(ScenePath("paper_sim3_fixed_pinned.yaml").c_str(), &pinned, &err), F3R_OK) << err.message;
+  ASSERT_EQ(f3r_scene_load(ScenePath("paper_sim3_fixed_free.yaml").c_str(), &free_links, &err), F3R_OK) << err.message;
+  for (int i = 0; i < 3; ++i) {
+    pinned.explicit_settings &= ~(F3R_EXPLICIT_MODES << i);
+    free_links.explicit_settings &= ~(F3R_EXPLICIT_MODES << i);
+  }
+  f3r_accuracy_choice c;
+  ASSERT_EQ(f3r_accuracy_choose(&pinned, 1e-3, 0, &c, &err), F3R_OK) << err.message;
+  EXPECT_EQ(c.pilot, 0) << c.summary;
+  EXPECT_EQ(c.exact_kinematics, 0) << c.summary;
+  EXPECT_GT(c.kinematics_linear, 0.0) << c.summary;
+  EXPECT_LT(100.0 * c.kinematics_linear, F3R_ACCURACY_KINEMATICS_SHARE * 1e-3) << c.summary;
+  EXPECT_EQ(c.kinematics_error, c.kinematics_linear) << c.summary;
+  EXPECT_NE(std::strstr(c.summary, "exact kinematics: off (its linear estimate"), nullptr) << c.summary;
+  ASSERT_EQ(f3r_accuracy_choose(&pinned, 1e-5, 0, &c, &err), F3R_OK) << err.message;
+  EXPECT_EQ(c.pilot, 1) << c.summary;
+  EXPECT_GT(c.kinematics_effect, 0.0) << c.summary;
+  EXPECT_NE(std::strstr(c.summary, "a pilot estimates its effect"), nullptr) << c.summary;
+  ASSERT_EQ(f3r_accuracy_choose(&free_links, 1e-3, 0, &c, &err), F3R_OK) << err.message;
+  EXPECT_EQ(c.pilot, 1) << c.summary;
+  EXPECT_EQ(c.kinematics_linear, 0.0) << "not needed where the pilot runs anyway: " << c.summary;
+  EXPECT_GT(c.kinematics_effect, 0.0) << c.summary;
 }
 
 // The pilot finds minimal IDA at rtol 1e-3 short of its relation on paper simulation 3 with

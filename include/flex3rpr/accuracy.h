@@ -8,7 +8,9 @@
  *    duration and initial state; r is raised uniformly until it fits, then trimmed per link;
  *  - pilot check: when the linear path leaves the initial pose far, short nonlinear runs at the
  *    least mode counts and one more (and one with exact kinematics) measure what the
- *    linearisation cannot; with end stops the knob takes 20 modes and exact kinematics instead;
+ *    linearisation cannot, unless the linear estimates (of the mode counts, and of exact
+ *    kinematics' added forces along the linear path) lie far below their shares; with end stops
+ *    the knob takes 20 modes and exact kinematics instead;
  *  - solver error: the benchmark's measured relation of error to tolerance (solver_table.c).
  * modes: auto without an accuracy request asks the linear estimate for auto_tolerance of the
  * path's extent. */
@@ -37,6 +39,7 @@ typedef struct {
   double model_error;     /* m, estimated error of the mode counts */
   double kinematics_effect;/* m, estimated effect of exact kinematics on the path */
   double kinematics_error;/* m, the part of it left in the run: the effect when it is off, else 0 */
+  double kinematics_linear;/* m, the effect's linear estimate (0 when not computed) */
   double solver_error;    /* m, the measured relation's error at rtol */
   double extent;          /* m, largest distance of the linear end-effector path from its start */
   int pilot;              /* 1 when nonlinear pilot runs checked the estimate */

@@ -46,6 +46,15 @@ f3r_status f3r_linear_response(const f3r_linear_model* linear, const f3r_model* 
                                int count, int order, double* pose, int* unreachable,
                                f3r_error* err);
 
+/* What `other` (a model of the same coordinates, e.g. with exact kinematics) adds to the path, to
+ * first order in the difference: its residual less the model's along the model's first-order
+ * linear path, fed through the model's modes. pose gets the deviation (x, y, phi a sample, zero at
+ * t = 0). The difference is second order in the motion where the two models share their tangent
+ * (exact kinematics' axial velocity -w theta_dot is), so the linear model cannot see it itself. */
+f3r_status f3r_linear_difference_response(const f3r_linear_model* linear, const f3r_model* model,
+                                          const f3r_model* other, double dt, int count, double* pose,
+                                          int* unreachable, f3r_error* err);
+
 #ifdef __cplusplus
 }
 #endif

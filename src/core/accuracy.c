@@ -17,6 +17,11 @@
  * shipped scenes is 30 (paper simulation 3, fixed-free links); a linear estimate this many times
  * below the model's share is left unchecked, as no such ratio lifts it there. */
 #define PAIR_SKIP_FACTOR 100.0
+/* The largest ratio of exact kinematics' effect in the pilot to its linear estimate
+ * (f3r_linear_kinematics) on the shipped scenes is 23 (free_vibration_long; paper simulation 3
+ * with fixed-free links 16, payload_pick 10, all others below 3.2 at the pilot's tightest
+ * tolerance); a linear estimate this many times below the kinematics' share is left unchecked. */
+#define KINEMATICS_SKIP_FACTOR 100.0
 /* A measured relation whose error is within this share of the solver's budget is left unchecked
  * on a run no longer than the benchmark's scenes. */
 #define SOLVER_CHECK_SHARE 0.1
@@ -134,8 +139,22 @@ f3r_status f3r_accuracy_choose(const f3r_scene* scene, double request, int comma
   const int far = st == F3R_OK && !impacts && ms.far;
   const int pair = far && chosen && PAIR_SKIP_FACTOR * linear_error > model_target;
   const int pair_skipped = far && chosen && !pair;
-  const int kinematics = far && kinematics_open;
-  if (pair || kinematics) {
+  int kinematics = far && kinematics_open;
+  if (st == F3R_OK && kinematics && !pair) {
+    /* Exact kinematics' effect to first order, where it may spare the pilot (a pair of pilots runs
+     * anyway otherwise, and a third costs about what the estimate does): a pilot measures it
+     * unless it is far below its share. */
+    int least[3];
+    f3r_mode_search_least(&ms, least);
+    st = f3r_linear_kinematics(&s, &ms, least, &c->kinematics_linear, err);
+    if (KINEMATICS_SKIP_FACTOR * c->kinematics_linear <= F3R_ACCURACY_KINEMATICS_SHARE * request) {
+      kinematics = 0;
+      c->exact_kinematics = 0;
+      c->kinematics_effect = c->kinematics_error = c->kinematics_linear;
+    }
+  }
+  const int kinematics_linear_only = far && kinematics_open && !kinematics;
+  if (st == F3R_OK && (pair || kinematics)) {
     int least[3];
     f3r_mode_search_least(&ms, least);
     st = f3r_pilot_start(&s, &ms, least, kind, 0.1 * model_target, long_run, &pilot, err);
@@ -204,12 +223,20 @@ f3r_status f3r_accuracy_choose(const f3r_scene* scene, double request, int comma
     append(text, size, "exact kinematics: %s, as the scene sets\n", c->exact_kinematics ? "on" : "off");
   else if (impacts)
     append(text, size, "exact kinematics: on (the most faithful model)\n");
+  else if (kinematics_linear_only)
+    append(text, size,
+           "exact kinematics: off (its linear estimate %.3g m is below 1/%g of the limit %.3g m, beyond any "
+           "ratio a pilot measured; not checked)\n",
+           c->kinematics_linear, KINEMATICS_SKIP_FACTOR, F3R_ACCURACY_KINEMATICS_SHARE * request);
   else if (!c->pilot)
     append(text, size, "exact kinematics: off (second order in the deflections; the path stays near the initial pose)\n");
-  else
-    append(text, size, "exact kinematics: %s (its effect is estimated at %.3g m; the limit is %.3g m)\n",
-           c->exact_kinematics ? "on" : "off", c->kinematics_effect,
+  else {
+    char linear[64] = "";
+    if (c->kinematics_linear > 0.0) snprintf(linear, sizeof linear, ", its linear estimate at %.3g m", c->kinematics_linear);
+    append(text, size, "exact kinematics: %s (a pilot estimates its effect at %.3g m%s; the limit is %.3g m)\n",
+           c->exact_kinematics ? "on" : "off", c->kinematics_effect, linear,
            F3R_ACCURACY_KINEMATICS_SHARE * request);
+  }
 
   double budget = request - c->model_error - c->kinematics_error;
   budget = fmax(budget, F3R_ACCURACY_SOLVER_SHARE * request);

@@ -65,6 +65,11 @@ void f3r_mode_search_free(f3r_mode_search* ms);
 /* The least mode counts the search may give: one mode, or the initial state's highest, on each
  * chosen link; the other links keep theirs. */
 void f3r_mode_search_least(const f3r_mode_search* ms, int modes[3]);
+/* The effect of exact kinematics on the end-effector path at the given modes, to first order:
+ * the linear response to its added forces along the first-order linear path, at the search's
+ * sampling (linear.h: f3r_linear_difference_response). */
+f3r_status f3r_linear_kinematics(const f3r_scene* s, const f3r_mode_search* ms, const int modes[3],
+                                 double* effect, f3r_error* err);
 
 /* The nonlinear pilot: short runs over the first F3R_PILOT_SHARE of the duration, at the least
  * mode counts (where the mode-count differences stand far above the pilot's own solver error),

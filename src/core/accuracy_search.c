@@ -46,6 +46,26 @@ f3r_status f3r_linear_path(const f3r_scene* s, const int modes[3], double dt, in
   return st;
 }
 
+f3r_status f3r_linear_kinematics(const f3r_scene* s, const f3r_mode_search* ms, const int modes[3],
+                                 double* effect, f3r_error* err) {
+  *effect = 0.0;
+  f3r_model *model = NULL, *exact = NULL;
+  f3r_linear_model* lin = NULL;
+  double* pose = malloc((size_t)ms->count * 3 * sizeof(double));
+  f3r_status st = pose ? F3R_OK : f3r_error_set(err, F3R_ERR_MEMORY, "accuracy: out of memory");
+  if (st == F3R_OK) st = f3r_model_with_modes(s, modes, 0, &model, err);
+  if (st == F3R_OK) st = f3r_model_with_modes(s, modes, 1, &exact, err);
+  if (st == F3R_OK) st = f3r_linearise(model, &lin, err);
+  if (st == F3R_OK) st = f3r_linear_difference_response(lin, model, exact, ms->dt, ms->count, pose, NULL, err);
+  for (int k = 0; st == F3R_OK && k < ms->count; ++k)
+    *effect = fmax(*effect, hypot(pose[3 * k], pose[3 * k + 1]));
+  f3r_linear_destroy(lin);
+  f3r_model_destroy(exact);
+  f3r_model_destroy(model);
+  free(pose);
+  return st;
+}
+
 /* Largest end-effector distance between two pose paths (3 values a sample) over count samples. */
 double f3r_max_distance(const double* a, const double* b, int count) {
   double worst = 0.0;

@@ -285,26 +285,38 @@ static void superpose(const f3r_linear_model* lin, double dt, int count, const d
   }
 }
 
-/* The residual's remainder along the linear path: e = F_b(z, z', z''; u) less its linear part
- * M z'' + D z' + K dz - f0 - U u, second order in the motion. A sample the loop closure cannot
- * reach gets e = 0 and is counted in *unreachable. */
-static f3r_status second_order_remainder(const f3r_linear_model* lin, const f3r_model* model, int count,
-                            const double* u, const double* z, const double* zd, const double* zdd,
-                            double* e, int* unreachable, f3r_error* err) {
-  const int n = lin->n;
-  f3r_model m = *model; /* the applied forces come in as held forces, the lag already applied */
+/* The model with its applied forces taken as held forces (the lag already applied to them). */
+static f3r_model held_forces_model(const f3r_model* model) {
+  f3r_model m = *model;
   memset(m.scene.inputs, 0, sizeof m.scene.inputs);
   m.n_lag = 0;
   m.n_breakpoints = 0;
+  return m;
+}
+
+/* The residual's remainder along the linear path: e = F_b(z, z', z''; u) less its linear part
+ * M z'' + D z' + K dz - f0 - U u, second order in the motion. With `other` (a model of the same
+ * coordinates), e is instead the difference of the two residuals, F_b of model less F_b of other:
+ * what other adds along the path. A sample the loop closure cannot reach gets e = 0 and is
+ * counted in *unreachable. */
+static f3r_status second_order_remainder(const f3r_linear_model* lin, const f3r_model* model,
+                            const f3r_model* other, int count,
+                            const double* u, const double* z, const double* zd, const double* zdd,
+                            double* e, int* unreachable, f3r_error* err) {
+  const int n = lin->n;
+  const f3r_model m = held_forces_model(model);
+  f3r_model* o = other ? malloc(sizeof *o) : NULL; /* a model is large for the stack */
+  if (o) *o = held_forces_model(other);
   const int ny = f3r_state_size(&m, F3R_FORMULATION_MINIMAL);
   f3r_workspace* ws = f3r_workspace_create(&m);
   double* y = calloc((size_t)ny, sizeof(double));
   double* yp = calloc((size_t)ny, sizeof(double));
   double* res = calloc((size_t)ny, sizeof(double));
+  double* res_other = calloc((size_t)ny, sizeof(double));
   double held[F3R_MAX_Q] = {0};
-  if (!ws || !y || !yp || !res) {
+  if (!ws || !y || !yp || !res || !res_other || (other && !o)) {
     f3r_workspace_destroy(ws);
-    free(y), free(yp), free(res);
+    free(y), free(yp), free(res), free(res_other), free(o);
     return f3r_error_set(err, F3R_ERR_MEMORY, "linear response: out of memory");
   }
   *unreachable = 0;
@@ -318,9 +330,14 @@ static f3r_status second_order_remainder(const f3r_linear_model* lin, const f3r_
       yp[n + a] = zddk[a];
     }
     memcpy(held, u + (size_t)k * F3R_RIGID_FORCES, F3R_RIGID_FORCES * sizeof(double));
-    if (f3r_residual(&m, F3R_FORMULATION_MINIMAL, 0.0, y, yp, held, res, ws) != F3R_OK) {
+    if (f3r_residual(&m, F3R_FORMULATION_MINIMAL, 0.0, y, yp, held, res, ws) != F3R_OK ||
+        (o && f3r_residual(o, F3R_FORMULATION_MINIMAL, 0.0, y, yp, held, res_other, ws) != F3R_OK)) {
       memset(ek, 0, (size_t)n * sizeof(double));
       ++*unreachable;
+      continue;
+    }
+    if (o) {
+      for (int a = 0; a < n; ++a) ek[a] = res[n + a] - res_other[n + a];
       continue;
     }
     for (int a = 0; a < n; ++a) {
@@ -333,19 +350,21 @@ static f3r_status second_order_remainder(const f3r_linear_model* lin, const f3r_
     }
   }
   f3r_workspace_destroy(ws);
-  free(y), free(yp), free(res);
+  free(y), free(yp), free(res), free(res_other), free(o);
   return F3R_OK;
 }
 
-f3r_status f3r_linear_response(const f3r_linear_model* lin, const f3r_model* model, double dt,
-                               int count, int order, double* pose, int* unreachable,
-                               f3r_error* err) {
+/* The linear path (order 1 or 2) into pose; with `other`, the response to what other adds along
+ * the first-order path instead (pose: the deviation from it). */
+static f3r_status response(const f3r_linear_model* lin, const f3r_model* model, const f3r_model* other,
+                           double dt, int count, int order, double* pose, int* unreachable,
+                           f3r_error* err) {
   const int n = lin->n;
   if (unreachable) *unreachable = 0;
   if (count < 1 || !(dt > 0.0))
     return f3r_error_set(err, F3R_ERR_ARGUMENT, "linear response: needs count >= 1 and dt > 0");
   const size_t series = (size_t)n * count;
-  const int second = order >= 2;
+  const int second = order >= 2 || other;
   double* u = malloc((size_t)count * F3R_RIGID_FORCES * sizeof(double));
   double* P = malloc(series * sizeof(double));
   double* F = second ? malloc(series * sizeof(double)) : NULL;
@@ -383,9 +402,10 @@ f3r_status f3r_linear_response(const f3r_linear_model* lin, const f3r_model* mod
     }
   }
   superpose(lin, dt, count, P, dz0, vz0, pose, z, zd, zdd);
+  if (other) memset(pose, 0, (size_t)count * 3 * sizeof(double));
   if (second) {
     int missed = 0;
-    st = second_order_remainder(lin, model, count, u, z, zd, zdd, F, &missed, err);
+    st = second_order_remainder(lin, model, other, count, u, z, zd, zdd, F, &missed, err);
     if (st == F3R_OK) {
       project(lin, count, F, P);
       superpose(lin, dt, count, P, zero, zero, pose, NULL, NULL, NULL);
@@ -395,4 +415,18 @@ f3r_status f3r_linear_response(const f3r_linear_model* lin, const f3r_model* mod
 done:
   free(u), free(P), free(F), free(z), free(zd), free(zdd);
   return st;
+}
+
+f3r_status f3r_linear_response(const f3r_linear_model* lin, const f3r_model* model, double dt,
+                               int count, int order, double* pose, int* unreachable,
+                               f3r_error* err) {
+  return response(lin, model, NULL, dt, count, order, pose, unreachable, err);
+}
+
+f3r_status f3r_linear_difference_response(const f3r_linear_model* lin, const f3r_model* model,
+                                          const f3r_model* other, double dt, int count, double* pose,
+                                          int* unreachable, f3r_error* err) {
+  if (!other || other->nq != model->nq)
+    return f3r_error_set(err, F3R_ERR_ARGUMENT, "linear response: the other model needs the same coordinates");
+  return response(lin, model, other, dt, count, 1, pose, unreachable, err);
 }
