@@ -70,6 +70,15 @@ std::vector<double> NonlinearPath(const f3r_scene& s, double dt, int count, doub
   return pose;
 }
 
+// A shipped scene with its mode counts left to the knob.
+f3r_scene OpenScene(const char* file) {
+  f3r_scene s;
+  f3r_error err{};
+  if (f3r_scene_load(ScenePath(file).c_str(), &s, &err) != F3R_OK) throw std::runtime_error(err.message);
+  for (int i = 0; i < 3; ++i) s.explicit_settings &= ~(F3R_EXPLICIT_MODES << i);
+  return s;
+}
+
 double MaxDistance(const std::vector<double>& a, const std::vector<double>& b) {
   double worst = 0;
   for (size_t k = 0; k < a.size() / 3; ++k)
@@ -363,11 +372,9 @@ TEST(Accuracy, TheChoiceMeetsTheRequestAgainstAHighFidelityRun) {
 // centimetres in 2 s): the knob must see that the path leaves the pose, check it with the pilot and
 // keep the counts uniform (unequal counts change the drift far more than the linear path says).
 TEST(Accuracy, ASecondOrderDriftCountsAsLeavingThePose) {
-  f3r_scene s;
+  f3r_scene s = OpenScene("free_vibration_long.yaml");
   f3r_error err{};
-  ASSERT_EQ(f3r_scene_load(ScenePath("free_vibration_long.yaml").c_str(), &s, &err), F3R_OK) << err.message;
   s.duration = 2.0;
-  for (int i = 0; i < 3; ++i) s.explicit_settings &= ~(F3R_EXPLICIT_MODES << i);
   f3r_accuracy_choice c;
   ASSERT_EQ(f3r_accuracy_choose(&s, 1e-3, 0, &c, &err), F3R_OK) << err.message;
   EXPECT_TRUE(c.pilot) << c.summary;
@@ -380,10 +387,8 @@ TEST(Accuracy, ASecondOrderDriftCountsAsLeavingThePose) {
 // A run longer than the benchmark's scenes has its solver measured by a pilot, as the relations'
 // drift does not carry over to it.
 TEST(Accuracy, ALongRunHasItsSolverMeasured) {
-  f3r_scene s;
+  f3r_scene s = OpenScene("resonance_damped.yaml");
   f3r_error err{};
-  ASSERT_EQ(f3r_scene_load(ScenePath("resonance_damped.yaml").c_str(), &s, &err), F3R_OK) << err.message;
-  for (int i = 0; i < 3; ++i) s.explicit_settings &= ~(F3R_EXPLICIT_MODES << i);
   f3r_accuracy_choice c;
   ASSERT_EQ(f3r_accuracy_choose(&s, 1e-4, 0, &c, &err), F3R_OK) << err.message;
   EXPECT_EQ(std::strstr(c.summary, "longer than the benchmark's scenes"), nullptr) << c.summary;
@@ -397,12 +402,10 @@ TEST(Accuracy, ALongRunHasItsSolverMeasured) {
 // the mode count, and they amplify the solver's error up to 1e5 times): the knob takes the most
 // faithful model and a tolerance for the budget over 1e5, and says so in the summary and the brief.
 TEST(Accuracy, ImpactsTakeTheMostFaithfulModelAndSayWhy) {
-  f3r_scene s;
+  f3r_scene s = OpenScene("end_stop_impact.yaml");
   f3r_error err{};
-  ASSERT_EQ(f3r_scene_load(ScenePath("end_stop_impact.yaml").c_str(), &s, &err), F3R_OK) << err.message;
   ASSERT_TRUE(s.end_stops);
   s.duration = 0.05;
-  for (int i = 0; i < 3; ++i) s.explicit_settings &= ~(F3R_EXPLICIT_MODES << i);
   f3r_accuracy_choice c;
   ASSERT_EQ(f3r_accuracy_choose(&s, 1e-3, 0, &c, &err), F3R_OK) << err.message;
   for (int i = 0; i < 3; ++i)
@@ -425,13 +428,7 @@ TEST(Accuracy, ImpactsTakeTheMostFaithfulModelAndSayWhy) {
 TEST(Accuracy, ThePilotPairRunsWhereTheLinearEstimateComesNearTheShare) {
   f3r_error err{};
   f3r_accuracy_choice c;
-  f3r_scene pinned, free_links;
-  ASSERT_EQ(f3r_scene_load(ScenePath("paper_sim3_fixed_pinned.yaml").c_str(), &pinned, &err), F3R_OK) << err.message;
-  ASSERT_EQ(f3r_scene_load(ScenePath("paper_sim3_fixed_free.yaml").c_str(), &free_links, &err), F3R_OK) << err.message;
-  for (int i = 0; i < 3; ++i) {
-    pinned.explicit_settings &= ~(F3R_EXPLICIT_MODES << i);
-    free_links.explicit_settings &= ~(F3R_EXPLICIT_MODES << i);
-  }
+  f3r_scene pinned = OpenScene("paper_sim3_fixed_pinned.yaml"), free_links = OpenScene("paper_sim3_fixed_free.yaml");
   ASSERT_EQ(f3r_accuracy_choose(&pinned, 1e-3, 0, &c, &err), F3R_OK) << err.message;
   EXPECT_NE(std::strstr(c.summary, "not checked"), nullptr) << c.summary;
   EXPECT_EQ(c.pilot_ratio, 1.0) << c.summary;
@@ -450,13 +447,7 @@ TEST(Accuracy, ThePilotPairRunsWhereTheLinearEstimateComesNearTheShare) {
 // pilot pair runs and measures it as well.
 TEST(Accuracy, ANegligibleLinearKinematicsEstimateSparesThePilot) {
   f3r_error err{};
-  f3r_scene pinned, free_links;
-  ASSERT_EQ(f3r_scene_load(ScenePath("paper_sim3_fixed_pinned.yaml").c_str(), &pinned, &err), F3R_OK) << err.message;
-  ASSERT_EQ(f3r_scene_load(ScenePath("paper_sim3_fixed_free.yaml").c_str(), &free_links, &err), F3R_OK) << err.message;
-  for (int i = 0; i < 3; ++i) {
-    pinned.explicit_settings &= ~(F3R_EXPLICIT_MODES << i);
-    free_links.explicit_settings &= ~(F3R_EXPLICIT_MODES << i);
-  }
+  f3r_scene pinned = OpenScene("paper_sim3_fixed_pinned.yaml"), free_links = OpenScene("paper_sim3_fixed_free.yaml");
   f3r_accuracy_choice c;
   ASSERT_EQ(f3r_accuracy_choose(&pinned, 1e-3, 0, &c, &err), F3R_OK) << err.message;
   EXPECT_EQ(c.pilot, 0) << c.summary;
@@ -480,9 +471,7 @@ TEST(Accuracy, ANegligibleLinearKinematicsEstimateSparesThePilot) {
 // integrator, whose step the highest mode bounds, costs more than the relations say and is passed.
 TEST(Accuracy, AShortRelationIsTightenedAndStiffModelsStayImplicit) {
   f3r_error err{};
-  f3r_scene s;
-  ASSERT_EQ(f3r_scene_load(ScenePath("paper_sim3_fixed_free.yaml").c_str(), &s, &err), F3R_OK) << err.message;
-  for (int i = 0; i < 3; ++i) s.explicit_settings &= ~(F3R_EXPLICIT_MODES << i);
+  f3r_scene s = OpenScene("paper_sim3_fixed_free.yaml");
   f3r_accuracy_choice c;
   ASSERT_EQ(f3r_accuracy_choose(&s, 1e-5, 0, &c, &err), F3R_OK) << err.message;
   EXPECT_GT(c.modes[0], 3) << c.summary;
