@@ -86,12 +86,12 @@ f3r_status f3r_model_create(const f3r_scene* scene, f3r_model** out, f3r_error* 
     }
   }
   if (open) {
-    f3r_scene fixed = *scene;
+    /* The model's own copy of the scene, with placeholders until the estimate replaces them. */
     for (int i = 0; i < 3; ++i)
-      if (open >> i & 1) fixed.links[i].modes = 1;
+      if (open >> i & 1) m->scene.links[i].modes = 1;
     const double target = scene->accuracy > 0.0 ? F3R_ACCURACY_MODEL_SHARE * scene->accuracy : -tolerance;
     double estimate = 0.0, extent = 0.0;
-    st = f3r_accuracy_modes(&fixed, open, target, open_modes, &estimate, &extent, NULL, err);
+    st = f3r_accuracy_modes(&m->scene, open, target, open_modes, &estimate, &extent, NULL, err);
     if (st != F3R_OK) {
       free(m);
       return st;
