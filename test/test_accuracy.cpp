@@ -299,6 +299,47 @@ TEST(Accuracy, ExplicitSettingsWinAndAreReported) {
   EXPECT_NE(std::strstr(c.summary, "exact kinematics: off, as the scene sets"), nullptr) << c.summary;
 }
 
+// A request below what the scene's own solver delivers: the choice still runs, and says plainly
+// that its estimate is above the request, by how much, and which part holds it there.
+TEST(Accuracy, AnUnreachableRequestIsReportedWithItsLargestPart) {
+  f3r_scene s;
+  f3r_error err{};
+  ASSERT_EQ(f3r_scene_load(ScenePath("paper_sim1.yaml").c_str(), &s, &err), F3R_OK);
+  s.duration = 0.02;
+  s.formulation = F3R_FORMULATION_MINIMAL;
+  s.integrator = F3R_INTEGRATOR_IDA;
+  s.rtol = 1e-3;
+  s.explicit_settings |= F3R_EXPLICIT_FORMULATION | F3R_EXPLICIT_INTEGRATOR | F3R_EXPLICIT_RTOL;
+  double relation = 0.0; /* the measured error of that solver, which the estimate takes */
+  for (int k = 0; k < f3r_solver_relation_count; ++k) {
+    const f3r_solver_relation& r = f3r_solver_relations[k];
+    if (!std::strcmp(r.kind, "flexible") && r.formulation == F3R_FORMULATION_MINIMAL &&
+        r.integrator == F3R_INTEGRATOR_IDA && r.rtol == 1e-3)
+      relation = r.error;
+  }
+  ASSERT_GT(relation, 1e-7);
+  f3r_accuracy_choice c;
+  ASSERT_EQ(f3r_accuracy_choose(&s, 1e-7, 0, &c, &err), F3R_OK) << err.message;
+  EXPECT_EQ(c.request_met, 0);
+  EXPECT_DOUBLE_EQ(c.estimated_error, c.model_error + c.kinematics_error + c.solver_error);
+  EXPECT_GE(c.solver_error, relation);
+  EXPECT_NE(std::strstr(c.summary, "not met"), nullptr) << c.summary;
+  EXPECT_NE(std::strstr(c.summary, "the largest part is the solver's"), nullptr) << c.summary;
+  EXPECT_NE(std::strstr(c.summary, "the scene sets the solver"), nullptr) << c.summary;
+  EXPECT_NE(std::strstr(c.brief, "NOT MET"), nullptr) << c.brief;
+
+  s.explicit_settings &= ~F3R_EXPLICIT_FORMULATION; /* the knob may not change what remains set */
+  ASSERT_EQ(f3r_accuracy_choose(&s, 1e-7, 0, &c, &err), F3R_OK) << err.message;
+  EXPECT_EQ(c.request_met, 0);
+  EXPECT_NE(std::strstr(c.summary, "the scene sets its integrator rtol"), nullptr) << c.summary;
+
+  ASSERT_EQ(f3r_accuracy_choose(&s, 1e-3, 0, &c, &err), F3R_OK) << err.message;
+  EXPECT_EQ(c.request_met, 1);
+  EXPECT_LE(c.estimated_error, 1e-3);
+  EXPECT_EQ(std::strstr(c.summary, "not met"), nullptr) << c.summary;
+  EXPECT_EQ(std::strstr(c.brief, "NOT MET"), nullptr) << c.brief;
+}
+
 TEST(Accuracy, ASceneAtRestNeedsNoLinearModelAndTheLoosestSolver) {
   f3r_scene s;
   f3r_error err{};

@@ -1,6 +1,7 @@
 // Shipped scenes load and run; bad scenes are refused with the file, line, field and range; the
 // CLI writes the documented CSV.
 #include <gtest/gtest.h>
+#include <unistd.h>
 
 #include <dirent.h>
 
@@ -127,6 +128,23 @@ TEST(Cli, WritesEveryDocumentedColumnAndASummary) {
                           "max constraint res", "energy balance err"})
     EXPECT_NE(ss.str().find(key), std::string::npos) << key;
   EXPECT_NE(std::system((std::string(F3R_CLI) + " /nonexistent.yaml 2>/dev/null").c_str()), 0);
+}
+
+// An accuracy request the scene's own solver cannot meet still runs, and warns on stderr.
+TEST(Cli, WarnsWhenTheAccuracyRequestIsNotMet) {
+  const std::string err = "/tmp/f3r_cli_unmet_" + std::to_string(getpid()) + ".err";
+  const std::string base = std::string(F3R_CLI) + " " + ScenePath("paper_sim1.yaml") +
+                           " --duration 0.002 --ida --rtol 1e-3 --formulation minimal --accuracy ";
+  for (const char* request : {"1e-7", "1e-3"}) {
+    ASSERT_EQ(std::system((base + request + " > /dev/null 2> " + err).c_str()), 0) << request;
+    std::ifstream in(err);
+    std::stringstream ss;
+    ss << in.rdbuf();
+    const bool warned = ss.str().find("warning") != std::string::npos &&
+                        ss.str().find(" m is not met: estimated ") != std::string::npos;
+    EXPECT_EQ(warned, std::string(request) == "1e-7") << request << ": " << ss.str();
+  }
+  std::remove(err.c_str());
 }
 
 }  // namespace

@@ -45,6 +45,10 @@ typedef struct {
   int pilot;              /* 1 when nonlinear pilot runs checked the estimate */
   double pilot_ratio;     /* nonlinear over linear mode-count difference in the pilot window */
   int linear_evaluations; /* linear models built and solved */
+  double estimated_error; /* m: model + kinematics + solver error; 0 when nothing was chosen */
+  int request_met;        /* 1 when estimated_error <= request; 0 names the largest part in the
+                           * summary and the brief (a scene's own settings, or what no choice
+                           * within F3R_MAX_MODES and the measured solvers reaches) */
   char summary[2048];     /* the choice and why, one line per decision */
   char brief[256];        /* the same in one line, for a status message */
 } f3r_accuracy_choice;

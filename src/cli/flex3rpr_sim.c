@@ -308,6 +308,9 @@ int main(int argc, char** argv) {
     return 0;
   }
   if (choice.summary[0]) printf("%s\n", choice.summary);
+  if (scene.accuracy > 0 && !choice.request_met)
+    fprintf(stderr, "flex3rpr_sim: warning: %s: the accuracy request %g m is not met: estimated %.3g m (see the summary)\n",
+            o.scene_path, scene.accuracy, choice.estimated_error);
   if (scene.accuracy > 0)
     printf("choice cpu time     %.6f s (%d linear models)\n", choose_cpu, choice.linear_evaluations);
   for (int i = 0; i < 3; ++i)

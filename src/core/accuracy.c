@@ -90,6 +90,38 @@ static void append(char* text, size_t size, const char* fmt, ...) {
   va_end(ap);
 }
 
+/* Why a choice's estimate exceeds its request: the largest part, and what holds it there. */
+static void unmet_reason(const f3r_scene* scene, const f3r_accuracy_choice* c, unsigned chosen,
+                         int solver_open, char* why, size_t size) {
+  const double solver = isfinite(c->solver_error) ? c->solver_error : 0.0;
+  if (c->model_error >= c->kinematics_error && c->model_error >= solver) {
+    int fixed = 0, at_most = 0;
+    for (int i = 0; i < 3; ++i) {
+      if (!f3r_is_flexible(scene, i)) continue;
+      if (!(chosen >> i & 1)) fixed = 1;
+      else if (c->modes[i] >= F3R_MAX_MODES) at_most = 1;
+    }
+    snprintf(why, size, "the largest part is the model's (%.3g m): %s", c->model_error,
+             fixed ? "the scene sets mode counts" : at_most ? "the mode counts are at their most" : "as the pilot scales it");
+  } else if (c->kinematics_error >= solver) {
+    snprintf(why, size, "the largest part is exact kinematics' effect (%.3g m): %s", c->kinematics_error,
+             scene->explicit_settings & F3R_EXPLICIT_EXACT_KINEMATICS ? "the scene turns it off" : "it is off");
+  } else {
+    const unsigned set = scene->explicit_settings;
+    char fixed[64] = "";
+    if (set & F3R_EXPLICIT_FORMULATION) append(fixed, sizeof fixed, " formulation");
+    if (set & F3R_EXPLICIT_INTEGRATOR) append(fixed, sizeof fixed, " integrator");
+    if (set & F3R_EXPLICIT_RTOL) append(fixed, sizeof fixed, " rtol");
+    if (set & F3R_EXPLICIT_TABLE) append(fixed, sizeof fixed, " table");
+    if (!solver_open) snprintf(why, size, "the largest part is the solver's (%.3g m): the scene sets the solver", solver);
+    else if (fixed[0])
+      snprintf(why, size, "the largest part is the solver's (%.3g m): the scene sets its%s", solver, fixed);
+    else
+      snprintf(why, size, "the largest part is the solver's (%.3g m): no measured solver reaches the budget on this run",
+               solver);
+  }
+}
+
 f3r_status f3r_accuracy_choose(const f3r_scene* scene, double request, int commanded,
                                f3r_accuracy_choice* c, f3r_error* err) {
   memset(c, 0, sizeof *c);
@@ -272,13 +304,12 @@ f3r_status f3r_accuracy_choose(const f3r_scene* scene, double request, int comma
         pilot_started = 1;
         if (st != F3R_OK) break;
       }
-      f3r_scene trial = s;
-      trial.formulation = r->formulation;
-      trial.integrator = r->integrator;
-      trial.rtol = r->rtol;
-      trial.atol = scene->explicit_settings & F3R_EXPLICIT_ATOL ? scene->atol : r->atol;
-      snprintf(trial.table, sizeof trial.table, "%s", r->table);
-      const f3r_solver_settings settings = f3r_solver_settings_from_scene(&trial);
+      f3r_solver_settings settings = f3r_solver_settings_from_scene(&s);
+      settings.formulation = r->formulation;
+      settings.integrator = r->integrator;
+      settings.rtol = r->rtol;
+      settings.atol = scene->explicit_settings & F3R_EXPLICIT_ATOL ? scene->atol : r->atol;
+      snprintf(settings.rk_table, sizeof settings.rk_table, "%s", r->table);
       /* At the pilot's least modes where it ran already: the relation, measured at each benchmark
        * scene's own modes, checked on this scene's motion at a fraction of the cost. */
       if ((st = f3r_pilot_solver(&s, &ms, &pilot, &settings, &measured, err)) != F3R_OK) break;
@@ -328,10 +359,17 @@ f3r_status f3r_accuracy_choose(const f3r_scene* scene, double request, int comma
   f3r_pilot_free(&pilot);
   f3r_mode_search_free(&ms);
   const double total = c->model_error + c->kinematics_error + (isfinite(c->solver_error) ? c->solver_error : 0.0);
+  c->estimated_error = total;
+  c->request_met = total <= request;
   append(text, size, "estimated error %.3g m (model %.3g, kinematics %.3g, solver %.3g)%s", total,
          c->model_error, c->kinematics_error, c->solver_error,
          impacts ? "; the impacts' effect on the model is not estimated: check the result against a run "
                    "with other modes" : "");
+  if (!c->request_met) {
+    char why[160];
+    unmet_reason(scene, c, chosen, solver_open, why, sizeof why);
+    append(text, size, "\nnot met: the estimate is %.3g times the request; %s", total / request, why);
+  }
   char how[64] = "linear estimate";
   if (impacts) snprintf(how, sizeof how, "the most faithful: impacts");
   else if (c->pilot) snprintf(how, sizeof how, "linear estimate x %.3g from the pilot", c->pilot_ratio);
@@ -341,6 +379,8 @@ f3r_status f3r_accuracy_choose(const f3r_scene* scene, double request, int comma
            request, c->modes[0], c->modes[1], c->modes[2], how, c->exact_kinematics ? "on" : "off",
            c->formulation == F3R_FORMULATION_DAE ? "dae" : "minimal", integrator_name(c->integrator),
            c->table[0] ? " " : "", c->table, c->rtol, total, impacts ? " without the impacts" : "");
+  if (!c->request_met)
+    append(c->brief, sizeof c->brief, "; NOT MET (%.3g x the request)", total / request);
   return F3R_OK;
 }
 
@@ -379,6 +419,8 @@ f3r_status f3r_accuracy_resolve(f3r_scene* scene, int commanded, f3r_accuracy_ch
   const f3r_status st = f3r_accuracy_modes(&s, chosen, -tolerance, c->modes, &c->model_error,
                                            &c->extent, &c->linear_evaluations, err);
   if (st != F3R_OK) return st;
+  c->estimated_error = c->model_error;
+  c->request_met = 1; /* no request: auto_tolerance, of the path's extent, decides */
   snprintf(c->brief, sizeof c->brief,
            "modes auto: %d/%d/%d (linearised path within %.3g m of 3r + 3 modes, auto_tolerance %g "
            "of its extent %.3g m)",

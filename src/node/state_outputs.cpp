@@ -41,12 +41,6 @@ std::string Leg(int i, const char* suffix) { return "leg_" + std::to_string(i + 
 
 }  // namespace
 
-// The knob's total estimate: model, kinematics and solver error (m); 0 when nothing was chosen.
-static double EstimatedError(const f3r_accuracy_choice& c) {
-  if (!c.brief[0]) return 0.0;
-  return c.model_error + c.kinematics_error + (std::isfinite(c.solver_error) ? c.solver_error : 0.0);
-}
-
 StateOutputs::StateOutputs(ros::NodeHandle& nh, ros::NodeHandle& pnh, const f3r_model& model,
                            const NodeParams& params)
     : model_(model), params_(params), frames_(params.frames) {
@@ -266,7 +260,7 @@ void StateOutputs::PublishDiagnostics(const f3r_outputs& out, const RunInfo& inf
               value("rejected_commands", static_cast<double>(info.rejected_commands))};
   if (!choice.value.empty()) {
     d.values.push_back(choice);
-    d.values.push_back(value("estimated_error", EstimatedError(params_.accuracy)));
+    d.values.push_back(value("estimated_error", params_.accuracy.estimated_error));
   }
   diagnostics_.header.stamp = Stamp(out.t);
   diagnostics_pub_.publish(diagnostics_);
@@ -292,7 +286,7 @@ bool StateOutputs::SubscribersConnected(int n) const {
 
 void StateOutputs::PublishStatus(const f3r_outputs& out, const RunInfo& info) {
   status_.accuracy_choice = params_.accuracy.brief;
-  status_.estimated_error = EstimatedError(params_.accuracy);
+  status_.estimated_error = params_.accuracy.estimated_error;
   status_.header.stamp = Stamp(out.t);
   status_.sim_time = out.t;
   status_.wall_time = info.wall_time;
