@@ -4,8 +4,12 @@
 #include <gtest/gtest.h>
 
 #include <functional>
+#include <random>
 
 #include "flex3rpr/stages.h"
+extern "C" {
+#include "../src/core/data.h"  // f3r_fwd_leg_strokes: the event roots' closure
+}
 #include "independent_lagrangian.h"
 #include "test_support.h"
 
@@ -218,6 +222,34 @@ TEST(Stages, ModelConstantsFollowTableOne) {
   for (int i = 0; i < 3; ++i) {
     EXPECT_NEAR(q[i], 0.560 / std::sqrt(3.0) - 0.2, 1e-12);
     EXPECT_NEAR(std::remainder(q[3 + i] - theta0[i], 2 * M_PI), 0.0, 1e-12);
+  }
+}
+
+// The event roots close the loops for the leg strokes alone: the same values, to the last bit, as
+// the full closure gives (a root that moved by one ulp could move an impact), and the same refusal
+// where a leg cannot reach its joint.
+TEST(Stages, LegStrokesAloneEqualTheFullClosure) {
+  std::mt19937 rng(7);
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  for (f3r_link_model model : {F3R_LINK_FIXED_FREE, F3R_LINK_FIXED_PINNED}) {
+    auto m = MakeModel(SceneWithLinks(model, 3, model, 2, model, 4));
+    for (int trial = 0; trial < 200; ++trial) {
+      std::vector<double> q(F3R_MAX_Q, 0.0);
+      q[F3R_Q_X] = 0.05 * u(rng);
+      q[F3R_Q_Y] = 0.05 * u(rng);
+      q[F3R_Q_PHI] = 0.5 * u(rng);
+      for (int n = F3R_Q_MODAL; n < m->nq; ++n) q[n] = 1e-3 * u(rng);
+      double rho[3];
+      ASSERT_EQ(f3r_fwd_leg_strokes(m.get(), q.data(), rho), F3R_OK);
+      ASSERT_EQ(f3r_model_close_loops(m.get(), q.data()), F3R_OK);
+      for (int i = 0; i < 3; ++i) EXPECT_EQ(rho[i], q[i]) << "leg " << i << ", trial " << trial;
+    }
+    double rho[3];
+    std::vector<double> onto(F3R_MAX_Q, 0.0); /* the platform joint onto a base joint: singular */
+    onto[F3R_Q_X] = m->base_joint[0][0] - m->platform_radius * m->platform_direction[0][0];
+    onto[F3R_Q_Y] = m->base_joint[0][1] - m->platform_radius * m->platform_direction[0][1];
+    EXPECT_EQ(f3r_fwd_leg_strokes(m.get(), onto.data(), rho), F3R_ERR_SINGULAR);
+    EXPECT_EQ(f3r_model_close_loops(m.get(), onto.data()), F3R_ERR_SINGULAR);
   }
 }
 

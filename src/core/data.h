@@ -68,6 +68,10 @@ void f3r_fwd_position(const f3r_model* m, const double* q, f3r_data* d);
  * atan2). theta_i in q are left as they are: f3r_fwd_leg_angles fills them when asked. Returns
  * F3R_ERR_SINGULAR when a leg cannot reach its joint. g is not filled (zero by construction). */
 f3r_status f3r_fwd_position_closed(const f3r_model* m, double* q, f3r_data* d);
+/* The leg strokes rho_i alone from the platform pose and modal coordinates in q, by the same
+ * closure and arithmetic as f3r_fwd_position_closed (the same values to the last bit), without
+ * its mass and constraint blocks: what the event roots, evaluated once a step, need. */
+f3r_status f3r_fwd_leg_strokes(const f3r_model* m, const double* q, double rho[3]);
 /* theta_i in q from the closed directions of the position stage, on the model's branch. */
 void f3r_fwd_leg_angles(const f3r_model* m, const f3r_data* d, double* q);
 /* Velocity stage from v (and q's modal coordinates): rates per link, h and gamma. */

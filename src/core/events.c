@@ -6,19 +6,21 @@
 
 #include "flex3rpr/residual.h"
 #include "flex3rpr/stages.h"
+#include "data.h"
 
 int f3r_event_roots(const f3r_model* m, f3r_formulation form, const double* y, double* g) {
-  double q[F3R_MAX_Q]; /* positions only: the roots need the leg strokes, not their rates */
+  double rho[3]; /* the roots need the leg strokes alone */
   if (form == F3R_FORMULATION_MINIMAL) {
+    double q[F3R_MAX_Q];
     memcpy(q + F3R_Q_INDEPENDENT, y, (size_t)m->n_independent * sizeof(double));
-    if (f3r_model_close_loops(m, q) != F3R_OK) return 1;
+    if (f3r_fwd_leg_strokes(m, q, rho) != F3R_OK) return 1;
   } else {
-    memcpy(q, y, (size_t)m->nq * sizeof(double));
+    memcpy(rho, y, sizeof rho);
   }
   for (int i = 0; i < 3; ++i) {
-    g[2 * i] = m->end_stops ? q[i] - m->stroke_min : 1.0;
-    g[2 * i + 1] = m->end_stops ? m->stroke_max - q[i] : 1.0;
-    g[F3R_COLLAPSE_ROOT + i] = q[i] + (1.0 - F3R_COLLAPSE_LEG_FRACTION) * m->link_length;
+    g[2 * i] = m->end_stops ? rho[i] - m->stroke_min : 1.0;
+    g[2 * i + 1] = m->end_stops ? m->stroke_max - rho[i] : 1.0;
+    g[F3R_COLLAPSE_ROOT + i] = rho[i] + (1.0 - F3R_COLLAPSE_LEG_FRACTION) * m->link_length;
   }
   return 0;
 }

@@ -72,6 +72,13 @@ void f3r_fwd_position(const f3r_model* m, const double* q, f3r_data* d) {
   }
 }
 
+/* D = C_i - A_i of leg i, from the platform pose in q and the joint direction (cc, sc). */
+static void leg_span(const f3r_model* m, int i, const double* q, double cc, double sc, double* dx,
+                     double* dy) {
+  *dx = q[F3R_Q_X] + m->platform_radius * cc - m->base_joint[i][0];
+  *dy = q[F3R_Q_Y] + m->platform_radius * sc - m->base_joint[i][1];
+}
+
 /* Each loop closes in closed form: with D = C_i - A_i, |D|^2 = L^2 + w^2, and D points along
  * theta_i + beta with tan beta = w / L, so e = (D_x L + D_y w, D_y L - D_x w) / |D|^2. */
 f3r_status f3r_fwd_position_closed(const f3r_model* m, double* q, f3r_data* d) {
@@ -80,8 +87,8 @@ f3r_status f3r_fwd_position_closed(const f3r_model* m, double* q, f3r_data* d) {
   for (int i = 0; i < 3; ++i) {
     f3r_link_data* k = &d->link[i];
     modal_sums(m, i, q, k);
-    const double dx = q[F3R_Q_X] + m->platform_radius * k->cc - m->base_joint[i][0];
-    const double dy = q[F3R_Q_Y] + m->platform_radius * k->sc - m->base_joint[i][1];
+    double dx, dy;
+    leg_span(m, i, q, k->cc, k->sc, &dx, &dy);
     const double d_sq = dx * dx + dy * dy;
     const double len_sq = d_sq - k->w * k->w;
     if (!(len_sq > min_len * min_len)) return F3R_ERR_SINGULAR;
@@ -93,6 +100,24 @@ f3r_status f3r_fwd_position_closed(const f3r_model* m, double* q, f3r_data* d) {
     mass_blocks(m, i, q[i], k);
     constraint_blocks(m, k);
     d->g[2 * i] = d->g[2 * i + 1] = 0.0;
+  }
+  return F3R_OK;
+}
+
+f3r_status f3r_fwd_leg_strokes(const f3r_model* m, const double* q, double rho[3]) {
+  /* platform_joints' rotation, without an f3r_data to clear (kilobytes, more than the rest) */
+  const double cp = cos(q[F3R_Q_PHI]), sp = sin(q[F3R_Q_PHI]);
+  const double min_len = F3R_CLOSURE_MIN_LEG_FRACTION * m->link_length;
+  for (int i = 0; i < 3; ++i) {
+    const f3r_link_params* lp = &m->link[i];
+    const double c0 = m->platform_direction[i][0], s0 = m->platform_direction[i][1];
+    double w = 0.0; /* as modal_sums sums it */
+    for (int j = 0; j < lp->modes; ++j) w += lp->tip[j] * q[lp->eta_index + j];
+    double dx, dy;
+    leg_span(m, i, q, c0 * cp - s0 * sp, s0 * cp + c0 * sp, &dx, &dy);
+    const double len_sq = dx * dx + dy * dy - w * w;
+    if (!(len_sq > min_len * min_len)) return F3R_ERR_SINGULAR;
+    rho[i] = sqrt(len_sq) - m->link_length;
   }
   return F3R_OK;
 }
