@@ -4,6 +4,7 @@
 #include <gtest/gtest.h>
 
 #include <Eigen/Dense>
+#include <algorithm>
 #include <cstdio>
 #include <cstring>
 
@@ -510,6 +511,51 @@ TEST(Accuracy, ANegligibleLinearKinematicsEstimateSparesThePilot) {
 // The pilot finds minimal IDA at rtol 1e-3 short of its relation on paper simulation 3 with
 // fixed-free links (7.5e-5 m against 2.1e-6), and the knob tightens it; with 13 modes an explicit
 // integrator, whose step the highest mode bounds, costs more than the relations say and is passed.
+// On a far path, a relation near its budget needs a pilot's check (a window at it, after the tight
+// pilot's); the cheapest relation that needs none is taken instead where it costs less than the
+// relation and its check, by the relations' own measured costs.
+TEST(Accuracy, ACheckThatCostsMoreThanATighterSolverIsSkipped) {
+  f3r_error err{};
+  f3r_scene s = OpenScene("paper_sim2.yaml");
+  const double request = 1e-5;
+  f3r_accuracy_choice c;
+  ASSERT_EQ(f3r_accuracy_choose(&s, request, 0, &c, &err), F3R_OK) << err.message;
+  ASSERT_EQ(c.pilot, 0) << c.summary;  // no pilot ran for the modes or exact kinematics
+  const double budget = std::max(request - c.model_error - c.kinematics_error, F3R_ACCURACY_SOLVER_SHARE * request);
+  auto cheapest = [](double limit) {
+    const f3r_solver_relation* best = nullptr;
+    for (int k = 0; k < f3r_solver_relation_count; ++k) {
+      const f3r_solver_relation& r = f3r_solver_relations[k];
+      if (!std::strcmp(r.kind, "flexible") && r.error <= limit &&
+          (!best || r.cost < best->cost || (r.cost == best->cost && r.rtol > best->rtol)))
+        best = &r;
+    }
+    return best;
+  };
+  const f3r_solver_relation* within = cheapest(budget);
+  const f3r_solver_relation* safe = cheapest(0.1 * budget);
+  ASSERT_NE(within, nullptr);
+  ASSERT_NE(safe, nullptr);
+  ASSERT_GT(within->error, 0.1 * budget) << "the relation within the budget would need no check";
+  double tight = 0.0, tight_cost = 1.0; /* the pilot's: the loosest minimal IDA within its resolution */
+  for (int k = 0; k < f3r_solver_relation_count; ++k) {
+    const f3r_solver_relation& r = f3r_solver_relations[k];
+    if (!std::strcmp(r.kind, "flexible") && r.formulation == F3R_FORMULATION_MINIMAL &&
+        r.integrator == F3R_INTEGRATOR_IDA && r.error <= 0.1 * F3R_ACCURACY_MODEL_SHARE * request && r.rtol > tight) {
+      tight = r.rtol;
+      tight_cost = r.cost;
+    }
+  }
+  if (safe->cost <= within->cost + 0.1 * (within->cost + tight_cost)) {
+    EXPECT_EQ(c.rtol, safe->rtol) << c.summary;
+    EXPECT_NE(std::strstr(c.summary, "not checked"), nullptr) << c.summary;
+  } else {
+    EXPECT_EQ(c.rtol, within->rtol) << c.summary;
+    EXPECT_NE(std::strstr(c.summary, "the pilot measures"), nullptr) << c.summary;
+  }
+  EXPECT_LE(c.estimated_error, request) << c.summary;
+}
+
 TEST(Accuracy, AShortRelationIsTightenedAndStiffModelsStayImplicit) {
   f3r_error err{};
   f3r_scene s = OpenScene("paper_sim3_fixed_free.yaml");

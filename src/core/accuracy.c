@@ -36,6 +36,11 @@
  * implicit one's is not. */
 #define BENCHMARK_MODES 3
 
+/* A relation's cost, with an explicit integrator's scaled that scale applied. */
+static double relation_cost(const f3r_solver_relation* r, double explicit_scale) {
+  return r->integrator == F3R_INTEGRATOR_ERK ? r->cost * explicit_scale : r->cost;
+}
+
 /* The cheapest measured solver whose error fits `budget`, among those the scene leaves open, with
  * explicit integrators' cost scaled by `explicit_scale`. */
 static const f3r_solver_relation* pick_solver(const f3r_scene* s, const char* kind, double budget,
@@ -50,7 +55,7 @@ static const f3r_solver_relation* pick_solver(const f3r_scene* s, const char* ki
     if ((fixed & F3R_EXPLICIT_INTEGRATOR) && r->integrator != s->integrator) continue;
     if ((fixed & F3R_EXPLICIT_RTOL) && r->rtol != s->rtol) continue;
     if ((fixed & F3R_EXPLICIT_TABLE) && strcmp(r->table, s->table)) continue;
-    const double cost = r->integrator == F3R_INTEGRATOR_ERK ? r->cost * explicit_scale : r->cost;
+    const double cost = relation_cost(r, explicit_scale);
     if (!best || cost < best_cost || (cost == best_cost && r->rtol > best->rtol)) {
       best = r;
       best_cost = cost;
@@ -292,13 +297,26 @@ f3r_status f3r_accuracy_choose(const f3r_scene* scene, double request, int comma
     for (int i = 0; i < 3; ++i) most = c->modes[i] > most ? c->modes[i] : most;
     const double explicit_scale = most > BENCHMARK_MODES ? (double)(most * most) / (BENCHMARK_MODES * BENCHMARK_MODES) : 1.0;
     int checked = 0;
-    const f3r_solver_relation* r = NULL;
+    const f3r_solver_relation *r = NULL, *skipped_check = NULL;
     for (int attempt = 0; attempt < 4; ++attempt) {
       const f3r_solver_relation* next = pick_solver(scene, kind, limit, explicit_scale);
       if (!next || next == r) break;
       r = next;
       /* once a relation fell short here, its successors are checked too */
       if (impacts || !(long_run || checked || (ms.far && r->error > SOLVER_CHECK_SHARE * budget))) break;
+      if (!long_run && !checked) {
+        /* A check runs a pilot window at the relation, after the tight pilot's when none ran yet;
+         * the cheapest relation that needs no check may cost less than that over the run. */
+        const double check = F3R_PILOT_SHARE * (relation_cost(r, explicit_scale) +
+                             (pilot_started ? 0.0 : f3r_pilot_cost(kind, 0.1 * model_target, long_run)));
+        const f3r_solver_relation* safe = pick_solver(scene, kind, SOLVER_CHECK_SHARE * budget, explicit_scale);
+        if (safe && relation_cost(safe, explicit_scale) <= relation_cost(r, explicit_scale) + check) {
+          skipped_check = r;
+          r = safe;
+          limit = SOLVER_CHECK_SHARE * budget;
+          break;
+        }
+      }
       if (!pilot_started) {
         st = f3r_pilot_start(&s, &ms, c->modes, kind, 0.1 * model_target, long_run, &pilot, err);
         pilot_started = 1;
@@ -351,6 +369,11 @@ f3r_status f3r_accuracy_choose(const f3r_scene* scene, double request, int comma
                BENCHMARK_DURATION, 100.0 * F3R_PILOT_SHARE, measured);
       else if (checked)
         append(text, size, "solver: the pilot measures %.3g m for it over the run\n", measured);
+      else if (skipped_check)
+        append(text, size, "solver: rtol %g, the cheapest within the budget, would need a pilot's check that "
+                           "costs more than this one does over it; this one's measured error is below %g of "
+                           "the budget: not checked\n",
+               skipped_check->rtol, SOLVER_CHECK_SHARE);
       else if (ms.far)
         append(text, size, "solver: its measured error is below %g of the budget; not checked\n",
                SOLVER_CHECK_SHARE);

@@ -84,6 +84,9 @@ typedef struct {
   double* b;         /* scratch */
 } f3r_pilot;
 
+/* The measured cost (a solver relation's) of the tight pilot's solver for kind, resolution and
+ * capped as f3r_pilot_start takes them. */
+double f3r_pilot_cost(const char* kind, double resolution, int capped);
 /* Runs the tight pilot at modes over the window (kind: the solver relations' kind; resolution:
  * the error the pilot's own solver may have; capped: never looser than rtol 1e-6). f3r_pilot_free
  * after, whatever it returns. */

@@ -56,6 +56,18 @@ static double pilot_rtol(const char* kind, double error, int capped, double* noi
 
 
 
+double f3r_pilot_cost(const char* kind, double resolution, int capped) {
+  double noise, cost = 1.0; /* minimal IDA at 1e-6, where the costs are measured from */
+  const double rtol = pilot_rtol(kind, resolution, capped, &noise);
+  for (int k = 0; k < f3r_solver_relation_count; ++k) {
+    const f3r_solver_relation* r = &f3r_solver_relations[k];
+    if (!strcmp(r->kind, kind) && r->formulation == F3R_FORMULATION_MINIMAL &&
+        r->integrator == F3R_INTEGRATOR_IDA && r->rtol == rtol)
+      cost = r->cost;
+  }
+  return cost;
+}
+
 void f3r_pilot_free(f3r_pilot* p) {
   free(p->a);
   free(p->b);
