@@ -1,6 +1,7 @@
 /* The linearised model and its modal response (include/flex3rpr/linear.h). Everything comes
  * from the public minimal residual, so the linear model is exactly the simulated one's tangent. */
 #include <math.h>
+#include <stddef.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -88,12 +89,26 @@ done:
   return st;
 }
 
+/* Into m: the model with its applied forces taken as held forces (no scripted inputs, no actuator
+ * lag: the lag is applied to them already). The inputs' tables and the breakpoints, 170 of a
+ * model's 230 kB, are left out: with no input and no breakpoint nothing reads them, and a
+ * linear model makes two such copies. */
+static void held_forces_model(const f3r_model* model, f3r_model* m) {
+  const size_t inputs = offsetof(f3r_model, scene.inputs), inputs_end = inputs + sizeof model->scene.inputs;
+  const size_t points = offsetof(f3r_model, breakpoints), points_end = points + sizeof model->breakpoints;
+  memcpy(m, model, inputs);
+  memcpy((char*)m + inputs_end, (const char*)model + inputs_end, points - inputs_end);
+  memcpy((char*)m + points_end, (const char*)model + points_end, sizeof *m - points_end);
+  for (int k = 0; k < F3R_RIGID_FORCES; ++k) /* all but the tables: kind F3R_INPUT_NONE */
+    memset(&m->scene.inputs[k], 0, offsetof(f3r_input, table_time));
+  m->n_lag = 0;
+  m->n_breakpoints = 0;
+}
+
 f3r_status f3r_linearise(const f3r_model* model, f3r_linear_model** out, f3r_error* err) {
   *out = NULL;
-  f3r_model m = *model; /* without the scripted inputs and the actuator lag */
-  memset(m.scene.inputs, 0, sizeof m.scene.inputs);
-  m.n_lag = 0;
-  m.n_breakpoints = 0;
+  f3r_model m; /* without the scripted inputs and the actuator lag */
+  held_forces_model(model, &m);
   const int n = m.n_independent, ny = f3r_state_size(&m, F3R_FORMULATION_MINIMAL);
   f3r_linear_model* lin = calloc(1, sizeof *lin);
   f3r_workspace* ws = f3r_workspace_create(&m);
@@ -285,14 +300,6 @@ static void superpose(const f3r_linear_model* lin, double dt, int count, const d
   }
 }
 
-/* The model with its applied forces taken as held forces (the lag already applied to them). */
-static f3r_model held_forces_model(const f3r_model* model) {
-  f3r_model m = *model;
-  memset(m.scene.inputs, 0, sizeof m.scene.inputs);
-  m.n_lag = 0;
-  m.n_breakpoints = 0;
-  return m;
-}
 
 /* The residual's remainder along the linear path: e = F_b(z, z', z''; u) less its linear part
  * M z'' + D z' + K dz - f0 - U u, second order in the motion. With `other` (a model of the same
@@ -304,9 +311,10 @@ static f3r_status second_order_remainder(const f3r_linear_model* lin, const f3r_
                             const double* u, const double* z, const double* zd, const double* zdd,
                             double* e, int* unreachable, f3r_error* err) {
   const int n = lin->n;
-  const f3r_model m = held_forces_model(model);
+  f3r_model m;
+  held_forces_model(model, &m);
   f3r_model* o = other ? malloc(sizeof *o) : NULL; /* a model is large for the stack */
-  if (o) *o = held_forces_model(other);
+  if (o) held_forces_model(other, o);
   const int ny = f3r_state_size(&m, F3R_FORMULATION_MINIMAL);
   f3r_workspace* ws = f3r_workspace_create(&m);
   double* y = calloc((size_t)ny, sizeof(double));

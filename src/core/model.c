@@ -8,6 +8,7 @@
 #include "flex3rpr/model.h"
 #include "effects.h"
 #include "data.h"
+#include "model_edit.h"
 
 static const double kPlatformAngle[3] = {-M_PI / 6.0, M_PI / 2.0, 7.0 * M_PI / 6.0};
 
@@ -30,13 +31,26 @@ static void collect_breakpoints(f3r_model* m) {
 }
 
 f3r_status f3r_model_create(const f3r_scene* scene, f3r_model** out, f3r_error* err) {
-  if (!scene || !out) return f3r_error_set(err, F3R_ERR_ARGUMENT, "f3r_model_create: NULL argument");
+  return f3r_model_create_edited(scene, NULL, NULL, out, err);
+}
+
+f3r_status f3r_model_create_edited(const f3r_scene* source, void (*edit)(f3r_scene*, const void*),
+                                   const void* arg, f3r_model** out, f3r_error* err) {
+  if (!source || !out) return f3r_error_set(err, F3R_ERR_ARGUMENT, "f3r_model_create: NULL argument");
   *out = NULL;
-  f3r_status st = f3r_scene_validate(scene, err);
-  if (st != F3R_OK) return st;
-  f3r_model* m = calloc(1, sizeof *m);
+  f3r_model* m = malloc(sizeof *m);
   if (!m) return f3r_error_set(err, F3R_ERR_MEMORY, "f3r_model_create: out of memory");
-  m->scene = *scene;
+  /* The scene first, then everything after it cleared: the same as calloc and a copy, without
+   * writing the scene's 150 kB twice. */
+  m->scene = *source;
+  memset((char*)m + sizeof m->scene, 0, sizeof *m - sizeof m->scene);
+  if (edit) edit(&m->scene, arg);
+  const f3r_scene* scene = &m->scene; /* the model's own copy, edited: what it is built from */
+  f3r_status st = f3r_scene_validate(scene, err);
+  if (st != F3R_OK) {
+    free(m);
+    return st;
+  }
 
   const double base_radius = scene->base_side / sqrt(3.0);
   m->platform_radius = scene->platform_side / sqrt(3.0);
@@ -144,11 +158,10 @@ f3r_status f3r_model_create(const f3r_scene* scene, f3r_model** out, f3r_error* 
   for (int i = 0; i < 3; ++i)
     for (int j = 0; j < m->link[i].modes; ++j) q[m->link[i].eta_index + j] = scene->links[i].eta0[j];
   if (f3r_model_close_loops(m, q) != F3R_OK) {
-    free(m);
-    return f3r_error_set(err, F3R_ERR_SCENE,
-                         "initial.platform_pose: (%g, %g, %g) cannot be reached by the legs",
-                         scene->platform_pose0[0], scene->platform_pose0[1],
-                         scene->platform_pose0[2]);
+    st = f3r_error_set(err, F3R_ERR_SCENE, "initial.platform_pose: (%g, %g, %g) cannot be reached by the legs",
+                       scene->platform_pose0[0], scene->platform_pose0[1], scene->platform_pose0[2]);
+    free(m); /* after the message: scene is the model's copy */
+    return st;
   }
   *out = m;
   return F3R_OK;
