@@ -36,7 +36,7 @@
  * implicit one's is not. */
 #define BENCHMARK_MODES 3
 
-/* A relation's cost, with an explicit integrator's scaled that scale applied. */
+/* A relation's cost, an explicit integrator's scaled by explicit_scale. */
 static double relation_cost(const f3r_solver_relation* r, double explicit_scale) {
   return r->integrator == F3R_INTEGRATOR_ERK ? r->cost * explicit_scale : r->cost;
 }

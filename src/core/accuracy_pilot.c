@@ -36,36 +36,25 @@ static f3r_status pilot_path(const f3r_scene* base, const int modes[3], int exac
   return F3R_OK;
 }
 
-/* The loosest tolerance of minimal IDA whose measured error stays below `error` (1e-6 if none),
- * and that error: the pilot's noise. capped: never looser than the baseline 1e-6, for a run
- * longer than the benchmark's scenes, where the relations can be short. */
-static double pilot_rtol(const char* kind, double error, int capped, double* noise) {
-  double best = 0.0;
-  *noise = error;
+/* The relation of the loosest minimal IDA whose measured error stays below `error`, NULL if none
+ * (the pilot then takes the baseline rtol 1e-6, with `error` as its noise). capped: never looser
+ * than that baseline, for a run longer than the benchmark's scenes, where the relations can be
+ * short. */
+static const f3r_solver_relation* pilot_relation(const char* kind, double error, int capped) {
+  const f3r_solver_relation* best = NULL;
   for (int k = 0; k < f3r_solver_relation_count; ++k) {
     const f3r_solver_relation* r = &f3r_solver_relations[k];
     if (!strcmp(r->kind, kind) && r->formulation == F3R_FORMULATION_MINIMAL &&
-        r->integrator == F3R_INTEGRATOR_IDA && r->error <= error && r->rtol > best &&
-        (!capped || r->rtol <= 1e-6 * (1.0 + 1e-9))) {
-      best = r->rtol;
-      *noise = r->error;
-    }
+        r->integrator == F3R_INTEGRATOR_IDA && r->error <= error && (!best || r->rtol > best->rtol) &&
+        (!capped || r->rtol <= 1e-6 * (1.0 + 1e-9)))
+      best = r;
   }
-  return best > 0.0 ? best : 1e-6;
+  return best;
 }
 
-
-
 double f3r_pilot_cost(const char* kind, double resolution, int capped) {
-  double noise, cost = 1.0; /* minimal IDA at 1e-6, where the costs are measured from */
-  const double rtol = pilot_rtol(kind, resolution, capped, &noise);
-  for (int k = 0; k < f3r_solver_relation_count; ++k) {
-    const f3r_solver_relation* r = &f3r_solver_relations[k];
-    if (!strcmp(r->kind, kind) && r->formulation == F3R_FORMULATION_MINIMAL &&
-        r->integrator == F3R_INTEGRATOR_IDA && r->rtol == rtol)
-      cost = r->cost;
-  }
-  return cost;
+  const f3r_solver_relation* r = pilot_relation(kind, resolution, capped);
+  return r ? r->cost : 1.0; /* the baseline, minimal IDA at 1e-6, is what the costs are measured from */
 }
 
 void f3r_pilot_free(f3r_pilot* p) {
@@ -90,7 +79,9 @@ f3r_status f3r_pilot_start(const f3r_scene* s, const f3r_mode_search* ms, const 
   p->tight = f3r_solver_settings_from_scene(s);
   p->tight.formulation = F3R_FORMULATION_MINIMAL;
   p->tight.integrator = F3R_INTEGRATOR_IDA;
-  p->tight.rtol = pilot_rtol(kind, resolution, capped, &p->noise);
+  const f3r_solver_relation* r = pilot_relation(kind, resolution, capped);
+  p->tight.rtol = r ? r->rtol : 1e-6;
+  p->noise = r ? r->error : resolution;
   p->tight.atol = fmin(1e-2 * p->tight.rtol, s->atol); /* positions resolved from the start */
   p->tight.rk_table[0] = '\0';
   memcpy(p->modes, modes, sizeof p->modes);

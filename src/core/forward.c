@@ -13,15 +13,18 @@
 
 static double exact_flag(const f3r_model* m) { return m->exact_kinematics ? 1.0 : 0.0; }
 
+/* (cc, sc) of platform joint i from (cos, sin) phi_p: its direction at phi_p = 0, rotated. */
+static void joint_direction(const f3r_model* m, int i, double cp, double sp, double* cc, double* sc) {
+  const double c0 = m->platform_direction[i][0], s0 = m->platform_direction[i][1];
+  *cc = c0 * cp - s0 * sp;
+  *sc = s0 * cp + c0 * sp;
+}
+
 /* (cc, sc) of the three platform joints from one sin/cos pair of phi_p. */
 static void platform_joints(const f3r_model* m, double phi_p, f3r_data* d) {
   const double cp = cos(phi_p), sp = sin(phi_p);
   d->sincos_pairs++;
-  for (int i = 0; i < 3; ++i) {
-    const double c0 = m->platform_direction[i][0], s0 = m->platform_direction[i][1];
-    d->link[i].cc = c0 * cp - s0 * sp;
-    d->link[i].sc = s0 * cp + c0 * sp;
-  }
+  for (int i = 0; i < 3; ++i) joint_direction(m, i, cp, sp, &d->link[i].cc, &d->link[i].sc);
 }
 
 /* w, the mean deflection and |eta|^2 of link i. */
@@ -109,12 +112,10 @@ f3r_status f3r_fwd_leg_strokes(const f3r_model* m, const double* q, double rho[3
   const double cp = cos(q[F3R_Q_PHI]), sp = sin(q[F3R_Q_PHI]);
   const double min_len = F3R_CLOSURE_MIN_LEG_FRACTION * m->link_length;
   for (int i = 0; i < 3; ++i) {
-    const f3r_link_params* lp = &m->link[i];
-    const double c0 = m->platform_direction[i][0], s0 = m->platform_direction[i][1];
-    double w = 0.0; /* as modal_sums sums it */
-    for (int j = 0; j < lp->modes; ++j) w += lp->tip[j] * q[lp->eta_index + j];
-    double dx, dy;
-    leg_span(m, i, q, c0 * cp - s0 * sp, s0 * cp + c0 * sp, &dx, &dy);
+    const double w = f3r_model_tip_deflection(m, q, i); /* summed as modal_sums sums it */
+    double cc, sc, dx, dy;
+    joint_direction(m, i, cp, sp, &cc, &sc);
+    leg_span(m, i, q, cc, sc, &dx, &dy);
     const double len_sq = dx * dx + dy * dy - w * w;
     if (!(len_sq > min_len * min_len)) return F3R_ERR_SINGULAR;
     rho[i] = sqrt(len_sq) - m->link_length;

@@ -300,7 +300,6 @@ static void superpose(const f3r_linear_model* lin, double dt, int count, const d
   }
 }
 
-
 /* The residual's remainder along the linear path: e = F_b(z, z', z''; u) less its linear part
  * M z'' + D z' + K dz - f0 - U u, second order in the motion. With `other` (a model of the same
  * coordinates), e is instead the difference of the two residuals, F_b of model less F_b of other:
