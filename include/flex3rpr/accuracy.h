@@ -7,10 +7,12 @@
  *    the same with F3R_MAX_MODES on every link being chosen, over the scene's own inputs,
  *    duration and initial state; r is raised uniformly until it fits, then trimmed per link;
  *  - pilot check: when the linear path leaves the initial pose far, short nonlinear runs at the
- *    least mode counts and one more (and one with exact kinematics) measure what the
- *    linearisation cannot, unless the linear estimates (of the mode counts, and of exact
- *    kinematics' added forces along the linear path) lie far below their shares; with end stops
- *    the knob takes 20 modes and exact kinematics instead;
+ *    least mode counts and one more measure what the linearisation cannot, unless the linear
+ *    estimate lies far below its share; with end stops the knob takes 20 modes instead;
+ *  - kinematics error: 0, as exact kinematics is on wherever the scene leaves it open (it costs no
+ *    measurable CPU time); where the scene turns it off, its estimated effect: a linear estimate
+ *    of its added forces along the linear path, and a pilot run with it on unless that is
+ *    negligible;
  *  - solver error: the benchmark's measured relation of error to tolerance (solver_table.c).
  * modes: auto without an accuracy request asks the linear estimate for auto_tolerance of the
  * path's extent. */
@@ -37,7 +39,8 @@ typedef struct {
   char table[48];         /* the Butcher table for erk and dirk, "" for the default */
   double rtol, atol;
   double model_error;     /* m, estimated error of the mode counts */
-  double kinematics_effect;/* m, estimated effect of exact kinematics on the path */
+  double kinematics_effect;/* m, estimated effect of exact kinematics on the path; estimated only
+                           * where the scene turns it off (0 otherwise) */
   double kinematics_error;/* m, the part of it left in the run: the effect when it is off, else 0 */
   double kinematics_linear;/* m, the effect's linear estimate (0 when not computed) */
   double solver_error;    /* m, the measured relation's error at rtol */

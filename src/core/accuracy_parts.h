@@ -80,6 +80,7 @@ typedef struct {
   double noise;      /* m: the pilot's own solver error */
   f3r_solver_settings tight;
   int modes[3];
+  int exact_kinematics; /* the runs' own setting, the choice's (f3r_pilot_kinematics turns it on) */
   double* a;         /* the path at modes, tight */
   double* b;         /* scratch */
 } f3r_pilot;
@@ -87,16 +88,18 @@ typedef struct {
 /* The measured cost (a solver relation's) of the tight pilot's solver for kind, resolution and
  * capped as f3r_pilot_start takes them. */
 double f3r_pilot_cost(const char* kind, double resolution, int capped);
-/* Runs the tight pilot at modes over the window (kind: the solver relations' kind; resolution:
- * the error the pilot's own solver may have; capped: never looser than rtol 1e-6). f3r_pilot_free
- * after, whatever it returns. */
+/* Runs the tight pilot at modes and exact_kinematics over the window (kind: the solver relations'
+ * kind; resolution: the error the pilot's own solver may have; capped: never looser than rtol
+ * 1e-6). f3r_pilot_free after, whatever it returns. */
 f3r_status f3r_pilot_start(const f3r_scene* s, const f3r_mode_search* ms, const int modes[3],
-                           const char* kind, double resolution, int capped, f3r_pilot* p, f3r_error* err);
+                           int exact_kinematics, const char* kind, double resolution, int capped,
+                           f3r_pilot* p, f3r_error* err);
 /* The nonlinear difference of the pilot's modes and one more on each chosen link, carried to the
  * whole run, and the linear one over the whole run. */
 f3r_status f3r_pilot_pair(const f3r_scene* s, f3r_mode_search* ms, f3r_pilot* p, double* nonlinear,
                           double* linear, f3r_error* err);
-/* The effect of exact kinematics at the pilot's modes, carried to the whole run. */
+/* The effect of turning exact kinematics on at the pilot's modes (a pilot run without it),
+ * carried to the whole run. */
 f3r_status f3r_pilot_kinematics(const f3r_scene* s, const f3r_mode_search* ms, f3r_pilot* p,
                                 double* effect, f3r_error* err);
 /* A solver's error at the pilot's modes against the tight pilot, carried to the whole run. */

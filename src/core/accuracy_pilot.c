@@ -71,7 +71,8 @@ static double extrapolate(const f3r_pilot* p, const double* x, const double* y) 
 }
 
 f3r_status f3r_pilot_start(const f3r_scene* s, const f3r_mode_search* ms, const int modes[3],
-                           const char* kind, double resolution, int capped, f3r_pilot* p, f3r_error* err) {
+                           int exact_kinematics, const char* kind, double resolution, int capped,
+                           f3r_pilot* p, f3r_error* err) {
   memset(p, 0, sizeof *p);
   const double window = fmax(F3R_PILOT_SHARE * s->duration, ms->dt);
   p->count = ms->count < (int)ceil(window / ms->dt) + 1 ? ms->count : (int)ceil(window / ms->dt) + 1;
@@ -85,10 +86,11 @@ f3r_status f3r_pilot_start(const f3r_scene* s, const f3r_mode_search* ms, const 
   p->tight.atol = fmin(1e-2 * p->tight.rtol, s->atol); /* positions resolved from the start */
   p->tight.rk_table[0] = '\0';
   memcpy(p->modes, modes, sizeof p->modes);
+  p->exact_kinematics = exact_kinematics;
   p->a = malloc((size_t)p->count * 3 * sizeof(double));
   p->b = malloc((size_t)p->count * 3 * sizeof(double));
   if (!p->a || !p->b) return f3r_error_set(err, F3R_ERR_MEMORY, "accuracy: out of memory");
-  return pilot_path(s, modes, 0, &p->tight, ms->dt, p->count, p->a, err);
+  return pilot_path(s, modes, exact_kinematics, &p->tight, ms->dt, p->count, p->a, err);
 }
 
 /* The nonlinear difference of r and r + 1 modes, carried to the whole run (0 within the pilot's
@@ -102,7 +104,7 @@ f3r_status f3r_pilot_pair(const f3r_scene* s, f3r_mode_search* ms, f3r_pilot* p,
   double* la = malloc((size_t)ms->count * 3 * sizeof(double));
   double* lb = malloc((size_t)ms->count * 3 * sizeof(double));
   f3r_status st = la && lb ? F3R_OK : f3r_error_set(err, F3R_ERR_MEMORY, "accuracy: out of memory");
-  if (st == F3R_OK && (st = pilot_path(s, more, 0, &p->tight, ms->dt, p->count, p->b, err)) == F3R_OK &&
+  if (st == F3R_OK && (st = pilot_path(s, more, p->exact_kinematics, &p->tight, ms->dt, p->count, p->b, err)) == F3R_OK &&
       (st = f3r_mode_search_path(s, ms, p->modes, 1, la, err)) == F3R_OK &&
       (st = f3r_mode_search_path(s, ms, more, 1, lb, err)) == F3R_OK) {
     *linear = f3r_max_distance(la, lb, ms->count);
@@ -113,7 +115,7 @@ f3r_status f3r_pilot_pair(const f3r_scene* s, f3r_mode_search* ms, f3r_pilot* p,
   return st;
 }
 
-/* The effect of exact kinematics at the pilot's modes, carried to the whole run. Not gated by the
+/* The effect of turning exact kinematics on at the pilot's modes, carried to the whole run. Not gated by the
  * pilot's noise: both runs take the same solver and nearly the same steps, so their difference
  * holds little of it, and an effect below the noise can still exceed the kinematics' share. */
 f3r_status f3r_pilot_kinematics(const f3r_scene* s, const f3r_mode_search* ms, f3r_pilot* p,
@@ -129,7 +131,7 @@ f3r_status f3r_pilot_kinematics(const f3r_scene* s, const f3r_mode_search* ms, f
 f3r_status f3r_pilot_solver(const f3r_scene* s, const f3r_mode_search* ms, f3r_pilot* p,
                             const f3r_solver_settings* solver, double* error, f3r_error* err) {
   *error = 0.0;
-  const f3r_status st = pilot_path(s, p->modes, 0, solver, ms->dt, p->count, p->b, err);
+  const f3r_status st = pilot_path(s, p->modes, p->exact_kinematics, solver, ms->dt, p->count, p->b, err);
   if (st == F3R_OK && f3r_max_distance(p->a, p->b, p->count) > 3.0 * p->noise) *error = extrapolate(p, p->a, p->b);
   return st;
 }
