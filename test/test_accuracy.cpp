@@ -543,6 +543,13 @@ TEST(Accuracy, ExactKinematicsTheSceneTurnsOffIsEstimatedAndCounted) {
   EXPECT_EQ(c.kinematics_linear, 0.0) << "not needed where the pilot runs anyway: " << c.summary;
   EXPECT_GT(c.kinematics_effect, 0.0) << c.summary;
   EXPECT_EQ(c.kinematics_error, c.kinematics_effect) << c.summary;
+  // Its effect there (7.2e-5 m) is the largest part at 1e-4 m, and with the model's (3.7e-5 m)
+  // the request is not met: the summary says why.
+  ASSERT_EQ(f3r_accuracy_choose(&free_links, 1e-4, 0, &c, &err), F3R_OK) << err.message;
+  EXPECT_GT(c.kinematics_error, c.model_error) << c.summary;
+  EXPECT_EQ(c.request_met, 0) << c.summary;
+  EXPECT_NE(std::strstr(c.summary, "the largest part is exact kinematics' effect"), nullptr) << c.summary;
+  EXPECT_NE(std::strstr(c.summary, "the scene turns it off"), nullptr) << c.summary;
 }
 
 // The pilot finds minimal IDA at rtol 1e-3 short of its relation on paper simulation 3 with
