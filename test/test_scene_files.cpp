@@ -6,6 +6,7 @@
 #include <dirent.h>
 
 #include <cstdio>
+#include <cstring>
 #include <fstream>
 #include <sstream>
 
@@ -153,6 +154,50 @@ namespace {
 
 // test/invalid_scenes/NN_name.yaml holds a bad scene and NN_name.expected the error after
 // "path:": the line, the field and the allowed range or values.
+// f3r_scene_copy copies everything a scene holds but the unused tails of its input tables, which
+// the destination keeps; a model built from the copy runs the same path as one built from the
+// original (end_stop_impact drives a leg by a table).
+TEST(SceneFiles, ACopyHoldsEverythingButTheTablesUnusedTails) {
+  f3r_scene s;
+  f3r_error err{};
+  ASSERT_EQ(f3r_scene_load(ScenePath("end_stop_impact.yaml").c_str(), &s, &err), F3R_OK) << err.message;
+  int table = -1;
+  for (int k = 0; k < F3R_RIGID_FORCES; ++k)
+    if (s.inputs[k].kind == F3R_INPUT_TABLE) table = k;
+  ASSERT_GE(table, 0);
+  const int used = s.inputs[table].table_size;
+  ASSERT_LT(used, F3R_MAX_TABLE);
+  std::vector<unsigned char> room(sizeof(f3r_scene), 0xAB);
+  f3r_scene* copy = reinterpret_cast<f3r_scene*>(room.data());
+  f3r_scene_copy(copy, &s);
+  f3r_scene expected = s; /* the whole struct, with copy's untouched tails put in */
+  for (int k = 0; k < F3R_RIGID_FORCES; ++k) {
+    const int n = s.inputs[k].table_size;
+    std::memset(expected.inputs[k].table_time + n, 0xAB, (F3R_MAX_TABLE - n) * sizeof(double));
+    std::memset(expected.inputs[k].table_value + n, 0xAB, (F3R_MAX_TABLE - n) * sizeof(double));
+  }
+  EXPECT_EQ(std::memcmp(copy, &expected, sizeof expected), 0);
+  EXPECT_EQ(copy->inputs[table].table_value[used - 1], s.inputs[table].table_value[used - 1]);
+  s.duration = copy->duration = 0.05;
+  s.end_stops = copy->end_stops = 0;
+  auto final_state = [](const f3r_scene& scene) {
+    ModelPtr m = MakeModel(scene);
+    const f3r_solver_settings settings = f3r_solver_settings_from_scene(&scene);
+    f3r_sim* sim = nullptr;
+    f3r_error e{};
+    std::vector<double> y;
+    if (f3r_sim_create(m.get(), &settings, &sim, &e) == F3R_OK && f3r_sim_advance(sim, scene.duration, &e) == F3R_OK) {
+      const double* state = f3r_sim_state(sim);
+      y.assign(state, state + f3r_state_size(m.get(), settings.formulation));
+    }
+    f3r_sim_destroy(sim);
+    return y;
+  };
+  const std::vector<double> original = final_state(s);
+  ASSERT_FALSE(original.empty());
+  EXPECT_EQ(original, final_state(*copy));
+}
+
 TEST(SceneFiles, InvalidSceneCorpusGivesTheExpectedErrors) {
   const std::string dir = std::string(F3R_SOURCE_DIR) + "/test/invalid_scenes";
   DIR* d = opendir(dir.c_str());

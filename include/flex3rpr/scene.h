@@ -153,6 +153,11 @@ typedef struct {
 /* Table I, rigid links, home pose (P = O, phi_p = 0), no inputs, minimal on IDA at rtol 2e-7. */
 f3r_scene f3r_default_scene(void);
 
+/* Copies src into dst but for the unused tails of its input tables (entries table_size and on),
+ * which dst keeps as they were: a scene is 150 kB, almost all of it the tables' room, and models
+ * and the accuracy knob copy scenes many times over. */
+void f3r_scene_copy(f3r_scene* dst, const f3r_scene* src);
+
 /* Checks every field against its allowed range. The message names the field, the value and the
  * range, e.g. "links[1].modes: 25 is out of range 1..20". */
 f3r_status f3r_scene_validate(const f3r_scene* scene, f3r_error* err);

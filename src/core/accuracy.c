@@ -142,7 +142,8 @@ f3r_status f3r_accuracy_choose(const f3r_scene* scene, double request, int comma
   c->request = request;
   unsigned chosen = 0;
   int any_flexible = 0;
-  f3r_scene s = *scene;
+  f3r_scene s;
+  f3r_scene_copy(&s, scene);
   for (int i = 0; i < 3; ++i) {
     if (!f3r_is_flexible(scene, i)) continue;
     any_flexible = 1;
@@ -445,7 +446,8 @@ f3r_status f3r_accuracy_resolve(f3r_scene* scene, int commanded, f3r_accuracy_ch
       tolerance = fmax(tolerance, scene->links[i].auto_tolerance);
     }
   if (!chosen) return F3R_OK;
-  f3r_scene s = *scene;
+  f3r_scene s;
+  f3r_scene_copy(&s, scene);
   for (int i = 0; i < 3; ++i)
     if (chosen >> i & 1) s.links[i].modes = 1;
   const f3r_status st = f3r_accuracy_modes(&s, chosen, -tolerance, c->modes, &c->model_error,

@@ -1,5 +1,6 @@
 /* Scene to model: geometry, inertia, modal constants and the coordinate layout, computed once. */
 #include <math.h>
+#include <stddef.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -40,10 +41,13 @@ f3r_status f3r_model_create_edited(const f3r_scene* source, void (*edit)(f3r_sce
   *out = NULL;
   f3r_model* m = malloc(sizeof *m);
   if (!m) return f3r_error_set(err, F3R_ERR_MEMORY, "f3r_model_create: out of memory");
-  /* The scene first, then everything after it cleared: the same as calloc and a copy, without
-   * writing the scene's 150 kB twice. */
-  m->scene = *source;
-  memset((char*)m + sizeof m->scene, 0, sizeof *m - sizeof m->scene);
+  /* The scene first, then everything after it cleared but the breakpoints' room (written up to
+   * n_breakpoints): the same as calloc and a copy for everything read, without writing the
+   * tables' and the breakpoints' unused 220 kB. */
+  f3r_scene_copy(&m->scene, source);
+  const size_t points = offsetof(f3r_model, breakpoints), points_end = points + sizeof m->breakpoints;
+  memset((char*)m + sizeof m->scene, 0, points - sizeof m->scene);
+  memset((char*)m + points_end, 0, sizeof *m - points_end);
   if (edit) edit(&m->scene, arg);
   const f3r_scene* scene = &m->scene; /* the model's own copy, edited: what it is built from */
   f3r_status st = f3r_scene_validate(scene, err);

@@ -1,5 +1,6 @@
 /* Scene defaults (Table I, ../shared/MODEL.md), range checks and scripted inputs. */
 #include <math.h>
+#include <stddef.h>
 #include <stdio.h>
 #include <string.h>
 
@@ -109,6 +110,20 @@ int f3r_input_breakpoints(const f3r_input* in, double* times, int max) {
       break;
   }
   return n;
+}
+
+void f3r_scene_copy(f3r_scene* dst, const f3r_scene* src) {
+  const size_t inputs = offsetof(f3r_scene, inputs), inputs_end = inputs + sizeof src->inputs;
+  memcpy(dst, src, inputs);
+  memcpy((char*)dst + inputs_end, (const char*)src + inputs_end, sizeof *dst - inputs_end);
+  for (int k = 0; k < F3R_RIGID_FORCES; ++k) {
+    const f3r_input* from = &src->inputs[k];
+    f3r_input* to = &dst->inputs[k];
+    memcpy(to, from, offsetof(f3r_input, table_time));
+    const int used = from->table_size < 0 ? 0 : from->table_size > F3R_MAX_TABLE ? F3R_MAX_TABLE : from->table_size;
+    memcpy(to->table_time, from->table_time, (size_t)used * sizeof(double));
+    memcpy(to->table_value, from->table_value, (size_t)used * sizeof(double));
+  }
 }
 
 #define CHECK_RANGE(field, value, lo, hi)                                                   \
