@@ -483,7 +483,7 @@ TEST(Accuracy, ThePilotPairRunsWhereTheLinearEstimateComesNearTheShare) {
   EXPECT_EQ(c.exact_kinematics, 1) << c.summary;
 }
 
-// Exact kinematics costs no measurable CPU time (0.89 to 1.11 times the runs without it,
+// Exact kinematics costs no measurable CPU time (the same steps and time as the runs without it,
 // scripts/bench_accuracy), so the knob turns it on wherever the scene leaves it open, and neither
 // estimates its effect nor runs a pilot for it: on paper simulation 3 with fixed-pinned links at
 // 1e-5 m, where an estimate would have needed a pilot, none runs at all.

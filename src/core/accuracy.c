@@ -23,9 +23,11 @@
  * tolerance); where a scene turns exact kinematics off, a linear estimate this many times below
  * the kinematics' share is taken as its effect unchecked. */
 #define KINEMATICS_SKIP_FACTOR 100.0
-/* Exact kinematics costs no measurable CPU time: runs with it on took 0.89 to 1.11 times the time
- * of the same runs without it, median 0.98, over 15 configurations of the shipped scenes (r = 1 to
- * 20, minimal and dae on IDA, both ERK tables; scripts/bench_accuracy measures it on every scene).
+/* Exact kinematics costs no measurable CPU time: runs with it on take 0.86 to 1.05 times the steps
+ * of the same runs without it and, within the machine's noise, the same time (median 0.98 to 1.01
+ * in three runs of scripts/bench_accuracy: 39 pairs each, every shipped scene with a flexible
+ * link at r = 1 and 3, minimal and dae on IDA; 0.89 to 1.11, median 0.98, over 15 more pairs up
+ * to r = 20 and with both ERK tables, medians of 7 to 15 runs in turns).
  * So the knob turns it on wherever the scene leaves it open: its part of the error goes to 0 at no
  * cost, where an estimate (a linear response, or a pilot run of a tenth of the duration) could only
  * have turned it off to save nothing. */
@@ -266,7 +268,7 @@ f3r_status f3r_accuracy_choose(const f3r_scene* scene, double request, int comma
   else if (kinematics_open && impacts)
     append(text, size, "exact kinematics: on (the most faithful model)\n");
   else if (kinematics_open)
-    append(text, size, "exact kinematics: on: it costs no measurable CPU time (0.89 to 1.11 times the runs "
+    append(text, size, "exact kinematics: on: it costs no measurable CPU time (the same steps and time as "
                        "without it on the shipped scenes), so its part of the error is removed, not estimated\n");
   else if (!kinematics_off)
     append(text, size, "exact kinematics: on, as the scene sets\n");
