@@ -1,7 +1,7 @@
 /* The accuracy knob (include/flex3rpr/accuracy.h): chooses mode counts (accuracy_search.c),
  * checks them and the solver with a pilot (accuracy_pilot.c), and picks the measured solver
- * relation; exact kinematics is on unless the scene turns it off, and then its effect is counted. Runs once before a simulation, so it allocates freely; nothing here
- * touches the step loop. */
+ * relation; exact kinematics is on unless the scene turns it off, and then its effect is counted.
+ * Runs once before a simulation, so it allocates freely; nothing here touches the step loop. */
 #include <math.h>
 #include <stdarg.h>
 #include <stdio.h>
@@ -23,14 +23,6 @@
  * tolerance); where a scene turns exact kinematics off, a linear estimate this many times below
  * the kinematics' share is taken as its effect unchecked. */
 #define KINEMATICS_SKIP_FACTOR 100.0
-/* Exact kinematics costs no measurable CPU time: runs with it on take 0.86 to 1.05 times the steps
- * of the same runs without it and, within the machine's noise, the same time (median 0.98 to 1.01
- * in three runs of scripts/bench_accuracy: 39 pairs each, every shipped scene with a flexible
- * link at r = 1 and 3, minimal and dae on IDA; 0.89 to 1.11, median 0.98, over 15 more pairs up
- * to r = 20 and with both ERK tables, medians of 7 to 15 runs in turns).
- * So the knob turns it on wherever the scene leaves it open: its part of the error goes to 0 at no
- * cost, where an estimate (a linear response, or a pilot run of a tenth of the duration) could only
- * have turned it off to save nothing. */
 /* A measured relation whose error is within this share of the solver's budget is left unchecked
  * on a run no longer than the benchmark's scenes. */
 #define SOLVER_CHECK_SHARE 0.1
@@ -156,8 +148,15 @@ f3r_status f3r_accuracy_choose(const f3r_scene* scene, double request, int comma
   }
   const char* kind = commanded && any_flexible ? "commanded" : any_flexible ? "flexible" : "rigid";
   const double model_target = F3R_ACCURACY_MODEL_SHARE * request;
+  /* Exact kinematics costs no measurable CPU time: runs with it on take 0.86 to 1.05 times the
+   * steps of the same runs without it and, within the machine's noise, the same time (median 0.98
+   * to 1.01 in three runs of scripts/bench_accuracy: 39 pairs each, every shipped scene with a
+   * flexible link at r = 1 and 3, minimal and dae on IDA; 0.89 to 1.11, median 0.98, over 15 more
+   * pairs up to r = 20 and with both ERK tables, medians of 7 to 15 runs in turns). So it is on
+   * wherever the scene leaves it open: its part of the error goes to 0 at no cost, where an
+   * estimate (a linear response, or a pilot run of a tenth of the duration) could only have
+   * turned it off to save nothing. Where the scene turns it off, its effect is estimated. */
   const int kinematics_open = any_flexible && !(scene->explicit_settings & F3R_EXPLICIT_EXACT_KINEMATICS);
-  /* where the scene turns exact kinematics off, its effect is estimated and counted */
   const int kinematics_off = any_flexible && !kinematics_open && !scene->exact_kinematics;
   const unsigned solver_fixed = F3R_EXPLICIT_FORMULATION | F3R_EXPLICIT_INTEGRATOR | F3R_EXPLICIT_RTOL;
   const int solver_open = (scene->explicit_settings & solver_fixed) != solver_fixed;

@@ -115,9 +115,10 @@ f3r_status f3r_pilot_pair(const f3r_scene* s, f3r_mode_search* ms, f3r_pilot* p,
   return st;
 }
 
-/* The effect of turning exact kinematics on at the pilot's modes, carried to the whole run. Not gated by the
- * pilot's noise: both runs take the same solver and nearly the same steps, so their difference
- * holds little of it, and an effect below the noise can still exceed the kinematics' share. */
+/* The effect of turning exact kinematics on at the pilot's modes, carried to the whole run. Not
+ * gated by the pilot's noise: both runs take the same solver and nearly the same steps, so their
+ * difference holds little of it, and an effect below the noise can still exceed the kinematics'
+ * share. */
 f3r_status f3r_pilot_kinematics(const f3r_scene* s, const f3r_mode_search* ms, f3r_pilot* p,
                                    double* effect, f3r_error* err) {
   *effect = 0.0;

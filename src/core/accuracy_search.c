@@ -6,7 +6,6 @@
 #include <string.h>
 
 #include "accuracy_parts.h"
-#include "model_edit.h"
 #include "flex3rpr/linear.h"
 
 #define MAX_SAMPLES 20001
@@ -22,24 +21,17 @@ static int lowest_modes(const f3r_scene* s, int i) { /* the initial state's high
   return low;
 }
 
-
-typedef struct {
-  const int* modes;
-  int exact_kinematics;
-} modes_edit;
-
-static void set_modes(f3r_scene* s, const void* arg) {
-  const modes_edit* e = arg;
-  s->accuracy = 0.0;
-  s->exact_kinematics = e->exact_kinematics;
-  for (int i = 0; i < 3; ++i) s->links[i].modes = f3r_is_flexible(s, i) ? e->modes[i] : 0;
-}
-
-/* The scene with fixed mode counts, no accuracy request: a model the caller must destroy. */
+/* The scene with fixed mode counts, no accuracy request: a model the caller must destroy. The
+ * copy leaves the input tables' room untouched (f3r_scene_copy), so the knob's dozens of models a
+ * choice cost no 150 kB scene each. */
 f3r_status f3r_model_with_modes(const f3r_scene* base, const int modes[3], int exact_kinematics,
                              f3r_model** model, f3r_error* err) {
-  const modes_edit e = {modes, exact_kinematics};
-  return f3r_model_create_edited(base, set_modes, &e, model, err);
+  f3r_scene s;
+  f3r_scene_copy(&s, base);
+  s.accuracy = 0.0;
+  s.exact_kinematics = exact_kinematics;
+  for (int i = 0; i < 3; ++i) s.links[i].modes = f3r_is_flexible(&s, i) ? modes[i] : 0;
+  return f3r_model_create(&s, model, err);
 }
 
 /* The linearised end-effector path (order 1, or 2 with the second-order correction) at

@@ -9,7 +9,6 @@
 #include "flex3rpr/model.h"
 #include "effects.h"
 #include "data.h"
-#include "model_edit.h"
 
 static const double kPlatformAngle[3] = {-M_PI / 6.0, M_PI / 2.0, 7.0 * M_PI / 6.0};
 
@@ -31,12 +30,7 @@ static void collect_breakpoints(f3r_model* m) {
   m->n_breakpoints = unique;
 }
 
-f3r_status f3r_model_create(const f3r_scene* scene, f3r_model** out, f3r_error* err) {
-  return f3r_model_create_edited(scene, NULL, NULL, out, err);
-}
-
-f3r_status f3r_model_create_edited(const f3r_scene* source, void (*edit)(f3r_scene*, const void*),
-                                   const void* arg, f3r_model** out, f3r_error* err) {
+f3r_status f3r_model_create(const f3r_scene* source, f3r_model** out, f3r_error* err) {
   if (!source || !out) return f3r_error_set(err, F3R_ERR_ARGUMENT, "f3r_model_create: NULL argument");
   *out = NULL;
   f3r_model* m = malloc(sizeof *m);
@@ -48,8 +42,7 @@ f3r_status f3r_model_create_edited(const f3r_scene* source, void (*edit)(f3r_sce
   const size_t points = offsetof(f3r_model, breakpoints), points_end = points + sizeof m->breakpoints;
   memset((char*)m + sizeof m->scene, 0, points - sizeof m->scene);
   memset((char*)m + points_end, 0, sizeof *m - points_end);
-  if (edit) edit(&m->scene, arg);
-  const f3r_scene* scene = &m->scene; /* the model's own copy, edited: what it is built from */
+  const f3r_scene* scene = &m->scene; /* the model's own copy: what it is built from */
   f3r_status st = f3r_scene_validate(scene, err);
   if (st != F3R_OK) {
     free(m);
