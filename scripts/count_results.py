@@ -8,6 +8,7 @@ import xml.etree.ElementTree as ET
 
 runs = [(pathlib.Path(f), int(rc)) for f, rc in zip(sys.argv[1::2], sys.argv[2::2])]
 passed = failed = 0
+shown = set()  # failure messages printed: each once
 for xml in sorted(x for folder, _ in runs for x in folder.rglob("*.xml")):
     try:
         root = ET.parse(xml).getroot()
@@ -19,6 +20,15 @@ for xml in sorted(x for folder, _ in runs for x in folder.rglob("*.xml")):
         if case.find("failure") is not None or case.find("error") is not None:
             failed += 1
             print(f"FAILED {xml.parent.name}/{xml.name}: {case.get('classname')}.{case.get('name')}")
+            # the first lines of the message, so that a CI log's tail says why
+            node = case.find("failure") if case.find("failure") is not None else case.find("error")
+            text = (node.get("message") or "") + "\n" + (node.text or "")
+            lines = list(dict.fromkeys(l.strip() for l in text.splitlines() if l.strip()))[:12]
+            if lines and tuple(lines) in shown:
+                print("    (the message above)")
+            for line in [] if tuple(lines) in shown else lines:
+                print(f"    {line[:300]}")
+            shown.add(tuple(lines))
         elif case.find("skipped") is None:
             passed += 1
 for folder, ctest_rc in runs:

@@ -74,6 +74,7 @@ def free_port():
 class Checks:
     def __init__(self):
         self.cases = {}  # name -> list of failure messages
+        self.settled = set()  # cases fully checked: a later crash does not touch them
 
     def case(self, name):
         self.cases.setdefault(name, [])
@@ -216,9 +217,9 @@ def main():
     work = tempfile.mkdtemp(prefix="test_render_bag.")
     try:
         run(args, checks, work)
-    except Exception as e:  # a crash is a failure of every case not yet decided
+    except Exception as e:  # a crash is a failure of every case not yet fully checked
         for name, fails in checks.cases.items():
-            if not fails:
+            if name not in checks.settled and not fails:
                 checks.fail(name, f"not checked: {type(e).__name__}: {e}")
     finally:
         stop_all()
@@ -255,8 +256,8 @@ def run(args, checks, work):
 
     # --- record ---------------------------------------------------------------------------------
     log = open(os.path.join(work, "record.log"), "w")
-    procs.append(subprocess.Popen(["rosmaster", "--core", "-p", str(port)], env=env, stdout=log,
-                                  stderr=subprocess.STDOUT, start_new_session=True))
+    procs.append(subprocess.Popen(["rosmaster", "--core", "-p", str(port)], env=env, stdin=subprocess.DEVNULL,
+                                  stdout=log, stderr=subprocess.STDOUT, start_new_session=True))
     import rosgraph
 
     master = rosgraph.Master("/test_render_bag", master_uri=env["ROS_MASTER_URI"])
@@ -266,7 +267,8 @@ def run(args, checks, work):
             raise RuntimeError("the master did not start")
         time.sleep(0.1)
     for topic, (mtype, value) in COMMANDS.items():  # latched zero commands, delivered on connection
-        procs.append(subprocess.Popen(["rostopic", "pub", "--latch", topic, mtype, value], env=env, stdout=log,
+        procs.append(subprocess.Popen(["rostopic", "pub", "--latch", topic, mtype, value], env=env,
+                                      stdin=subprocess.DEVNULL, stdout=log,
                                       stderr=subprocess.STDOUT, start_new_session=True))
     deadline = time.time() + 120
     while not all(t in {n for n, _ in master.getSystemState()[0]} for t in COMMANDS):
@@ -281,7 +283,8 @@ def run(args, checks, work):
     if os.environ.get("F3R_NODE_LAUNCH_PREFIX"):
         cmd.append("launch_prefix:=" + os.environ["F3R_NODE_LAUNCH_PREFIX"])
     t0 = time.time()
-    rc = subprocess.run(cmd, env=env, stdout=log, stderr=subprocess.STDOUT, timeout=600).returncode
+    rc = subprocess.run(cmd, env=env, stdin=subprocess.DEVNULL, stdout=log, stderr=subprocess.STDOUT,
+                        timeout=600).returncode
     print(f"recorded in {time.time() - t0:.1f} s (roslaunch exit {rc})", flush=True)
     stop_all()  # the command publishers and the master
     if not os.path.isfile(bag):
@@ -310,19 +313,20 @@ def run(args, checks, work):
                     + (f"; unexpected topics {extra}" if extra else ""))
     else:
         checks.ok("bag_counts", ", ".join(f"{t} {counts[t]}" for t in sorted(counts)))
+    checks.settled.add("bag_counts")
 
     # --- render -------------------------------------------------------------------------------------
     frames_dir = os.path.join(work, "frames")
     t0 = time.time()
     r = subprocess.run(["/usr/bin/python3", os.path.join(ROOT, "scripts", "render_bag"), bag, "--at",
-                        ",".join(str(t) for t in TIMES), "--out", frames_dir], env=env, capture_output=True,
-                       text=True, timeout=900)
+                        ",".join(str(t) for t in TIMES), "--out", frames_dir], env=env, stdin=subprocess.DEVNULL,
+                       capture_output=True, text=True, timeout=900)
     with open(os.path.join(work, "render.log"), "w") as f:
         f.write(r.stdout + r.stderr)
     print(f"rendered in {time.time() - t0:.1f} s (exit {r.returncode})", flush=True)
     pngs = [os.path.join(frames_dir, "rviz_t%.3f.png" % t) for t in TIMES]
     if r.returncode != 0 or not all(os.path.isfile(p) for p in pngs):
-        raise RuntimeError("render_bag failed: " + (r.stdout + r.stderr)[-600:])
+        raise RuntimeError(f"render_bag failed (exit {r.returncode}): " + (r.stdout + r.stderr)[-1500:])
     for p in pngs:
         shutil.copy(p, work)
 
