@@ -32,6 +32,9 @@ import xml.sax.saxutils
 ROOT = os.path.dirname(os.path.dirname(os.path.realpath(__file__)))
 # The sanitizers' settings pass into the clean environment (an instrumented node needs them).
 KEEP = ("HOME", "ROS_HOME", "ASAN_OPTIONS", "LSAN_OPTIONS", "UBSAN_OPTIONS")
+# what a devel space's setup sets (catkin's setup_cached.sh)
+DEVEL_SETUP = ("CMAKE_PREFIX_PATH", "LD_LIBRARY_PATH", "PKG_CONFIG_PATH", "PYTHONPATH", "ROS_DISTRO", "ROS_ETC_DIR",
+               "ROS_MASTER_URI", "ROS_PACKAGE_PATH", "ROS_PYTHON_VERSION", "ROS_VERSION", "ROSLISP_PACKAGE_DIRECTORIES")
 
 
 def free_port():
@@ -93,9 +96,14 @@ def check_install(prefix):
 
 def case_catkin_make_install(workspace):
     workspace = os.path.abspath(workspace)
-    # catkin_make takes the workspace from $PWD
-    p = subprocess.run(["catkin_make", "install", "-j2"], cwd=workspace, env=dict(os.environ, PWD=workspace),
-                       capture_output=True, text=True, timeout=1800)
+    # catkin_make takes the workspace from $PWD. It runs without what the devel space's setup put
+    # into this test's environment: should it re-run cmake in the workspace the other tests use,
+    # catkin writes only what differs from the environment into their setup (setup_cached.sh),
+    # which would then hold nothing, and the tests after this one would not find the package.
+    env = {k: v for k, v in os.environ.items() if k not in DEVEL_SETUP}
+    env["PWD"] = workspace
+    p = subprocess.run(["catkin_make", "install", "-j2"], cwd=workspace, env=env, capture_output=True, text=True,
+                       timeout=1800)
     if p.returncode != 0:
         return "catkin_make install failed:\n" + (p.stdout + p.stderr)[-4000:]
     return check_install(os.path.join(workspace, "install"))
