@@ -23,12 +23,13 @@ for xml in sorted(x for folder, _ in runs for x in folder.rglob("*.xml")):
             # the first lines of the message, so that a CI log's tail says why
             node = case.find("failure") if case.find("failure") is not None else case.find("error")
             text = (node.get("message") or "") + "\n" + (node.text or "")
-            lines = list(dict.fromkeys(l.strip() for l in text.splitlines() if l.strip()))[:12]
-            if lines and tuple(lines) in shown:
+            lines = tuple(dict.fromkeys(l.strip() for l in text.splitlines() if l.strip()))[:12]
+            if lines in shown:
                 print("    (the message above)")
-            for line in [] if tuple(lines) in shown else lines:
-                print(f"    {line[:300]}")
-            shown.add(tuple(lines))
+            else:
+                for line in lines:
+                    print(f"    {line[:300]}")
+                shown.add(lines)
         elif case.find("skipped") is None:
             passed += 1
 for folder, ctest_rc in runs:
