@@ -85,6 +85,23 @@ f3r_status f3r_sim_reset(f3r_sim* sim, f3r_error* err);
  * Non-finite values are rejected and change nothing. */
 f3r_status f3r_sim_set_forces(f3r_sim* sim, const double* held, f3r_error* err);
 
+/* Puts the run in a given state at the current time, as a node's "set state" service or a
+ * test's initial condition would: the platform pose (X_p, Y_p, phi_p) (m, m, rad) and its rate
+ * (X_p', Y_p', phi_p') (m/s, m/s, rad/s), both in the world (base) frame, and the modal
+ * coordinates eta (m) and their rates (m/s), nq - 9 values each in model.h order (link 1, 2, 3);
+ * NULL for either gives zero. rho_i, theta_i and their rates follow from the loop closure
+ * (f3r_model_close_loops, f3r_model_close_loop_rates), so the state is consistent
+ * (constraint_residual and velocity_residual at rounding level). Time, held forces, actuator lag
+ * states and the impact count are kept; the integrator restarts as after f3r_sim_set_forces; the
+ * energy balance restarts: external work 0, and T + V of the new state (less the impact losses
+ * so far) is its reference, so energy_balance_error measures the run from here.
+ * Errors change nothing (state, time, energy reference): F3R_ERR_ARGUMENT for non-finite values
+ * or, with end stops, a stroke rho_i outside [stroke_min, stroke_max] (the message names the leg,
+ * its stroke and the range); F3R_ERR_SINGULAR for a pose the legs cannot reach (a leg would need
+ * rho_i + l <= 0, or below the collapse guard 0.1 l where a run stops at once). */
+f3r_status f3r_sim_set_state(f3r_sim* sim, const double pose[3], const double twist[3],
+                             const double* modal, const double* modal_rate, f3r_error* err);
+
 /* Integrates to t_out (> current time). On failure the last good state is kept. */
 f3r_status f3r_sim_advance(f3r_sim* sim, double t_out, f3r_error* err);
 

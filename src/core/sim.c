@@ -10,6 +10,9 @@
 #include "stepper.h"
 #include "workspace.h"
 
+/* The largest state y: dae's 2 nq + 12 multipliers + 3 actuator lag states + W. */
+#define F3R_MAX_STATE (2 * F3R_MAX_Q + 16)
+
 struct f3r_sim {
   const f3r_model* model;
   f3r_solver_settings settings;
@@ -173,6 +176,106 @@ f3r_status f3r_sim_set_forces(f3r_sim* s, const double* held, f3r_error* err) {
   if (st == F3R_OK) st = s->ops->restart(&s->stepper, s->y, s->yp, s->t, err);
   if (st != F3R_OK) memcpy(s->held, keep, sizeof keep);
   return st;
+}
+
+/* Why pose and modal coordinates in q cannot be closed, or 0 when they can be: the first leg
+ * whose root would have to reach A_i (the closure's F3R_ERR_SINGULAR) or come closer to it than
+ * the collapse guard (a run would stop there at once), or, with end stops, whose stroke lies
+ * outside them. q holds the pose and the modal coordinates; rho and theta are filled. */
+static f3r_status closure_error(const f3r_model* m, double* q, f3r_error* err) {
+  const double* P = q + F3R_Q_X;
+  if (f3r_model_close_loops(m, q) != F3R_OK) {
+    for (int i = 0; i < 3; ++i) { /* the closure's test, leg by leg, to name the leg */
+      const double angle = m->platform_angle[i] + P[2];
+      const double dx = P[0] + m->platform_radius * cos(angle) - m->base_joint[i][0];
+      const double dy = P[1] + m->platform_radius * sin(angle) - m->base_joint[i][1];
+      const double w = f3r_model_tip_deflection(m, q, i);
+      if (dx * dx + dy * dy - w * w <= 1e-6 * m->link_length * m->link_length)
+        return f3r_error_set(err, F3R_ERR_SINGULAR,
+                             "pose (%g, %g, %g) unreachable: leg %d would need rho_%d + l <= 0 "
+                             "(|C_%d - A_%d| = %.4g m, tip deflection %.4g m)",
+                             P[0], P[1], P[2], i + 1, i + 1, i + 1, i + 1, hypot(dx, dy), w);
+    }
+    return f3r_error_set(err, F3R_ERR_SINGULAR, "pose (%g, %g, %g) unreachable by the legs", P[0],
+                         P[1], P[2]);
+  }
+  for (int i = 0; i < 3; ++i) {
+    const double len = q[F3R_Q_RHO + i] + m->link_length;
+    if (len < F3R_COLLAPSE_LEG_FRACTION * m->link_length)
+      return f3r_error_set(err, F3R_ERR_SINGULAR,
+                           "pose (%g, %g, %g) unreachable: leg %d would need rho_%d + l = %.4g m, "
+                           "below the collapse guard %.2g l where a run stops",
+                           P[0], P[1], P[2], i + 1, i + 1, len, F3R_COLLAPSE_LEG_FRACTION);
+  }
+  if (m->end_stops)
+    for (int i = 0; i < 3; ++i) {
+      const double rho = q[F3R_Q_RHO + i];
+      if (rho < m->stroke_min || rho > m->stroke_max)
+        return f3r_error_set(err, F3R_ERR_ARGUMENT,
+                             "pose (%g, %g, %g) beyond the end stops: leg %d would need rho_%d = "
+                             "%.6g m, outside [%.6g, %.6g] m",
+                             P[0], P[1], P[2], i + 1, i + 1, rho, m->stroke_min, m->stroke_max);
+    }
+  return F3R_OK;
+}
+
+static f3r_status check_finite_values(const double* x, int count, const char* what,
+                                      f3r_error* err) {
+  for (int k = 0; k < count; ++k)
+    if (!isfinite(x[k]))
+      return f3r_error_set(err, F3R_ERR_ARGUMENT, "%s[%d] is %g, not finite", what, k, x[k]);
+  return F3R_OK;
+}
+
+f3r_status f3r_sim_set_state(f3r_sim* s, const double pose[3], const double twist[3],
+                             const double* modal, const double* modal_rate, f3r_error* err) {
+  if (!s || !pose || !twist)
+    return f3r_error_set(err, F3R_ERR_ARGUMENT, "f3r_sim_set_state: NULL argument");
+  const f3r_model* m = s->model;
+  const int n_modal = m->nq - F3R_Q_MODAL;
+  f3r_status st;
+  if ((st = check_finite_values(pose, 3, "pose", err)) ||
+      (st = check_finite_values(twist, 3, "twist", err)) ||
+      (modal && (st = check_finite_values(modal, n_modal, "modal", err))) ||
+      (modal_rate && (st = check_finite_values(modal_rate, n_modal, "modal_rate", err))))
+    return st;
+  double q[F3R_MAX_Q] = {0}, v[F3R_MAX_Q] = {0}, lag[3];
+  memcpy(q + F3R_Q_X, pose, 3 * sizeof(double));
+  memcpy(v + F3R_Q_X, twist, 3 * sizeof(double));
+  if (modal) memcpy(q + F3R_Q_MODAL, modal, (size_t)n_modal * sizeof(double));
+  if (modal_rate) memcpy(v + F3R_Q_MODAL, modal_rate, (size_t)n_modal * sizeof(double));
+  if ((st = closure_error(m, q, err)) != F3R_OK) return st;
+  f3r_model_close_loop_rates(m, q, v);
+  /* The consistent state goes to scratch first (the outputs' workspace, which the integrator
+   * never reads), so that a failure leaves the simulation as it was. */
+  double y[F3R_MAX_STATE], yp[F3R_MAX_STATE];
+  st = f3r_consistent_state(m, s->settings.formulation, nextafter(s->t, INFINITY), q, v, s->held,
+                            lag_states(s, lag), 0.0, y, yp, NULL, s->out_ws);
+  if (st != F3R_OK)
+    return f3r_error_set(err, st, "no consistent state at pose (%g, %g, %g): %s", pose[0], pose[1],
+                         pose[2], st == F3R_ERR_SINGULAR ? "the constrained mass matrix is singular"
+                                                         : "non-finite values");
+  double* sy = N_VGetArrayPointer(s->y);
+  double* syp = N_VGetArrayPointer(s->yp);
+  double keep_y[F3R_MAX_STATE], keep_yp[F3R_MAX_STATE];
+  memcpy(keep_y, sy, (size_t)s->ny * sizeof(double));
+  memcpy(keep_yp, syp, (size_t)s->ny * sizeof(double));
+  memcpy(sy, y, (size_t)s->ny * sizeof(double));
+  memcpy(syp, yp, (size_t)s->ny * sizeof(double));
+  const int keep_stale = s->stepper.yp_stale;
+  s->stepper.yp_stale = 0;
+  if ((st = s->ops->restart(&s->stepper, s->y, s->yp, s->t, err)) != F3R_OK) {
+    memcpy(sy, keep_y, (size_t)s->ny * sizeof(double));
+    memcpy(syp, keep_yp, (size_t)s->ny * sizeof(double));
+    s->stepper.yp_stale = keep_stale;
+    s->ops->restart(&s->stepper, s->y, s->yp, s->t, NULL);
+    return st;
+  }
+  /* The balance starts anew: W = 0 in the new state, and T + V less the impact losses so far
+   * (which the balance adds back) is the reference. */
+  s->energy0 = f3r_kinetic_energy(m, q, v) + f3r_potential_energy(m, q) + s->impact_loss;
+  memset(&s->impact_window, 0, sizeof s->impact_window);
+  return F3R_OK;
 }
 
 /* At an end-stop event: the impact law on the legs in contact (events.c), then a restart. */
