@@ -287,6 +287,100 @@ TEST(Simulation, OutputsAgreeWithTheStagesAtTheOutputState) {
   }
 }
 
+// The scripted inputs of test/scenes/all_effects.yaml plus a table on theta_2, written out
+// here from the scene's numbers (not through f3r_input_value).
+double AllEffectsInput(int index, double t) {
+  switch (index) {
+    case F3R_FORCE_RHO + 0: return t <= 0.002 ? 0.0 : 5.0;                  // step
+    case F3R_FORCE_RHO + 1: return 1.0 + 2.0 * std::cos(2.0 * M_PI * 30.0 * t);  // harmonic
+    case F3R_FORCE_THETA + 1: {  // table (0, 0), (0.01, 0.1), (0.02, -0.05), linear
+      if (t <= 0.01) return 0.1 * t / 0.01;
+      if (t <= 0.02) return 0.1 - 0.15 * (t - 0.01) / 0.01;
+      return -0.05;
+    }
+    case F3R_FORCE_THETA + 2: {  // chirp 10 -> 100 Hz over 0.1 s, amplitude 0.2
+      if (t > 0.1) return 0.0;
+      return 0.2 * std::sin(2.0 * M_PI * (10.0 * t + 0.5 * 90.0 * t * t / 0.1));
+    }
+    default: return 0.0;
+  }
+}
+
+// The passive forces on the leg joints written out from effects.c's formulas: viscous joint
+// friction and in-plane gravity on the cylinder and the beam.
+void PassiveForces(const f3r_model* m, const f3r_scene& s, const double* q, const double* v,
+                   double passive[6]) {
+  const double gx = s.gravity[0], gy = s.gravity[1];
+  for (int i = 0; i < 3; ++i) {
+    const double th = q[F3R_Q_THETA + i], e_x = std::cos(th), e_y = std::sin(th);
+    const double g_e = gx * e_x + gy * e_y, g_n = -gx * e_y + gy * e_x;
+    double mean = 0.0;  // int_0^1 w dxi
+    for (int j = 0; j < m->link[i].modes; ++j) mean += m->link[i].mean[j] * q[m->link[i].eta_index + j];
+    passive[i] = -s.friction_prismatic[i] * v[i] + m->link_mass * g_e;
+    passive[3 + i] = -s.friction_revolute[i] * v[3 + i] +
+                     (m->cylinder_mass * m->cylinder_length / 2.0 +
+                      m->link_mass * (q[i] + m->link_length / 2.0)) * g_n -
+                     m->link_mass * mean * g_e;
+  }
+}
+
+// The efforts of the six actuators are the held forces plus the scene's inputs (or, for the legs
+// under actuator lag, the lag states, which follow a step as 1 - exp(-t/tau)); the passive forces
+// are the rest of Q on the leg joints: friction and gravity.
+TEST(Simulation, ActuatorEffortsAreHeldPlusScriptedAndPassiveIsTheRest) {
+  for (int lagged = 0; lagged < 2; ++lagged) {
+    f3r_scene s;
+    f3r_error err{};
+    ASSERT_EQ(f3r_scene_load((std::string(F3R_SOURCE_DIR) + "/test/scenes/all_effects.yaml").c_str(),
+                             &s, &err), F3R_OK) << err.message;
+    f3r_input& table = s.inputs[F3R_FORCE_THETA + 1];
+    table.kind = F3R_INPUT_TABLE;
+    table.table_size = 3;
+    const double times[3] = {0.0, 0.01, 0.02}, values[3] = {0.0, 0.1, -0.05};
+    std::copy(times, times + 3, table.table_time);
+    std::copy(values, values + 3, table.table_value);
+    if (!lagged) s.actuator_lag = 0.0;
+    auto m = MakeModel(s);
+    ASSERT_EQ(m->n_lag, lagged ? 3 : 0);
+    f3r_solver_settings set = f3r_solver_settings_from_scene(&s);
+    set.rtol = 1e-10;
+    set.atol = 1e-12;
+    f3r_sim* raw = nullptr;
+    ASSERT_EQ(f3r_sim_create(m.get(), &set, &raw, &err), F3R_OK) << err.message;
+    SimPtr sim(raw);
+    std::vector<double> held(m->nq, 0.0);
+    held[F3R_FORCE_RHO + 2] = 1.5;
+    held[F3R_FORCE_THETA + 0] = -0.02;
+    held[F3R_FORCE_THETA + 1] = 0.01;
+    ASSERT_EQ(f3r_sim_set_forces(sim.get(), held.data(), &err), F3R_OK) << err.message;
+    const double tau = s.actuator_lag;
+    for (double t : {0.0015, 0.004, 0.0137, 0.025, 0.04}) {
+      ASSERT_EQ(f3r_sim_advance(sim.get(), t, &err), F3R_OK) << err.message;
+      const f3r_outputs* o = f3r_sim_outputs(sim.get());
+      double passive[6];
+      PassiveForces(m.get(), s, o->q, o->v, passive);
+      for (int j = 0; j < 6; ++j) {
+        const double scripted = held[j] + AllEffectsInput(j, t);
+        if (j >= F3R_FORCE_THETA || !lagged) {
+          EXPECT_NEAR(o->actuator[j], scripted, 1e-14 * (1.0 + std::fabs(scripted)))
+              << "joint " << j << " at " << t;
+        } else if (j == F3R_FORCE_RHO) {  // the lag's step response, from rest
+          const double delivered = t <= 0.002 ? 0.0 : 5.0 * (1.0 - std::exp(-(t - 0.002) / tau));
+          EXPECT_NEAR(o->actuator[j], delivered, 1e-6) << "at " << t;
+        }
+        if (lagged && j < F3R_FORCE_THETA) {
+          const double* y = f3r_sim_state(sim.get());
+          EXPECT_EQ(o->actuator[j], y[f3r_lag_index(m.get(), set.formulation) + j]) << j;
+        }
+        EXPECT_NEAR(o->actuator[j] + o->passive[j], o->forces[j], 1e-13 * (1.0 + std::fabs(o->forces[j])))
+            << "joint " << j << " at " << t;
+        EXPECT_NEAR(o->passive[j], passive[j], 1e-12 * (1.0 + std::fabs(passive[j])))
+            << "joint " << j << " at " << t;
+      }
+    }
+  }
+}
+
 TEST(Simulation, NonFiniteForcesAreRejectedAndChangeNothing) {
   f3r_scene s = Scene("paper_sim1.yaml");
   auto m = MakeModel(s);

@@ -55,6 +55,13 @@ typedef struct {
   double q[F3R_MAX_Q];           /* generalized coordinates (model.h layout) */
   double v[F3R_MAX_Q];           /* their rates */
   double forces[F3R_MAX_Q];      /* applied generalized forces Q at t */
+  double actuator[6];            /* effort of the six actuators, as ros_control reports it:
+                                  * [0..2] leg force on rho_i (N), [3..5] cylinder torque on
+                                  * theta_i (N m); the held force plus the scene's scripted input
+                                  * at t, or for the legs with actuator lag the lag state (the
+                                  * force the actuator delivers) */
+  double passive[6];             /* forces[j] - actuator[j] on the same six joints: joint
+                                  * friction, in-plane gravity and the other effects (N, N m) */
   double lambda[F3R_NCON];       /* multipliers: constraint force on the loop (x, y per link), N */
   double tip_deflection[3];      /* w_i(l), m */
   double tip_deflection_rate[3]; /* m/s */

@@ -372,6 +372,14 @@ const f3r_outputs* f3r_sim_outputs(f3r_sim* s) {
   f3r_fwd_velocity(m, o->q, o->v, d);
   f3r_fwd_forces(m, s->t, s->held, o->q, o->v, lag_states(s, lag), d);
   memcpy(o->forces, d->Q, (size_t)nq * sizeof(double));
+  /* The actuators' share of Q on the leg joints: what the force stage applied for them (the lag
+   * states, or the held force plus the scripted input it commanded), the rest is passive. */
+  for (int i = 0; i < 3; ++i) {
+    const int leg = F3R_FORCE_RHO + i, cylinder = F3R_FORCE_THETA + i;
+    o->actuator[leg] = m->n_lag ? lag[i] : s->held[leg] + f3r_input_value(&m->scene.inputs[leg], s->t);
+    o->actuator[cylinder] = s->held[cylinder] + f3r_input_value(&m->scene.inputs[cylinder], s->t);
+  }
+  for (int j = 0; j < F3R_Q_LEG_JOINTS; ++j) o->passive[j] = d->Q[j] - o->actuator[j];
   if (s->settings.formulation == F3R_FORMULATION_DAE) {
     memcpy(o->lambda, y + 2 * nq, sizeof o->lambda);
   } else {
