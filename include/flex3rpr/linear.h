@@ -55,6 +55,47 @@ f3r_status f3r_linear_difference_response(const f3r_linear_model* linear, const 
                                           const f3r_model* other, double dt, int count, double* pose,
                                           int* unreachable, f3r_error* err);
 
+/* The linear model as a first-order state-space system, for control design and for export
+ * (flex3rpr_sim --linearise FILE.mat):
+ *   x' = A x + B u,   y - y0 = C x + D u
+ * about the operating point of f3r_linearise (the scene's initial platform pose, zero deflection,
+ * zero velocity), with
+ *   x = (z - z0, z')  (nx = 2 n, n = 3 + sum r_i; z = (X_p, Y_p, phi_p, eta of link 1..3))
+ *   u = (leg forces on rho_1..3 (N), cylinder torques on theta_1..3 (N m))  (nu = 6)
+ *   y = (rho_1..3 (m), theta_1..3 (rad), X_p, Y_p (m), phi_p (rad), tip deflections w_i(l) (m))
+ *       (ny = 12)
+ *   A = [0 I; -M^-1 K  -M^-1 D],  B = [0; M^-1 U_sel]  (M, D, K, U of f3r_linear_model; U_sel
+ *       its columns F3R_FORCE_RHO + i and F3R_FORCE_THETA + i),
+ *   C = [dy/dz  0] at z0: rho and theta from the loop closure's derivative (the velocity closure
+ *       f3r_model_close_loop_rates, exact), the pose rows the identity, the tip deflections
+ *       psi_j(1); D = 0.
+ * u is the force the actuators deliver: a model's actuator lag is left out, as in f3r_linearise.
+ * With in-plane gravity the operating point is not an equilibrium: its static force
+ * (f3r_linear_model.static_force) is not part of A and B. All matrices are column-major. */
+#define F3R_SS_INPUTS 6
+#define F3R_SS_OUTPUTS 12
+#define F3R_SS_NAME 24 /* room for any name below, NUL included */
+
+typedef struct {
+  int nx, nu, ny;  /* 2 n, F3R_SS_INPUTS, F3R_SS_OUTPUTS */
+  double* A;       /* nx x nx (1/s, 1/s^2) */
+  double* B;       /* nx x nu (rates per N or N m) */
+  double* C;       /* ny x nx */
+  double* D;       /* ny x nu: zero */
+  double* x0;      /* nx: the operating point (z0, 0) in absolute coordinates, so z = z0 + x[0..n) */
+  double y0[F3R_SS_OUTPUTS]; /* the outputs at the operating point */
+  char (*state_names)[F3R_SS_NAME]; /* nx: "x_p", "y_p", "phi_p", "eta_1_1" .. "eta_3_<r_3>", then
+                                     * the same with "_rate" */
+  char input_names[F3R_SS_INPUTS][F3R_SS_NAME];   /* "leg_force_1".., "cylinder_torque_1".. */
+  char output_names[F3R_SS_OUTPUTS][F3R_SS_NAME]; /* "rho_1".., "theta_1".., "x_p", "y_p",
+                                                   * "phi_p", "tip_deflection_1".. */
+} f3r_state_space;
+
+/* Builds the state-space form of the model's linearisation (f3r_linearise). Errors: those of
+ * f3r_linearise (an unreachable pose, a singular mass matrix), F3R_ERR_MEMORY. */
+f3r_status f3r_state_space_create(const f3r_model* model, f3r_state_space** out, f3r_error* err);
+void f3r_state_space_destroy(f3r_state_space* ss);
+
 #ifdef __cplusplus
 }
 #endif
