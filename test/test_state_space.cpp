@@ -13,7 +13,12 @@
 
 #include "flex3rpr/linear.h"
 #include "flex3rpr/modal.h"
+#include "linear_export.h"
 #include "test_support.h"
+
+#include <fstream>
+#include <sstream>
+#include <unistd.h>
 
 namespace {
 
@@ -287,6 +292,174 @@ TEST(StateSpace, StepResponseAgreesWithTheSimulationToFirstOrder) {
   EXPECT_GT(ratio, 3.6);
   EXPECT_LT(ratio, 4.4);
   RecordProperty("step_error_ratio", std::to_string(ratio));
+}
+
+// --- the CLI's export (src/cli/linear_export.c) --------------------------------------------------
+
+std::vector<unsigned char> ReadBytes(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  return std::vector<unsigned char>(std::istreambuf_iterator<char>(in), {});
+}
+
+// Reads the level-4 file back byte by byte: each record's five little-endian int32, its name,
+// its doubles (little-endian IEEE, column-major), against the state space's own arrays.
+TEST(StateSpaceExport, MatFileIsMatlabLevel4ByteForByte) {
+  auto m = MakeModel(FlexibleScene());
+  auto ss = MakeStateSpace(m.get());
+  const std::string path = "/tmp/f3r_ss_" + std::to_string(getpid()) + ".mat";
+  char why[512] = "";
+  ASSERT_EQ(f3r_cli_write_mat(ss.get(), path.c_str(), why, sizeof why), 0) << why;
+  const std::vector<unsigned char> bytes = ReadBytes(path);
+  std::remove(path.c_str());
+  size_t at = 0;
+  auto int32 = [&]() {
+    if (at + 4 > bytes.size()) throw std::runtime_error("short file");
+    uint32_t v = 0;
+    for (int k = 0; k < 4; ++k) v |= uint32_t(bytes[at + k]) << (8 * k);
+    at += 4;
+    return int32_t(v);
+  };
+  auto float64 = [&]() {
+    if (at + 8 > bytes.size()) throw std::runtime_error("short file");
+    uint64_t v = 0;
+    for (int k = 0; k < 8; ++k) v |= uint64_t(bytes[at + k]) << (8 * k);
+    at += 8;
+    double d;
+    std::memcpy(&d, &v, sizeof d);
+    return d;
+  };
+  auto header = [&](const std::string& name, int type, int rows, int cols) {
+    EXPECT_EQ(int32(), type) << name;
+    EXPECT_EQ(int32(), rows) << name;
+    EXPECT_EQ(int32(), cols) << name;
+    EXPECT_EQ(int32(), 0) << name << ": imagf";
+    ASSERT_EQ(int32(), int(name.size() + 1)) << name;
+    EXPECT_EQ(std::string(bytes.begin() + at, bytes.begin() + at + name.size()), name);
+    EXPECT_EQ(bytes[at + name.size()], 0) << name << ": NUL";
+    at += name.size() + 1;
+  };
+  const int nx = ss->nx, nu = 6, ny = 12;
+  struct Numeric {
+    const char* name;
+    const double* data;
+    int rows, cols;
+  } numeric[] = {{"A", ss->A, nx, nx}, {"B", ss->B, nx, nu}, {"C", ss->C, ny, nx},
+                 {"D", ss->D, ny, nu}, {"x0", ss->x0, nx, 1},  {"y0", ss->y0, ny, 1}};
+  for (const Numeric& v : numeric) {
+    header(v.name, 0, v.rows, v.cols);
+    for (int k = 0; k < v.rows * v.cols; ++k) {
+      const double d = float64();
+      ASSERT_EQ(std::memcmp(&d, &v.data[k], sizeof d), 0) << v.name << "[" << k << "]";
+    }
+  }
+  auto names = [&](const std::string& name, const char (*list)[F3R_SS_NAME], int count) {
+    size_t width = 0;
+    for (int r = 0; r < count; ++r) width = std::max(width, std::strlen(list[r]));
+    header(name, 1, count, int(width));
+    std::vector<std::string> rows(count);
+    for (size_t c = 0; c < width; ++c)
+      for (int r = 0; r < count; ++r) rows[r] += char(int(float64()));
+    for (int r = 0; r < count; ++r) {
+      std::string padded = list[r];
+      padded.resize(width, ' ');
+      EXPECT_EQ(rows[r], padded) << name;
+    }
+  };
+  names("state_names", ss->state_names, nx);
+  names("input_names", ss->input_names, nu);
+  names("output_names", ss->output_names, ny);
+  EXPECT_EQ(at, bytes.size()) << "nothing after the last record";
+}
+
+// The JSON beside it: the same numbers to the bit (17 digits round-trip), matrices as rows.
+TEST(StateSpaceExport, JsonHoldsTheSameAsRows) {
+  char out[64];
+  ASSERT_EQ(f3r_cli_json_path("dir/model.mat", out, sizeof out), 0);
+  EXPECT_STREQ(out, "dir/model.json");
+  ASSERT_EQ(f3r_cli_json_path("model", out, sizeof out), 0);
+  EXPECT_STREQ(out, "model.json");
+  EXPECT_EQ(f3r_cli_json_path("a_rather_long_name.mat", out, 8), -1);
+  auto m = MakeModel(FlexibleScene());
+  auto ss = MakeStateSpace(m.get());
+  const std::string path = "/tmp/f3r_ss_" + std::to_string(getpid()) + ".json";
+  char why[512] = "";
+  ASSERT_EQ(f3r_cli_write_json(ss.get(), path.c_str(), why, sizeof why), 0) << why;
+  std::ifstream in(path);
+  std::stringstream text;
+  text << in.rdbuf();
+  std::remove(path.c_str());
+  const std::string j = text.str();
+  // The numbers of one field, in the order written, and how many rows ("[" after the first).
+  auto numbers = [&](const std::string& key, int* rows) {
+    const size_t from = j.find("\"" + key + "\": [");
+    if (from == std::string::npos) throw std::runtime_error(key + " missing");
+    const bool matrix = key.size() == 1;  // A, B, C, D end with "\n  ]"; x0, y0 with "]"
+    const size_t to = matrix ? j.find("\n  ]", from) : j.find("]", from);
+    const std::string body = j.substr(from + key.size() + 5, to - from - key.size() - 5);
+    *rows = int(std::count(body.begin(), body.end(), '['));
+    std::vector<double> v;
+    for (const char* p = body.c_str(); *p;) {
+      if (std::strchr("-0123456789", *p)) {
+        char* end;
+        v.push_back(std::strtod(p, &end));
+        p = end;
+      } else {
+        ++p;
+      }
+    }
+    return v;
+  };
+  const int nx = ss->nx;
+  struct Field {
+    const char* key;
+    const double* data;
+    int rows, cols;
+  } fields[] = {{"A", ss->A, nx, nx}, {"B", ss->B, nx, 6}, {"C", ss->C, 12, nx},
+                {"D", ss->D, 12, 6},  {"x0", ss->x0, nx, 1}, {"y0", ss->y0, 12, 1}};
+  for (const Field& f : fields) {
+    int rows = 0;
+    const std::vector<double> v = numbers(f.key, &rows);
+    ASSERT_EQ(int(v.size()), f.rows * f.cols) << f.key;
+    if (f.cols > 1) EXPECT_EQ(rows, f.rows) << f.key;  // a list of rows
+    for (int r = 0; r < f.rows; ++r)
+      for (int c = 0; c < f.cols; ++c)
+        ASSERT_EQ(v[r * f.cols + c], f.data[c * f.rows + r]) << f.key << "(" << r << ", " << c << ")";
+  }
+  EXPECT_NE(j.find("\"state_names\": [\"x_p\", \"y_p\", \"phi_p\", \"eta_1_1\""), std::string::npos);
+  EXPECT_NE(j.find("\"eta_3_3_rate\"]"), std::string::npos);
+  EXPECT_NE(j.find("\"input_names\": [\"leg_force_1\", \"leg_force_2\", \"leg_force_3\", "
+                   "\"cylinder_torque_1\", \"cylinder_torque_2\", \"cylinder_torque_3\"]"),
+            std::string::npos);
+  EXPECT_NE(j.find("\"output_names\": [\"rho_1\""), std::string::npos);
+  EXPECT_NE(j.find("\"tip_deflection_3\"]\n}"), std::string::npos);
+  EXPECT_NE(j.find("\"nx\": " + std::to_string(nx) + ","), std::string::npos);
+}
+
+// The CLI: --linearise writes both files at the pose --set chooses and says so; a file it
+// cannot create is an error naming the path, with a non-zero exit.
+TEST(StateSpaceExport, CliWritesBothFilesOrNamesThePathItCannotWrite) {
+  const std::string stem = "/tmp/f3r_cli_ss_" + std::to_string(getpid());
+  const std::string log = stem + ".log";
+  const std::string scene = std::string(F3R_SOURCE_DIR) + "/config/scenes/mixed_links.yaml";
+  const std::string cmd = std::string(F3R_CLI) + " " + scene + " --linearise " + stem +
+                          ".mat --set 'initial.platform_pose=[0.01, -0.005, 0.05]' > " + log + " 2>&1";
+  ASSERT_EQ(std::system(cmd.c_str()), 0);
+  std::ifstream in(log);
+  std::stringstream said;
+  said << in.rdbuf();
+  EXPECT_NE(said.str().find("wrote " + stem + ".mat"), std::string::npos) << said.str();
+  EXPECT_NE(said.str().find("nx 16, nu 6, ny 12"), std::string::npos) << said.str();
+  const std::vector<unsigned char> mat = ReadBytes(stem + ".mat"), json = ReadBytes(stem + ".json");
+  EXPECT_GT(mat.size(), 16u * 16u * 8u);
+  EXPECT_NE(std::string(json.begin(), json.end()).find("\"x0\": [0.01, -0.005, 0.05"), std::string::npos);
+  const std::string bad = "/nonexistent_f3r_dir/model.mat";
+  const std::string cmd_bad = std::string(F3R_CLI) + " " + scene + " --linearise " + bad + " > " + log + " 2>&1";
+  EXPECT_NE(std::system(cmd_bad.c_str()), 0);
+  std::ifstream in_bad(log);
+  std::stringstream said_bad;
+  said_bad << in_bad.rdbuf();
+  EXPECT_NE(said_bad.str().find("cannot create " + bad), std::string::npos) << said_bad.str();
+  for (const std::string& f : {log, stem + ".mat", stem + ".json"}) std::remove(f.c_str());
 }
 
 }  // namespace

@@ -4,6 +4,7 @@
  *                [--exact-kinematics] [--ida | --erk | --dirk] [--table NAME]
  *                [--accuracy METRES] [--linear-path FILE.csv] [--set FIELD=VALUE ...] ...
  *   flex3rpr_sim --modal SCENE.yaml
+ *   flex3rpr_sim SCENE.yaml --linearise FILE.mat [--set ...]   (state-space export, linear.h)
  *   flex3rpr_sim --geometry SCENE.yaml   (JSON for scripts/make_urdf.py)
  *   flex3rpr_sim --check SCENE.yaml [--set ...]   (loads and builds the model only) */
 #include <math.h>
@@ -18,6 +19,7 @@
 #include "flex3rpr/linear.h"
 #include "flex3rpr/modal.h"
 #include "flex3rpr/sim.h"
+#include "linear_export.h"
 
 #define MAX_HOLDS 64
 #define MAX_SETS 64
@@ -41,6 +43,7 @@ typedef struct {
   const char* formulation;
   double rtol, atol, max_order, output_step, duration, accuracy;
   const char* linear_path;
+  const char* linearise_path; /* --linearise FILE.mat: the state-space model, and FILE.json */
   int stop_at_outputs;
   int integrator_ida, integrator_erk, integrator_dirk;
   const char* table;
@@ -57,7 +60,7 @@ static void usage(FILE* to) {
           "                    [--fd-jacobian] [--dense-linear-solver] [--exact-kinematics]\n"
           "                    [--ida | --erk | --dirk] [--table NAME]\n"
           "                    [--stop-at-outputs] [--hold T:INDEX:VALUE ...]\n"
-          "                    [--accuracy METRES] [--linear-path FILE.csv]\n"
+          "                    [--accuracy METRES] [--linear-path FILE.csv] [--linearise FILE.mat]\n"
           "                    [--set FIELD=VALUE ...]   (any scene field: --set links[0].modes=4)\n"
           "       flex3rpr_sim --modal SCENE.yaml\n"
           "       flex3rpr_sim --geometry SCENE.yaml\n"
@@ -112,6 +115,7 @@ static int parse_args(int argc, char** argv, cli_options* o) {
     }
     else if (!strcmp(a, "--out") && next) { o->out_path = next; ++k; }
     else if (!strcmp(a, "--linear-path") && next) { o->linear_path = next; ++k; }
+    else if (!strcmp(a, "--linearise") && next) { o->linearise_path = next; ++k; }
     else if (!strcmp(a, "--accuracy")) { if (!parse_number(a, next, &o->accuracy)) return 0; ++k; }
     else if (!strcmp(a, "--formulation") && next) { o->formulation = next; ++k; }
     else if (!strcmp(a, "--rtol")) { if (!parse_number(a, next, &o->rtol)) return 0; ++k; }
@@ -231,6 +235,33 @@ static int write_linear_path(const f3r_model* m, const char* path) {
   return rc;
 }
 
+/* The state-space form of the linearisation about the scene's initial pose (linear.h) as a
+ * MATLAB level-4 .mat file at path and JSON beside it (linear_export.h). */
+static int write_state_space(const f3r_model* m, const char* path) {
+  f3r_state_space* ss = NULL;
+  f3r_error err = {0};
+  char json[4096], why[1024];
+  if (f3r_cli_json_path(path, json, sizeof json) != 0) {
+    fprintf(stderr, "flex3rpr_sim: --linearise: path too long: %s\n", path);
+    return 1;
+  }
+  if (f3r_state_space_create(m, &ss, &err) != F3R_OK) {
+    fprintf(stderr, "flex3rpr_sim: %s\n", err.message);
+    return 1;
+  }
+  int rc = 0;
+  if (f3r_cli_write_mat(ss, path, why, sizeof why) != 0 ||
+      f3r_cli_write_json(ss, json, why, sizeof why) != 0) {
+    fprintf(stderr, "flex3rpr_sim: --linearise: %s\n", why);
+    rc = 1;
+  } else {
+    printf("linearised at pose (%.9g, %.9g, %.9g): wrote %s (MATLAB level 4) and %s: nx %d, nu %d, "
+           "ny %d\n", ss->x0[0], ss->x0[1], ss->x0[2], path, json, ss->nx, ss->nu, ss->ny);
+  }
+  f3r_state_space_destroy(ss);
+  return rc;
+}
+
 /* Process CPU time in s, at nanosecond resolution (clock() has microsecond steps). A system
  * call of about 0.5 us: read twice per run only. */
 static double cpu_seconds(void) {
@@ -317,6 +348,11 @@ int main(int argc, char** argv) {
     if (model->link[i].modes_reason[0]) printf("%s\n", model->link[i].modes_reason);
   if (o.linear_path) {
     const int rc = write_linear_path(model, o.linear_path);
+    f3r_model_destroy(model);
+    return rc;
+  }
+  if (o.linearise_path) {
+    const int rc = write_state_space(model, o.linearise_path);
     f3r_model_destroy(model);
     return rc;
   }
