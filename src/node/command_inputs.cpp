@@ -43,9 +43,12 @@ CommandInputs::CommandInputs(ros::NodeHandle& pnh, const f3r_model& model,
 
 std::string CommandInputs::ResolveFrame(const std::string& frame, Rotation* to_base) {
   const FrameNames& f = params_.frames;
-  // world -> base is the identity (state_outputs.cpp)
-  if (frame.empty() || frame == f.world || frame == f.base) {
+  if (frame.empty() || frame == f.base) {
     *to_base = YawRotation(0.0);
+    return "";
+  }
+  if (frame == f.world) {  // world -> base is ~base_pose (state_outputs.cpp)
+    *to_base = YawRotation(-params_.base_pose[2]);
     return "";
   }
   if (frame == f.platform) {
@@ -76,12 +79,37 @@ void CommandInputs::Accept(Source source, const std::string& why,
   if (!why.empty()) {
     ++rejected_;
     ROS_WARN_THROTTLE(1.0, "flex3rpr_node: rejected a command on %s: %s; the simulation runs on "
-                           "unchanged", topic, why.c_str());
+                           "unchanged%s", topic, why.c_str(),
+                      params_.lockstep ? " (in lockstep it takes its period with the commands held)" : "");
+    if (params_.lockstep) queue_.push_back({source, false, {}});
     return;
   }
+  if (params_.lockstep) {
+    queue_.push_back({source, true, forces});
+    return;
+  }
+  Hold(source, forces);
+}
+
+void CommandInputs::Hold(Source source, const std::vector<double>& forces) {
   held_[source] = forces;
   fresh_[source] = true;
   active_[source] = true;
+}
+
+bool CommandInputs::TakeOne() {
+  if (queue_.empty()) return false;
+  Queued& next = queue_.front();
+  if (next.valid) Hold(next.source, next.forces);
+  queue_.pop_front();
+  return true;
+}
+
+std::string CommandInputs::HoldCommand(const EffortCommand& command) {
+  std::vector<double> forces(total_.size(), 0.0);
+  const std::string why = DecodeEffortCommand(command, model_, params_.limits, &forces);
+  if (why.empty()) Hold(kCommand, forces);
+  return why;
 }
 
 const std::vector<double>& CommandInputs::Total(double t) {
@@ -103,6 +131,7 @@ const std::vector<double>& CommandInputs::Total(double t) {
 }
 
 void CommandInputs::Clear() {
+  queue_.clear();
   for (auto& h : held_) std::fill(h.begin(), h.end(), 0.0);
   fresh_.fill(false);
   active_.fill(false);

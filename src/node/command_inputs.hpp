@@ -6,6 +6,7 @@
 #include <tf2_ros/transform_listener.h>
 
 #include <array>
+#include <deque>
 #include <memory>
 #include <string>
 #include <vector>
@@ -25,10 +26,26 @@ class CommandInputs {
   void Clear();
   uint64_t rejected() const { return rejected_; }
 
+  // Lockstep (~lockstep): a message on any command topic is queued instead of taking effect, and
+  // TakeOne applies the oldest, one per period, so that which command meets which period depends
+  // on the controller's order alone, never on when the messages arrived. An invalid message
+  // (counted in rejected()) takes its period too, leaving the held commands as they were.
+  // False when no message is waiting.
+  bool TakeOne();
+  size_t waiting() const { return queue_.size(); }
+  // ~step_with_command: an EffortCommand held at once, as on ~command. Empty or the reason.
+  std::string HoldCommand(const EffortCommand& command);
+
  private:
   enum Source { kCommand = 0, kEffortGroup = 1, kWrench = 2, kSources = 3 };
+  struct Queued {
+    Source source;
+    bool valid;
+    std::vector<double> forces;
+  };
   void Accept(Source source, const std::string& why, const std::vector<double>& forces,
               const char* topic);
+  void Hold(Source source, const std::vector<double>& forces);
   // The axes of a wrench's frame in the base frame: the node's own world, base and platform
   // frames directly; any other through tf2 (a listener started at the first such wrench).
   std::string ResolveFrame(const std::string& frame, Rotation* to_base);
@@ -41,6 +58,7 @@ class CommandInputs {
   std::array<double, kSources> since_{};    // simulated time the command took effect
   std::array<bool, kSources> active_{};
   std::vector<double> scratch_, total_;
+  std::deque<Queued> queue_;  // lockstep only
   uint64_t rejected_ = 0;
   double now_ = 0.0;
   ros::Subscriber command_sub_, group_sub_, wrench_sub_;

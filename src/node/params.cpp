@@ -95,6 +95,26 @@ bool NonNegative(const char* name, double value, std::string* error) {
   return false;
 }
 
+// ~base_pose: [x, y, yaw], numbers (integers too), finite; absent: the identity.
+bool ReadBasePose(const ros::NodeHandle& pnh, std::array<double, 3>* pose, std::string* error) {
+  pose->fill(0.0);
+  if (!pnh.hasParam("base_pose")) return true;
+  XmlRpc::XmlRpcValue value;
+  pnh.getParam("base_pose", value);
+  const char* why = nullptr;
+  if (value.getType() != XmlRpc::XmlRpcValue::TypeArray || value.size() != 3) why = "not a list of 3 numbers";
+  for (int k = 0; !why && k < 3; ++k) {
+    XmlRpc::XmlRpcValue& v = value[k];
+    if (v.getType() == XmlRpc::XmlRpcValue::TypeDouble) (*pose)[static_cast<size_t>(k)] = static_cast<double>(v);
+    else if (v.getType() == XmlRpc::XmlRpcValue::TypeInt) (*pose)[static_cast<size_t>(k)] = static_cast<int>(v);
+    else why = "not a list of 3 numbers";
+    if (!why && !std::isfinite((*pose)[static_cast<size_t>(k)])) why = "holds a value that is not finite";
+  }
+  if (!why) return true;
+  *error = std::string("parameter ~base_pose: ") + why + " [x (m), y (m), yaw (rad)] of base in world";
+  return false;
+}
+
 }  // namespace
 
 bool LoadParams(const ros::NodeHandle& pnh, NodeParams* p, std::string* error) {
@@ -187,7 +207,10 @@ bool LoadParams(const ros::NodeHandle& pnh, NodeParams* p, std::string* error) {
       Read(pnh, "beam_marker_exaggeration", 1.0, &p->beam_marker_exaggeration, error) &&
       Read(pnh, "max_force", p->limits.force, &p->limits.force, error) &&
       Read(pnh, "max_torque", p->limits.torque, &p->limits.torque, error) &&
-      Read(pnh, "max_modal_force", p->limits.modal, &p->limits.modal, error);
+      Read(pnh, "max_modal_force", p->limits.modal, &p->limits.modal, error) &&
+      Read(pnh, "lockstep", false, &p->lockstep, error) &&
+      Read(pnh, "lockstep_warn_after", 2.0, &p->lockstep_warn_after, error) &&
+      ReadBasePose(pnh, &p->base_pose, error);
   if (!read) return false;
   if (p->duration < 0.0) p->duration = p->scene.duration;  // the scene's run.duration
   if (!Positive("publish_rate", p->publish_rate, error) ||
@@ -203,7 +226,8 @@ bool LoadParams(const ros::NodeHandle& pnh, NodeParams* p, std::string* error) {
       !Positive("beam_marker_exaggeration", p->beam_marker_exaggeration, error) ||
       !Positive("max_force", p->limits.force, error) ||
       !Positive("max_torque", p->limits.torque, error) ||
-      !Positive("max_modal_force", p->limits.modal, error))
+      !Positive("max_modal_force", p->limits.modal, error) ||
+      !Positive("lockstep_warn_after", p->lockstep_warn_after, error))
     return false;
   if (p->beam_points < 2 || p->beam_points > 101) {
     *error = "parameter ~beam_points: " + std::to_string(p->beam_points) + " is out of range 2..101";
@@ -214,6 +238,11 @@ bool LoadParams(const ros::NodeHandle& pnh, NodeParams* p, std::string* error) {
     return false;
   p->tf_prefix = NormalisePrefix(p->tf_prefix);
   p->frames = MakeFrameNames(p->tf_prefix, p->world_frame, p->base_frame, p->beam_points);
+  if (p->base_frame == p->world_frame && p->base_pose != std::array<double, 3>{}) {
+    *error = "parameter ~base_pose: the base frame is the world frame ('" + p->world_frame +
+             "'), so it cannot stand elsewhere; give a ~tf_prefix or a ~base_frame of its own";
+    return false;
+  }
   // One clock: stamps follow /use_sim_time (simulated time, with /clock from this node, as
   // gazebo_ros does), unless ~stamps says otherwise.
   bool use_sim_time = false;

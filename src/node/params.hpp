@@ -53,6 +53,9 @@ struct NodeParams {
   int queue_size = 10;                // outgoing messages held per subscriber and output topic
   int command_queue_size = 1000;      // incoming commands held per input topic while the loop integrates
   double beam_marker_exaggeration = 1.0;  // visual only: scales the deflection in ~beams
+  bool lockstep = false;              // ~lockstep: each period waits for its command (sim_node.cpp)
+  double lockstep_warn_after = 2.0;   // wall s without the period's command before a warning
+  std::array<double, 3> base_pose{};  // ~base_pose: x (m), y (m), yaw (rad) of base in world
   CommandLimits limits;
 };
 

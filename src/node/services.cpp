@@ -2,7 +2,8 @@
 
 namespace flex3rpr {
 
-Services::Services(ros::NodeHandle& pnh, RunControl* control) : control_(control) {
+Services::Services(ros::NodeHandle& pnh, RunControl* control, SimHandlers handlers)
+    : control_(control), handlers_(std::move(handlers)) {
   pause_ = pnh.advertiseService<std_srvs::Empty::Request, std_srvs::Empty::Response>(
       "pause", [this](std_srvs::Empty::Request&, std_srvs::Empty::Response&) {
         control_->paused = true;
@@ -31,6 +32,21 @@ Services::Services(ros::NodeHandle& pnh, RunControl* control) : control_(control
         ++control_->pending_steps;
         res.success = true;
         res.message = "one publish period";
+        return true;
+      });
+  step_with_command_ = pnh.advertiseService<StepWithCommand::Request, StepWithCommand::Response>(
+      "step_with_command", [this](StepWithCommand::Request& req, StepWithCommand::Response& res) {
+        handlers_.step_with_command(req, &res);
+        return true;
+      });
+  set_state_ = pnh.advertiseService<SetState::Request, SetState::Response>(
+      "set_state", [this](SetState::Request& req, SetState::Response& res) {
+        handlers_.set_state(req, &res);
+        return true;
+      });
+  linearise_ = pnh.advertiseService<Linearise::Request, Linearise::Response>(
+      "linearise", [this](Linearise::Request&, Linearise::Response& res) {
+        handlers_.linearise(&res);
         return true;
       });
 }

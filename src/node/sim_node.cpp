@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 
+#include <ros/callback_queue.h>
 #include <ros/package.h>
 
 #include <fstream>
@@ -65,7 +66,7 @@ bool SimNode::Init() {
   sim_.reset(sim);
   inputs_.reset(new CommandInputs(pnh_, *model_, params_, &phi_p_));
   outputs_.reset(new StateOutputs(nh_, pnh_, *model_, params_));
-  services_.reset(new Services(pnh_, &control_));
+  services_.reset(new Services(pnh_, &control_, Handlers()));
   ROS_INFO("flex3rpr_node: scene %s, nq %d, %s, rtol %g, publishing at %g Hz of simulated time, "
            "real-time factor %g, %s stamps%s, frames under %s",
            params_.scene_path.c_str(), model_->nq,
@@ -73,6 +74,9 @@ bool SimNode::Init() {
            params_.settings.rtol, params_.publish_rate, params_.realtime_factor,
            params_.sim_stamps ? "simulated" : "wall-clock", params_.publish_clock ? " with /clock" : "",
            params_.frames.base.c_str());
+  if (params_.lockstep)
+    ROS_INFO("flex3rpr_node: lockstep: each publish period waits for its command, the next message on "
+             "~command, ~effort_group/command or ~platform_wrench");
   if (params_.accuracy.summary[0]) ROS_INFO("flex3rpr_node: %s", params_.accuracy.summary);
   if (params_.accuracy.request > 0.0 && !params_.accuracy.request_met)
     ROS_WARN("flex3rpr_node: the accuracy request %g m is not met: estimated %.3g m (%s)",
@@ -155,6 +159,38 @@ bool SimNode::Step(double period) {
   return true;
 }
 
+bool SimNode::AdvancePeriod(double period) {
+  if (!Step(period)) {  // the node outlives its physics: it pauses and keeps serving
+    control_.paused = true;
+    control_.pending_steps = 0;
+    info_.paused = true;
+    info_.rejected_commands = inputs_->rejected();
+    PublishAt(*f3r_sim_outputs(sim_.get()));
+    return false;
+  }
+  PublishPeriod(*f3r_sim_outputs(sim_.get()));
+  return true;
+}
+
+void SimNode::PublishPeriod(const f3r_outputs& out) {
+  phi_p_ = out.q[F3R_Q_PHI];
+  CheckStroke(out);
+  info_.rejected_commands = inputs_->rejected();
+  PublishAt(out);
+}
+
+void SimNode::AwaitCommand(double wall_now) {
+  if (waiting_since_ < 0.0) waiting_since_ = wall_now;
+  const double waited = wall_now - waiting_since_;
+  if (waited < params_.lockstep_warn_after) return;
+  info_.waiting_for_command = waited;
+  ROS_WARN_THROTTLE(5.0,
+                    "flex3rpr_node: lockstep: no command for the period at t = %.6g s for %.1f s; waiting (a "
+                    "controller answers every joint_states message with one message on ~command, "
+                    "~effort_group/command or ~platform_wrench)",
+                    f3r_sim_time(sim_.get()), waited);
+}
+
 int SimNode::Run() {
   const double period = 1.0 / params_.publish_rate;
   if (params_.wait_for_subscribers > 0) {  // e.g. a recorder: nothing may be published before it listens
@@ -208,6 +244,8 @@ int SimNode::Run() {
     if (now - last_diagnostics >= kDiagnosticsSeconds) {
       info_.rejected_commands = inputs_->rejected();
       outputs_->PublishDiagnostics(*f3r_sim_outputs(sim_.get()), info_);
+      // A period that waits for its command publishes nothing else: say so on ~status too.
+      if (info_.waiting_for_command > 0.0) outputs_->PublishStatusOnly(*f3r_sim_outputs(sim_.get()), info_);
       last_diagnostics = now;
     }
     const bool run = !control_.paused || control_.pending_steps > 0;
@@ -216,7 +254,8 @@ int SimNode::Run() {
       was_running = false;
       info_.behind = false;
       info_.lag = 0.0;
-      if (now - last_paused_output >= kPausedPublishSeconds) {
+      // Not in lockstep: a controller answers every state it receives, and the state is latched.
+      if (!params_.lockstep && now - last_paused_output >= kPausedPublishSeconds) {
         info_.rejected_commands = inputs_->rejected();
         outputs_->PublishPaused(*f3r_sim_outputs(sim_.get()), info_);
         last_paused_output = now;
@@ -224,10 +263,18 @@ int SimNode::Run() {
       ros::WallDuration(0.001).sleep();
       continue;
     }
+    if (params_.lockstep && !inputs_->TakeOne()) {  // the period's command has not come yet
+      AwaitCommand(now);
+      // Wakes as soon as a message arrives, rather than at the next poll.
+      ros::getGlobalCallbackQueue()->callAvailable(ros::WallDuration(0.001));
+      continue;
+    }
+    waiting_since_ = -1.0;
+    info_.waiting_for_command = 0.0;
     if (control_.pending_steps > 0) --control_.pending_steps;
     if (!was_running) pacer_->Start(now, f3r_sim_time(sim_.get()));
     was_running = !control_.paused;
-    if (!Step(period)) {  // the node outlives its physics: it pauses and keeps serving
+    if (!Step(period)) {
       if (params_.duration > 0.0) {  // a scripted run (a recording) ends instead of waiting
         exit_code = 2;
         PublishAt(*f3r_sim_outputs(sim_.get()));
@@ -242,14 +289,11 @@ int SimNode::Run() {
       continue;
     }
     const f3r_outputs& out = *f3r_sim_outputs(sim_.get());
-    phi_p_ = out.q[F3R_Q_PHI];
     const double after = wall();
     info_.wall_time = after - start;
     const double due = pacer_->Due(after, out.t);
     ReportPace();
-    CheckStroke(out);
-    info_.rejected_commands = inputs_->rejected();
-    PublishAt(out);
+    PublishPeriod(out);
     if (grace_pending) {
       grace_pending = false;
       held += SpinFor(params_.subscriber_grace).toSec();

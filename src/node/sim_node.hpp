@@ -34,7 +34,20 @@ class SimNode {
   static constexpr double kDiagnosticsSeconds = 1.0;     // wall s between /diagnostics
 
   bool Step(double period);
+  // One period: Step, then what follows every period (stroke check, publishing). False when the
+  // integration stopped (the node then pauses, or ends a scripted run).
+  bool AdvancePeriod(double period);
   void PublishAt(const f3r_outputs& out);
+  // After each period: the stroke check and the outputs.
+  void PublishPeriod(const f3r_outputs& out);
+  // Lockstep: the present period has no command yet. Warns (throttled) and reports on ~status and
+  // /diagnostics once it has waited ~lockstep_warn_after wall seconds.
+  void AwaitCommand(double wall_now);
+  // The services that act on the simulation (sim_services.cpp).
+  SimHandlers Handlers();
+  void StepWithCommandCall(const StepWithCommand::Request& req, StepWithCommand::Response* res);
+  void SetStateCall(const SetState::Request& req, SetState::Response* res);
+  void LineariseCall(Linearise::Response* res);
   // Into ~status and a throttled warning while the achieved factor is short of the request.
   void ReportPace();
   // rho_i outside the scene's stroke: into ~status, and a warning once per excursion.
@@ -53,6 +66,8 @@ class SimNode {
   double phi_p_ = 0.0;
   long periods_ = 0;
   double last_published_t_ = -1.0;  // simulated time of the last full Publish (with /tf)
+  double waiting_since_ = -1.0;     // lockstep: wall s when the present period began to wait
+  bool stopped_ = false;            // the last AdvancePeriod failed
 };
 
 }  // namespace flex3rpr

@@ -47,10 +47,13 @@ StateOutputs::StateOutputs(ros::NodeHandle& nh, ros::NodeHandle& pnh, const f3r_
   // Each subscriber connection holds up to queue_size messages the node's network thread has not
   // sent yet; a recorder that must not lose any (record.launch) asks for a deep queue.
   const uint32_t q = static_cast<uint32_t>(params.queue_size);
-  joints_pub_ = nh.advertise<sensor_msgs::JointState>("joint_states", q);
-  odom_pub_ = pnh.advertise<nav_msgs::Odometry>("odom", q);
-  status_pub_ = pnh.advertise<SimStatus>("status", q);
-  beam_pub_ = pnh.advertise<BeamState>("beam_state", q);
+  // In lockstep the node waits for a controller that may connect later: the present state is
+  // latched, so that it gets it on connection instead of waiting for a period that never comes.
+  const bool latch = params.lockstep;
+  joints_pub_ = nh.advertise<sensor_msgs::JointState>("joint_states", q, latch);
+  odom_pub_ = pnh.advertise<nav_msgs::Odometry>("odom", q, latch);
+  status_pub_ = pnh.advertise<SimStatus>("status", q, latch);
+  beam_pub_ = pnh.advertise<BeamState>("beam_state", q, latch);
   markers_pub_ = pnh.advertise<visualization_msgs::MarkerArray>("beams", q);
   diagnostics_pub_ = nh.advertise<diagnostic_msgs::DiagnosticArray>("/diagnostics", 10);
   // A listener that connects while paused (rviz started later) gets the present frames at once.
@@ -101,7 +104,11 @@ StateOutputs::StateOutputs(ros::NodeHandle& nh, ros::NodeHandle& pnh, const f3r_
   // beam tips, the beams' clamped roots (station 0 is the piston, whatever the deflection) and
   // the platform joints.
   std::vector<geometry_msgs::TransformStamped> statics;
-  if (frames_.base != frames_.world) statics.push_back(Frame(frames_.world, frames_.base));
+  if (frames_.base != frames_.world) {
+    auto base = Frame(frames_.world, frames_.base);  // ~base_pose
+    SetPlanar(&base, params.base_pose[0], params.base_pose[1], params.base_pose[2]);
+    statics.push_back(base);
+  }
   for (int i = 0; i < 3; ++i) {
     auto tip = Frame(frames_.piston[i], frames_.tip_nominal[i]);
     tip.transform.translation.x = model.link_length;
@@ -169,10 +176,10 @@ void StateOutputs::PublishState(const f3r_outputs& out, const ros::Time& stamp) 
   for (int i = 0; i < 3; ++i) {
     joints_.position[2 * i] = out.q[F3R_Q_THETA + i];
     joints_.velocity[2 * i] = out.v[F3R_Q_THETA + i];
-    joints_.effort[2 * i] = out.forces[F3R_Q_THETA + i];
+    joints_.effort[2 * i] = out.actuator[3 + i];  // the actuators' efforts, as ros_control's
     joints_.position[2 * i + 1] = out.q[F3R_Q_RHO + i];
     joints_.velocity[2 * i + 1] = out.v[F3R_Q_RHO + i];
-    joints_.effort[2 * i + 1] = out.forces[F3R_Q_RHO + i];
+    joints_.effort[2 * i + 1] = out.actuator[i];
   }
   joints_pub_.publish(joints_);
 
@@ -233,6 +240,12 @@ void StateOutputs::PublishDiagnostics(const f3r_outputs& out, const RunInfo& inf
   if (!info.last_error.empty()) {
     d.level = diagnostic_msgs::DiagnosticStatus::ERROR;
     d.message = "integration stopped: " + info.last_error;
+  } else if (info.waiting_for_command > 0.0) {
+    d.level = diagnostic_msgs::DiagnosticStatus::WARN;
+    char text[160];
+    std::snprintf(text, sizeof text, "lockstep: no command for the period at t = %.6g s for %.1f s", out.t,
+                  info.waiting_for_command);
+    d.message = text;
   } else if (info.behind || !outside.empty()) {
     d.level = diagnostic_msgs::DiagnosticStatus::WARN;
     d.message = info.behind ? "behind the requested real-time factor" : outside + " outside the stroke";
@@ -309,6 +322,11 @@ void StateOutputs::PublishStatus(const f3r_outputs& out, const RunInfo& info) {
   status_.external_work = out.external_work;
   status_.energy_balance_error = out.energy_balance_error;
   status_.rejected_commands = info.rejected_commands;
+  status_.waiting_for_command = info.waiting_for_command;
+  for (int i = 0; i < 3; ++i) {  // joint_states' order: revolute, prismatic per leg
+    status_.joint_passive_effort[static_cast<size_t>(2 * i)] = out.passive[3 + i];
+    status_.joint_passive_effort[static_cast<size_t>(2 * i + 1)] = out.passive[i];
+  }
   status_.published_states = published_states_;
   status_.last_error = info.last_error;
   status_pub_.publish(status_);

@@ -31,6 +31,8 @@ struct RunInfo {
   std::array<bool, 3> outside_stroke{};    // rho_i outside the scene's stroke
   bool paused = false;
   uint64_t rejected_commands = 0;
+  double waiting_for_command = 0.0;        // lockstep: wall s the present period has waited for
+                                           // its command, once past ~lockstep_warn_after; else 0
   std::string last_error;
 };
 
@@ -44,11 +46,16 @@ class StateOutputs {
   // simulated stamp repeated is TF_REPEATED_DATA to every listener, so with simulated time a
   // listener that connects later gets the frames once, on connection.
   void PublishPaused(const f3r_outputs& out, const RunInfo& info);
+  // ~status alone (lockstep: while a period waits for its command, joint_states must not repeat,
+  // since a controller answers each one).
+  void PublishStatusOnly(const f3r_outputs& out, const RunInfo& info) { PublishStatus(out, info); }
   // /diagnostics: one status for the simulation (OK, WARN when behind or outside the stroke,
   // ERROR when the integration stopped).
   void PublishDiagnostics(const f3r_outputs& out, const RunInfo& info);
   // Restarts ~status.published_states (a reset starts the count again at its initial state).
   void RestartCount() { published_states_ = 0; }
+  // The last joint_states message filled (for ~step_with_command's answer).
+  const sensor_msgs::JointState& joint_state() const { return joints_; }
   // True when every output topic (joint_states, /tf, ~odom, ~status, ~beam_state, ~beams, and /clock
   // when it is published) has at least n subscribers connected, and each subscriber the master
   // lists for it: on /clock, rosout and other nodes on simulated time count too, so a count alone

@@ -4,6 +4,7 @@ one's frames carry its prefix, each tree is complete (every frame of its URDF re
 the two sets of frames are disjoint, and no frame has two publishers' data. The rviz config and
 launch files name no topic absolutely but /clock and /tf."""
 import glob
+import math
 import os
 import re
 import threading
@@ -62,6 +63,13 @@ class TwoRobots(unittest.TestCase):
         for robot in ("robot1", "robot2"):
             for frame in links[robot]:
                 wait_for(lambda: buf.can_transform("world", frame, rospy.Time(0)), 60, frame + " in world")
+        # ~base_pose: robot2's base stands 1 m away, turned round; robot1's at the origin
+        for robot, (x, y, yaw) in (("robot1", (0.0, 0.0, 0.0)), ("robot2", (1.0, 0.0, 3.1416))):
+            b = buf.lookup_transform("world", robot + "/base", rospy.Time(0)).transform
+            self.assertAlmostEqual(b.translation.x, x, delta=1e-12)
+            self.assertAlmostEqual(b.translation.y, y, delta=1e-12)
+            turned = 2.0 * math.atan2(b.rotation.z, b.rotation.w) - yaw  # q and -q: the same yaw
+            self.assertAlmostEqual(math.atan2(math.sin(turned), math.cos(turned)), 0.0, delta=1e-12)
         # the wall clock: stamps near now, not simulated seconds since 0
         t = buf.lookup_transform("world", "robot2/platform", rospy.Time(0)).header.stamp.to_sec()
         self.assertLess(abs(t - time.time()), 3600.0)
