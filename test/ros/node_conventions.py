@@ -232,6 +232,24 @@ class NodeConventions(unittest.TestCase):
         self.assertFalse(status.paused)
         self.assertFalse(any(status.outside_stroke), "the examples stay within the stroke")
 
+    def test_z_readme_service_examples(self):
+        text = open(os.path.join(PKG, "README.md")).read()
+        block = re.search(r"<!-- ros-service-examples -->\s*```\n(.*?)```", text, re.S)
+        self.assertIsNotNone(block, "README: the rosservice examples after <!-- ros-service-examples -->")
+        commands = [line for line in block.group(1).splitlines() if line.startswith("rosservice call")]
+        self.assertGreaterEqual(len(commands), 4)
+        for command in commands:
+            out = subprocess.run(shlex.split(command), check=True, timeout=300, capture_output=True,
+                                 text=True).stdout
+            if "success" in out:
+                self.assertIn("success: True", out, command)
+            if "set_state" in command:
+                wait_for(lambda: abs(self.rec.odom[-1].pose.pose.position.x - 0.01) < 1e-9, 60,
+                         "~odom at the pose set")
+            if "step_with_command" in command:
+                self.assertIn("sim_time", out)
+        wait_for(lambda: not self.rec.latest_status().paused, 60, "the resume")
+
 
 if __name__ == "__main__":
     rospy.init_node("node_conventions", anonymous=True)
