@@ -610,3 +610,24 @@ TEST(Accuracy, AShortRelationIsTightenedAndStiffModelsStayImplicit) {
   EXPECT_NE(c.integrator, F3R_INTEGRATOR_ERK) << c.summary;
   EXPECT_LE(c.model_error + c.kinematics_error + c.solver_error, 1e-5) << c.summary;
 }
+
+// The model never runs the knob: a mode count left open is an error naming the link until
+// f3r_accuracy_resolve, above the model, fixes it.
+TEST(Accuracy, AModelIsBuiltOnlyFromResolvedModeCounts) {
+  f3r_scene s;
+  f3r_error err{};
+  ASSERT_EQ(f3r_scene_load(ScenePath("paper_sim1.yaml").c_str(), &s, &err), F3R_OK) << err.message;
+  s.links[1].modes = F3R_MODES_AUTO;
+  f3r_model* m = nullptr;
+  EXPECT_EQ(f3r_model_create(&s, &m, &err), F3R_ERR_SCENE);
+  EXPECT_EQ(m, nullptr);
+  EXPECT_NE(std::strstr(err.message, "links[1].modes"), nullptr) << err.message;
+  EXPECT_NE(std::strstr(err.message, "f3r_accuracy_resolve"), nullptr) << err.message;
+  f3r_accuracy_choice c;
+  ASSERT_EQ(f3r_accuracy_resolve(&s, 0, &c, &err), F3R_OK) << err.message;
+  EXPECT_GE(s.links[1].modes, 1);
+  EXPECT_NE(std::strstr(c.summary, "links[1]: modes auto"), nullptr) << c.summary;
+  ASSERT_EQ(f3r_model_create(&s, &m, &err), F3R_OK) << err.message;
+  EXPECT_EQ(m->link[1].modes, s.links[1].modes);
+  f3r_model_destroy(m);
+}

@@ -20,7 +20,6 @@ extern "C" {
 typedef struct {
   f3r_link_model model;
   int modes;    /* r_i (chosen by the model when the scene says auto) */
-  char modes_reason[256]; /* why, when the scene left the mode count open */
   int eta_index;/* index of this link's first modal coordinate in q */
   double alpha[F3R_MAX_MODES];        /* roots of the frequency equation */
   double mean[F3R_MAX_MODES];         /* int_0^1 psi_j dxi */
@@ -97,9 +96,10 @@ typedef struct f3r_model {
   double theta_branch[3];    /* leg directions at the scene's initial pose: branch of atan2 */
 } f3r_model;
 
-/* Builds a model from a scene (validating it first). Links with modes left open (modes: auto, or
- * no modes under an accuracy request) get theirs from f3r_accuracy_modes (accuracy.h). The result owns no pointers, so a model is
- * freed with f3r_model_destroy or simply copied. */
+/* Builds a model from a scene (validating it first). Every flexible link's mode count must be a
+ * number: modes left open (modes: auto, or none under an accuracy request) are an error, resolved
+ * above the model by f3r_accuracy_resolve (accuracy.h). The result owns no pointers, so a model
+ * is freed with f3r_model_destroy or simply copied. */
 f3r_status f3r_model_create(const f3r_scene* scene, f3r_model** model, f3r_error* err);
 void f3r_model_destroy(f3r_model* model);
 

@@ -344,8 +344,6 @@ int main(int argc, char** argv) {
             o.scene_path, scene.accuracy, choice.estimated_error);
   if (scene.accuracy > 0)
     printf("choice cpu time     %.6f s (%d linear models)\n", choose_cpu, choice.linear_evaluations);
-  for (int i = 0; i < 3; ++i)
-    if (model->link[i].modes_reason[0]) printf("%s\n", model->link[i].modes_reason);
   if (o.linear_path) {
     const int rc = write_linear_path(model, o.linear_path);
     f3r_model_destroy(model);

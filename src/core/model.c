@@ -5,7 +5,6 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "flex3rpr/accuracy.h"
 #include "flex3rpr/model.h"
 #include "effects.h"
 #include "data.h"
@@ -83,37 +82,18 @@ f3r_status f3r_model_create(const f3r_scene* source, f3r_model** out, f3r_error*
   m->restitution = scene->restitution;
   m->exact_kinematics = scene->exact_kinematics;
 
-  /* Mode counts left open (modes: auto, or none under an accuracy request): the linear estimate
-   * of accuracy.h, for auto_tolerance of the path's extent or the request's model share. */
+  /* Mode counts are numbers here: `modes: auto`, or none under an accuracy request, is the
+   * accuracy knob's to resolve (f3r_accuracy_resolve, above the model), so that building a model
+   * never runs one. */
   int open_modes[3];
-  unsigned open = 0;
-  double tolerance = 0.0;
   for (int i = 0; i < 3; ++i) {
     const f3r_link_scene* L = &scene->links[i];
     open_modes[i] = L->model == F3R_LINK_RIGID ? 0 : L->modes;
     if (L->model != F3R_LINK_RIGID && (L->modes == F3R_MODES_AUTO || L->modes == 0)) {
-      open |= 1u << i;
-      tolerance = fmax(tolerance, L->auto_tolerance);
-    }
-  }
-  if (open) {
-    /* The model's own copy of the scene, with placeholders until the estimate replaces them. */
-    for (int i = 0; i < 3; ++i)
-      if (open >> i & 1) m->scene.links[i].modes = 1;
-    const double target = scene->accuracy > 0.0 ? F3R_ACCURACY_MODEL_SHARE * scene->accuracy : -tolerance;
-    double estimate = 0.0, extent = 0.0;
-    st = f3r_accuracy_modes(&m->scene, open, target, open_modes, &estimate, &extent, NULL, err);
-    if (st != F3R_OK) {
       free(m);
-      return st;
-    }
-    for (int i = 0; i < 3; ++i) {
-      if (!(open >> i & 1)) continue;
-      m->scene.links[i].modes = open_modes[i];
-      snprintf(m->link[i].modes_reason, sizeof m->link[i].modes_reason,
-               "links[%d]: modes -> %d (linearised end-effector path within %.3g m of 3r + 3 modes; "
-               "target %.3g m, path extent %.3g m)",
-               i, open_modes[i], estimate, target > 0 ? target : -target * extent, extent);
+      return f3r_error_set(err, F3R_ERR_SCENE,
+                           "links[%d].modes: left open (auto, or none under an accuracy request): "
+                           "resolve it with f3r_accuracy_resolve before building the model", i);
     }
   }
   int next = 9;

@@ -81,8 +81,6 @@ bool SimNode::Init() {
   if (params_.accuracy.request > 0.0 && !params_.accuracy.request_met)
     ROS_WARN("flex3rpr_node: the accuracy request %g m is not met: estimated %.3g m (%s)",
              params_.accuracy.request, params_.accuracy.estimated_error, params_.accuracy.brief);
-  for (int i = 0; i < 3; ++i)
-    if (model_->link[i].modes_reason[0]) ROS_INFO("flex3rpr_node: %s", model_->link[i].modes_reason);
   return true;
 }
 
