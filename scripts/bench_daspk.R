@@ -19,7 +19,7 @@
 # error weights by 1/h (argument nind, as in radau): the library orders y as
 # [q | v | (lag) | W | lambda | mu] so that they come last. Without that scaling DASPK's Newton
 # iteration fails at the first step from rtol 1e-8 on (paper_sim3_fixed_free). Their absolute
-# tolerance is the CLI's (atol 1e4, at least 1e-6: see src/core/stepper_ida.c); with the scaling a
+# tolerance is the CLI's (atol 1e4, at least 1e-6: see src/core/solve/stepper_ida.c); with the scaling a
 # plain scalar atol works as well.
 suppressPackageStartupMessages(library(deSolve))
 

@@ -57,6 +57,15 @@ LOCAL_LIB = os.path.join(ROOT, "build/peer/libf3r_peer.so")
 PEER_SOURCE = os.path.join(ROOT, "src/bench/f3r_peer.c")
 CORE_SOURCES = ["beam_modes", "constraints", "dense", "dynamics", "effects", "form_dae", "form_minimal", "forward",
                 "impact", "modal", "model", "residual", "scene", "scene_overrides", "scene_yaml", "scene_yaml_reader", "status"]
+CORE_LAYERS = sorted(os.path.join(ROOT, "src/core", d) for d in os.listdir(os.path.join(ROOT, "src/core"))
+                     if os.path.isdir(os.path.join(ROOT, "src/core", d)))
+
+
+def core_source(name):
+    """src/core/<layer>/<name>.c"""
+    return next(os.path.join(d, name + ".c") for d in CORE_LAYERS if os.path.exists(os.path.join(d, name + ".c")))
+
+
 R_SCRIPT = os.path.join(ROOT, "scripts/bench_daspk.R")
 MEBDFI_SCRIPT = os.path.join(ROOT, "scripts/bench_mebdfi.R")
 R_LOCAL_LIBRARY = os.path.join(ROOT, "build/rlib")  # where a deTestSet built here is installed
@@ -123,8 +132,8 @@ def ensure_installed():
 
 
 def _newest_source_mtime():
-    paths = [PEER_SOURCE] + [os.path.join(ROOT, "src/core", n + ".c") for n in CORE_SOURCES]
-    for d in (os.path.join(ROOT, "include/flex3rpr"), os.path.join(ROOT, "src/core")):
+    paths = [PEER_SOURCE] + [core_source(n) for n in CORE_SOURCES]
+    for d in [os.path.join(ROOT, "include/flex3rpr")] + CORE_LAYERS:
         paths += [os.path.join(d, f) for f in os.listdir(d) if f.endswith(".h")]
     return max(os.path.getmtime(p) for p in paths)
 
@@ -140,7 +149,7 @@ def build_library():
     tmp = LOCAL_LIB + ".tmp"
     # -O3 -DNDEBUG: the flags of the CMake Release build the CLI's core is compiled with
     cmd = ["gcc", "-O3", "-DNDEBUG", "-fPIC", "-shared", "-std=c11", "-D_GNU_SOURCE", "-I", os.path.join(ROOT, "include"),
-           PEER_SOURCE, *[os.path.join(ROOT, "src/core", n + ".c") for n in CORE_SOURCES],
+           *["-I" + d for d in CORE_LAYERS], PEER_SOURCE, *[core_source(n) for n in CORE_SOURCES],
            "-lyaml", "-lm", "-o", tmp]
     p = subprocess.run(cmd, capture_output=True, text=True)
     if p.returncode != 0:

@@ -1,7 +1,7 @@
 #!/usr/bin/python3
 """Checks the Runge-Kutta tables flex3rpr uses or compares, from first principles.
 
-Tables: the explicit pairs of src/core/erk_tables.c (parsed from the C source, the single source
+Tables: the explicit pairs of src/core/solve/erk_tables.c (parsed from the C source, the single source
 of truth; with gcc present the parse is compared bit for bit with what the compiler makes of it)
 and some SUNDIALS 6.4.1 built-ins, parsed from build/sundials/.../src/arkode/arkode_butcher_*.def.
 
@@ -42,7 +42,7 @@ import tempfile
 import mpmath as mp
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
-ERK_C = os.path.join(ROOT, "src", "core", "erk_tables.c")
+ERK_C = os.path.join(ROOT, "src", "core", "solve", "erk_tables.c")
 SUNDIALS_DIR = os.path.join(ROOT, "build", "sundials", "sundials-6.4.1+dfsg1", "src", "arkode")
 SUNDIALS_TABLES = [  # (file, ARKODE name)
     ("arkode_butcher_erk.def", "ARKODE_FEHLBERG_13_7_8"),
@@ -104,7 +104,7 @@ def zero():
 
 
 # ----------------------------------------------------------------------------------------------
-# src/core/erk_tables.c
+# src/core/solve/erk_tables.c
 
 def strip_c_comments(text):
     return re.sub(r"/\*.*?\*/|//[^\n]*", " ", text, flags=re.S)

@@ -1,5 +1,5 @@
 #!/usr/bin/python3
-"""Writes src/core/solver_table.c, the accuracy knob's measured solver relations, from the
+"""Writes src/core/accuracy/solver_table.c, the accuracy knob's measured solver relations, from the
 work-precision benchmark's build/bench/tolerance.csv (scripts/bench calls it after a full run).
 
 usage: scripts/solver_table.py [TOLERANCE_CSV] [--stamp TEXT]
@@ -16,7 +16,7 @@ import statistics
 import sys
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
-OUT = os.path.join(ROOT, "src/core/solver_table.c")
+OUT = os.path.join(ROOT, "src/core/accuracy/solver_table.c")
 
 # benchmark scene label -> kind
 KINDS = {"rigid (sim1 forcing)": "rigid", "closed loop (1 kHz hold)": "commanded"}

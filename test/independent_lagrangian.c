@@ -4,6 +4,8 @@
 #include <math.h>
 #include <string.h>
 
+#include "flex3rpr/beam_modes.h" /* f3r_beam_mode_eval, f3r_gauss_legendre */
+
 #define PANELS 24
 #define POINTS 8
 

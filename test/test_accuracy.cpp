@@ -64,7 +64,7 @@ std::vector<double> NonlinearPath(const f3r_scene& s, double dt, int count, doub
   SimPtr sim(raw);
   std::vector<double> pose(3 * count);
   for (int k = 0; k < count; ++k) {
-    if (k) EXPECT_EQ(f3r_sim_advance(sim.get(), k * dt, &err), F3R_OK) << err.message;
+    if (k) { EXPECT_EQ(f3r_sim_advance(sim.get(), k * dt, &err), F3R_OK) << err.message; }
     const f3r_outputs* o = f3r_sim_outputs(sim.get());
     for (int c = 0; c < 3; ++c) pose[3 * k + c] = o->q[F3R_Q_X + c];
   }
@@ -451,7 +451,7 @@ TEST(Accuracy, ImpactsTakeTheMostFaithfulModelAndSayWhy) {
   f3r_accuracy_choice c;
   ASSERT_EQ(f3r_accuracy_choose(&s, 1e-3, 0, &c, &err), F3R_OK) << err.message;
   for (int i = 0; i < 3; ++i)
-    if (s.links[i].model != F3R_LINK_RIGID) EXPECT_EQ(c.modes[i], F3R_MAX_MODES) << c.summary;
+    if (s.links[i].model != F3R_LINK_RIGID) { EXPECT_EQ(c.modes[i], F3R_MAX_MODES) << c.summary; }
   EXPECT_EQ(c.exact_kinematics, 1) << c.summary;
   EXPECT_LE(c.solver_error, 1e-3 / 1e5) << c.summary;
   EXPECT_EQ(c.linear_evaluations, 1) << "only the extent's reference: " << c.summary;

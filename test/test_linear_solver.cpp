@@ -1,4 +1,4 @@
-// IDA's structured linear solver (src/core/linsol_schur.h) against Eigen's full-pivoting LU of the
+// IDA's structured linear solver (src/core/solve/linsol_schur.h) against Eigen's full-pivoting LU of the
 // whole iteration matrix dF/dy + cj dF/dy' of both formulations, at states along real
 // trajectories, with every effect on; and whole runs with it against runs with SUNDIALS' dense LU.
 #include <gtest/gtest.h>
@@ -7,7 +7,7 @@
 #include <nvector/nvector_serial.h>
 #include <sunmatrix/sunmatrix_dense.h>
 
-#include "../src/core/linsol_schur.h"
+#include "linsol_schur.h"
 #include "flex3rpr/sim.h"
 #include "test_support.h"
 
@@ -75,8 +75,9 @@ TEST_P(SchurLinearSolver, SolvesTheIterationMatrixAsAFullPivotingLuDoes) {
         EXPECT_LE((full * got - rhs).norm(), 1e-7 * rhs.norm()) << name << " cj " << cj;
         // and the same solution as a full-pivoting LU wherever that LU itself solves well (dae
         // at cj 6e6 with every effect is so ill-conditioned that Eigen's residual is 0.65)
-        if ((full * expected - rhs).norm() <= 1e-7 * rhs.norm())
+        if ((full * expected - rhs).norm() <= 1e-7 * rhs.norm()) {
           EXPECT_LE((got - expected).norm(), 1e-8 * expected.norm()) << name << " cj " << cj;
+        }
         // in place, as IDA may call it (x == b)
         std::copy(rhs.data(), rhs.data() + ny, N_VGetArrayPointer(b));
         ASSERT_EQ(SUNLinSolSolve(ls, J, b, b, 0.0), SUNLS_SUCCESS);

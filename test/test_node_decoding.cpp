@@ -185,8 +185,9 @@ TEST(Urdf, GeneratedForAnySettingIsCompleteAndMatchesTheModel) {
   for (const auto& j : u->joints_) {
     const auto child = u->getLink(j.second->child_link_name);
     ASSERT_TRUE(child);
-    if (j.second->type != urdf::Joint::FIXED)
+    if (j.second->type != urdf::Joint::FIXED) {
       EXPECT_TRUE(child->inertial && child->inertial->mass > 0.0) << child->name << " moves but has no inertial";
+    }
   }
   for (const auto& l : u->links_)
     if (l.second->inertial) mass += l.second->inertial->mass;

@@ -454,8 +454,9 @@ TEST(Simulation, EveryIntegratorAndTableFollowsTheSamePath) {
     for (size_t k = 0; k < ref.size(); ++k) worst = std::max(worst, std::fabs(path[k] - ref[k]));
     EXPECT_LT(worst, c.tolerance) << (c.table ? c.table : "default") << " integrator " << c.integrator;
     EXPECT_GT(stats.steps, 100);
-    if (c.integrator == F3R_INTEGRATOR_ERK)
+    if (c.integrator == F3R_INTEGRATOR_ERK) {
       EXPECT_LE(stats.residual_evals, (long)c.stages * (stats.steps + 1)) << (c.table ? c.table : "default");
+    }
   }
 }
 

@@ -8,7 +8,7 @@
 
 #include "flex3rpr/stages.h"
 extern "C" {
-#include "../src/core/data.h"  // f3r_fwd_leg_strokes: the event roots' closure
+#include "data.h"  // f3r_fwd_leg_strokes: the event roots' closure
 }
 #include "independent_lagrangian.h"
 #include "test_support.h"

@@ -420,7 +420,7 @@ TEST(StateSpaceExport, JsonHoldsTheSameAsRows) {
     int rows = 0;
     const std::vector<double> v = numbers(f.key, &rows);
     ASSERT_EQ(int(v.size()), f.rows * f.cols) << f.key;
-    if (f.cols > 1) EXPECT_EQ(rows, f.rows) << f.key;  // a list of rows
+    if (f.cols > 1) { EXPECT_EQ(rows, f.rows) << f.key; }  // a list of rows
     for (int r = 0; r < f.rows; ++r)
       for (int c = 0; c < f.cols; ++c)
         ASSERT_EQ(v[r * f.cols + c], f.data[c * f.rows + r]) << f.key << "(" << r << ", " << c << ")";

@@ -11,16 +11,12 @@
 #ifndef FLEX3RPR_BEAM_MODES_H
 #define FLEX3RPR_BEAM_MODES_H
 
+#include "flex3rpr/coords.h" /* F3R_MAX_MODES, f3r_beam_end */
+
 #ifdef __cplusplus
 extern "C" {
 #endif
 
-#define F3R_MAX_MODES 20
-
-typedef enum {
-  F3R_BEAM_FIXED_PINNED = 1,
-  F3R_BEAM_FIXED_FREE = 2
-} f3r_beam_end;
 
 /* alpha_j, j = 1..count, roots of the frequency equation of `end`, to ~1e-15 relative.
  * Returns 0, or -1 if count is outside 1..F3R_MAX_MODES. */

@@ -20,4 +20,13 @@ enum {
   F3R_Q_LEG_JOINTS = F3R_Q_X   /* rho and theta of the three legs come before it */
 };
 
+/* Sizes and kinds every layer shares, from the scene up: the most modes a link may have, and
+ * the two beam ends of beam_modes.h. */
+#define F3R_MAX_MODES 20
+
+typedef enum {
+  F3R_BEAM_FIXED_PINNED = 1,
+  F3R_BEAM_FIXED_FREE = 2
+} f3r_beam_end;
+
 #endif

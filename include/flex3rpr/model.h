@@ -30,7 +30,7 @@ typedef struct {
 } f3r_link_params;
 
 struct f3r_model;
-struct f3r_data; /* the core's evaluation data (src/core/data.h): private */
+struct f3r_data; /* the core's evaluation data (src/core/physics/data.h): private */
 
 /* An optional force stage: adds its generalized forces to Q and, where they depend on q or v,
  * scale times their derivatives into a column-major A. A NULL derivative is zero. d holds the

@@ -6,7 +6,6 @@
 #define FLEX3RPR_SCENE_H
 
 #include "flex3rpr/coords.h"
-#include "flex3rpr/beam_modes.h"
 #include "flex3rpr/status.h"
 
 #ifdef __cplusplus
@@ -164,7 +163,7 @@ f3r_status f3r_scene_validate(const f3r_scene* scene, f3r_error* err);
 
 /* The Butcher tables an integrator offers by name (those the benchmark measures), NULL-ended:
  * erk: ARKODE's FEHLBERG_13_7_8 (default), DORMAND_PRINCE_7_4_5, VERNER_8_5_6 and the pairs of
- * src/core/erk_tables.c; dirk: ARKODE's KVAERNO_7_4_5 (default), ARK548L2SA_DIRK_8_4_5,
+ * src/core/solve/erk_tables.c; dirk: ARKODE's KVAERNO_7_4_5 (default), ARK548L2SA_DIRK_8_4_5,
  * SDIRK_5_3_4. NULL for ida. */
 const char* const* f3r_rk_tables(f3r_integrator integrator);
 

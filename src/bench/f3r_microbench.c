@@ -15,7 +15,7 @@
 #include <sunlinsol/sunlinsol_dense.h>
 #include <sunmatrix/sunmatrix_dense.h>
 
-#include "../core/linsol_schur.h"
+#include "linsol_schur.h"
 #include "flex3rpr/residual.h"
 #include "flex3rpr/stages.h"
 

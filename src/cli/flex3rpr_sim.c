@@ -16,6 +16,7 @@
 #include <sundials/sundials_config.h>
 
 #include "flex3rpr/accuracy.h"
+#include "flex3rpr/beam_modes.h"
 #include "flex3rpr/linear.h"
 #include "flex3rpr/modal.h"
 #include "flex3rpr/sim.h"

@@ -5,6 +5,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "flex3rpr/beam_modes.h"
 #include "flex3rpr/model.h"
 #include "effects.h"
 #include "data.h"
@@ -252,7 +253,7 @@ double f3r_data_actuation_condition(const f3r_model* m, const f3r_data* d, const
   double JtJ[3][3], ev[3];
   for (int i = 0; i < 3; ++i)
     for (int j = 0; j < 3; ++j) JtJ[i][j] = J[0][i] * J[0][j] + J[1][i] * J[1][j] + J[2][i] * J[2][j];
-  symmetric_eigenvalues3(JtJ, ev);
+  symmetric_eigenvalues3((const double(*)[3])JtJ, ev); /* ISO C before C2X: no implicit const */
   /* sigma_min from the determinant, which stays accurate where the smallest eigenvalue of J^T J
    * drowns in rounding: sigma_1 sigma_2 sigma_3 = |det J|. */
   const double det = J[0][0] * (J[1][1] * J[2][2] - J[1][2] * J[2][1]) -

@@ -1,0 +1,57 @@
+# cmake -DCORE=src/core -DINCLUDE=include/flex3rpr -P check_layers.cmake
+# Fails when a file of the core, or a public header, includes a header of a higher layer. The
+# layers, lowest first, and the public headers each belongs to:
+set(layers base scene physics solve accuracy)
+set(public_base status.h coords.h)
+set(public_scene scene.h)
+set(public_physics beam_modes.h model.h stages.h residual.h)
+set(public_solve sim.h)
+set(public_accuracy accuracy.h linear.h modal.h)
+
+# rank_<header name> for every public and private header
+set(rank 0)
+foreach(layer ${layers})
+  foreach(h ${public_${layer}})
+    set(rank_flex3rpr/${h} ${rank})
+  endforeach()
+  file(GLOB private RELATIVE ${CORE}/${layer} ${CORE}/${layer}/*.h)
+  foreach(h ${private})
+    set(rank_${h} ${rank})
+  endforeach()
+  set(layer_rank_${layer} ${rank})
+  math(EXPR rank "${rank} + 1")
+endforeach()
+
+# every public header is placed in a layer
+file(GLOB headers RELATIVE ${INCLUDE} ${INCLUDE}/*.h)
+foreach(h ${headers})
+  if(NOT DEFINED rank_flex3rpr/${h})
+    message(FATAL_ERROR "check_layers: include/flex3rpr/${h} belongs to no layer (list it in src/core/check_layers.cmake)")
+  endif()
+endforeach()
+
+set(errors "")
+macro(check_file path own_rank)
+  file(STRINGS ${path} lines REGEX "^#include \"")
+  foreach(line ${lines})
+    string(REGEX REPLACE "^#include \"([^\"]+)\".*" "\\1" included "${line}")
+    if(DEFINED rank_${included} AND rank_${included} GREATER ${own_rank})
+      list(APPEND errors "${path} includes ${included}, a layer above it")
+    endif()
+  endforeach()
+endmacro()
+
+foreach(layer ${layers})
+  file(GLOB files ${CORE}/${layer}/*.c ${CORE}/${layer}/*.h)
+  foreach(f ${files})
+    check_file(${f} ${layer_rank_${layer}})
+  endforeach()
+endforeach()
+foreach(h ${headers})
+  check_file(${INCLUDE}/${h} ${rank_flex3rpr/${h}})
+endforeach()
+
+if(errors)
+  list(JOIN errors "\n  " text)
+  message(FATAL_ERROR "check_layers: the core's layers only look down (src/core/CMakeLists.txt):\n  ${text}")
+endif()
