@@ -5,6 +5,8 @@
 #ifndef FLEX3RPR_SCENE_H
 #define FLEX3RPR_SCENE_H
 
+#include <stddef.h>
+
 #include "flex3rpr/coords.h"
 #include "flex3rpr/status.h"
 
@@ -30,6 +32,21 @@ typedef enum {
   F3R_INTEGRATOR_ERK = 1, /* SUNDIALS ARKODE ERKStep, explicit Runge-Kutta (minimal only) */
   F3R_INTEGRATOR_DIRK = 2 /* SUNDIALS ARKODE ARKStep, diagonally implicit RK (minimal only) */
 } f3r_integrator;
+
+/* The enums' names as scene files, --set, the CLI and the node's parameters spell them ("rigid",
+ * "dae", "ida"; names.c holds the one table). _name gives "unknown" for a value outside its
+ * enum. _from_name sets *out and returns 0, or returns -1 for a name a scene cannot choose
+ * (index3 has a name but is no choice). _names writes the choices for a message, "dae, minimal",
+ * into list (terminated, cut short if size is too small) and returns list. */
+const char* f3r_link_model_name(f3r_link_model model);
+int f3r_link_model_from_name(const char* name, f3r_link_model* model);
+const char* f3r_link_model_names(char* list, size_t size);
+const char* f3r_formulation_name(f3r_formulation formulation);
+int f3r_formulation_from_name(const char* name, f3r_formulation* formulation);
+const char* f3r_formulation_names(char* list, size_t size);
+const char* f3r_integrator_name(f3r_integrator integrator);
+int f3r_integrator_from_name(const char* name, f3r_integrator* integrator);
+const char* f3r_integrator_names(char* list, size_t size);
 
 /* A scripted generalized force f(t). Breakpoints (step times, ramp and chirp ends, table
  * times) are integration stops: the integrator restarts there and never steps across a kink. */

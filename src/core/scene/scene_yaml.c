@@ -25,10 +25,10 @@ static f3r_status read_link(loader* L, const yaml_node_t* map, int i) {
     snprintf(name, sizeof name, "%s.%s", section, key);
     if (!strcmp(key, "model")) {
       const char* s = f3r_yaml_scalar(value);
-      if (s && !strcmp(s, "rigid")) link->model = F3R_LINK_RIGID;
-      else if (s && !strcmp(s, "fixed_pinned")) link->model = F3R_LINK_FIXED_PINNED;
-      else if (s && !strcmp(s, "fixed_free")) link->model = F3R_LINK_FIXED_FREE;
-      else return f3r_yaml_fail(L, value, name, "'%s' is not one of rigid, fixed_pinned, fixed_free", s ? s : "?");
+      char allowed[64];
+      if (f3r_link_model_from_name(s, &link->model) != 0)
+        return f3r_yaml_fail(L, value, name, "'%s' is not one of %s", s ? s : "?",
+                             f3r_link_model_names(allowed, sizeof allowed));
       f3r_yaml_remember(L, name, value);
     } else if (!strcmp(key, "modes")) {
       const char* v = f3r_yaml_scalar(value);
@@ -201,17 +201,18 @@ static f3r_status read_solver(loader* L, const yaml_node_t* map) {
     snprintf(name, sizeof name, "solver.%s", key);
     if (!strcmp(key, "formulation")) {
       const char* v = f3r_yaml_scalar(value);
-      if (v && !strcmp(v, "dae")) s->formulation = F3R_FORMULATION_DAE;
-      else if (v && !strcmp(v, "minimal")) s->formulation = F3R_FORMULATION_MINIMAL;
-      else return f3r_yaml_fail(L, value, name, "'%s' is not one of dae, minimal", v ? v : "?");
+      char allowed[64];
+      if (f3r_formulation_from_name(v, &s->formulation) != 0)
+        return f3r_yaml_fail(L, value, name, "'%s' is not one of %s", v ? v : "?",
+                             f3r_formulation_names(allowed, sizeof allowed));
       s->explicit_settings |= F3R_EXPLICIT_FORMULATION;
       f3r_yaml_remember(L, name, value);
     } else if (!strcmp(key, "integrator")) {
       const char* v = f3r_yaml_scalar(value);
-      if (v && !strcmp(v, "ida")) s->integrator = F3R_INTEGRATOR_IDA;
-      else if (v && !strcmp(v, "erk")) s->integrator = F3R_INTEGRATOR_ERK;
-      else if (v && !strcmp(v, "dirk")) s->integrator = F3R_INTEGRATOR_DIRK;
-      else return f3r_yaml_fail(L, value, name, "'%s' is not one of ida, erk, dirk", v ? v : "?");
+      char allowed[64];
+      if (f3r_integrator_from_name(v, &s->integrator) != 0)
+        return f3r_yaml_fail(L, value, name, "'%s' is not one of %s", v ? v : "?",
+                             f3r_integrator_names(allowed, sizeof allowed));
       s->explicit_settings |= F3R_EXPLICIT_INTEGRATOR;
       f3r_yaml_remember(L, name, value);
     } else if (!strcmp(key, "table")) {

@@ -1,0 +1,92 @@
+/* The names of the scene's enums, one table each, indexed by the enum's value: the YAML loader,
+ * the CLI and the node read and print them from here, so that each name is spelled once. */
+#include <stdio.h>
+#include <string.h>
+
+#include "flex3rpr/scene.h"
+
+#define COUNT(table) ((int)(sizeof(table) / sizeof(table)[0]))
+
+static const char* const link_model_names[] = {"rigid", "fixed_pinned", "fixed_free"};
+
+/* index3 has a name, for messages, but no scene chooses it: a simulation rejects it. Only the
+ * first SELECTABLE_FORMULATIONS names are choices. */
+static const char* const formulation_names[] = {"dae", "minimal", "index3"};
+#define SELECTABLE_FORMULATIONS 2
+
+static const char* const integrator_names[] = {"ida", "erk", "dirk"};
+
+/* The tables are indexed by value: they must follow the enums' order. */
+_Static_assert(F3R_LINK_RIGID == 0 && F3R_LINK_FIXED_PINNED == 1 && F3R_LINK_FIXED_FREE == 2,
+               "link_model_names follows f3r_link_model");
+_Static_assert(F3R_FORMULATION_DAE == 0 && F3R_FORMULATION_MINIMAL == 1 && F3R_FORMULATION_INDEX3 == 2,
+               "formulation_names follows f3r_formulation");
+_Static_assert(F3R_INTEGRATOR_IDA == 0 && F3R_INTEGRATOR_ERK == 1 && F3R_INTEGRATOR_DIRK == 2,
+               "integrator_names follows f3r_integrator");
+
+static const char* name_of(const char* const* names, int count, int value) {
+  return value >= 0 && value < count ? names[value] : "unknown";
+}
+
+static int value_of(const char* const* names, int count, const char* name) {
+  for (int k = 0; name && k < count; ++k)
+    if (!strcmp(name, names[k])) return k;
+  return -1;
+}
+
+/* "a, b, c", cut short (but terminated) when list is too small. */
+static const char* join(const char* const* names, int count, char* list, size_t size) {
+  size_t used = 0;
+  if (size) list[0] = '\0';
+  for (int k = 0; k < count && used < size; ++k) {
+    const int n = snprintf(list + used, size - used, "%s%s", k ? ", " : "", names[k]);
+    if (n < 0) break;
+    used += (size_t)n;
+  }
+  return list;
+}
+
+const char* f3r_link_model_name(f3r_link_model model) {
+  return name_of(link_model_names, COUNT(link_model_names), (int)model);
+}
+
+int f3r_link_model_from_name(const char* name, f3r_link_model* model) {
+  const int k = value_of(link_model_names, COUNT(link_model_names), name);
+  if (k < 0) return -1;
+  *model = (f3r_link_model)k;
+  return 0;
+}
+
+const char* f3r_link_model_names(char* list, size_t size) {
+  return join(link_model_names, COUNT(link_model_names), list, size);
+}
+
+const char* f3r_formulation_name(f3r_formulation formulation) {
+  return name_of(formulation_names, COUNT(formulation_names), (int)formulation);
+}
+
+int f3r_formulation_from_name(const char* name, f3r_formulation* formulation) {
+  const int k = value_of(formulation_names, SELECTABLE_FORMULATIONS, name);
+  if (k < 0) return -1;
+  *formulation = (f3r_formulation)k;
+  return 0;
+}
+
+const char* f3r_formulation_names(char* list, size_t size) {
+  return join(formulation_names, SELECTABLE_FORMULATIONS, list, size);
+}
+
+const char* f3r_integrator_name(f3r_integrator integrator) {
+  return name_of(integrator_names, COUNT(integrator_names), (int)integrator);
+}
+
+int f3r_integrator_from_name(const char* name, f3r_integrator* integrator) {
+  const int k = value_of(integrator_names, COUNT(integrator_names), name);
+  if (k < 0) return -1;
+  *integrator = (f3r_integrator)k;
+  return 0;
+}
+
+const char* f3r_integrator_names(char* list, size_t size) {
+  return join(integrator_names, COUNT(integrator_names), list, size);
+}
