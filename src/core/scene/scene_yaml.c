@@ -244,6 +244,88 @@ static f3r_status read_solver(loader* L, const yaml_node_t* map) {
   return F3R_OK;
 }
 
+static f3r_status read_joint_friction(loader* L, const yaml_node_t* map, const char* name) {
+  f3r_scene* s = L->scene;
+  f3r_status st = f3r_yaml_mapping(L, map, name);
+  if (st != F3R_OK) return st;
+  FOR_EACH_PAIR(L, map, fkey, fvalue) {
+    char field[128];
+    snprintf(field, sizeof field, "%s.%s", name, fkey);
+    double* target = !strcmp(fkey, "prismatic") ? s->friction_prismatic
+                     : !strcmp(fkey, "revolute") ? s->friction_revolute : NULL;
+    if (!target) return f3r_yaml_fail(L, fvalue, field, "unknown key (allowed: prismatic, revolute)");
+    if ((st = f3r_yaml_vector(L, fvalue, field, target, 3)) != F3R_OK) return st;
+  }
+  return F3R_OK;
+}
+
+static f3r_status read_effects(loader* L, const yaml_node_t* map) {
+  f3r_scene* s = L->scene;
+  f3r_status st = f3r_yaml_mapping(L, map, "effects");
+  if (st != F3R_OK) return st;
+  FOR_EACH_PAIR(L, map, ekey, evalue) {
+    char name[96];
+    snprintf(name, sizeof name, "effects.%s", ekey);
+    if (!strcmp(ekey, "exact_kinematics")) {
+      st = f3r_yaml_bool(L, evalue, name, &s->exact_kinematics);
+      s->explicit_settings |= F3R_EXPLICIT_EXACT_KINEMATICS;
+    } else if (!strcmp(ekey, "gravity")) {
+      st = f3r_yaml_vector(L, evalue, name, s->gravity, 3);
+    } else if (!strcmp(ekey, "payload")) {
+      const number_field f[] = {{"mass", &s->payload_mass}, {"inertia", &s->payload_inertia}};
+      st = f3r_yaml_numbers(L, evalue, name, f, 2);
+    } else if (!strcmp(ekey, "end_stops")) {
+      const number_field f[] = {{"min", &s->stroke_min}, {"max", &s->stroke_max},
+                                {"restitution", &s->restitution}};
+      s->end_stops = 1;
+      st = f3r_yaml_numbers(L, evalue, name, f, 3);
+    } else if (!strcmp(ekey, "actuator_lag")) {
+      const number_field f[] = {{"time_constant", &s->actuator_lag}};
+      st = f3r_yaml_numbers(L, evalue, name, f, 1);
+    } else if (!strcmp(ekey, "joint_friction")) {
+      st = read_joint_friction(L, evalue, name);
+    } else {
+      return f3r_yaml_fail(L, evalue, name,
+                  "unknown effect (allowed: exact_kinematics, gravity, payload, joint_friction, "
+                  "actuator_lag, end_stops)");
+    }
+    if (st != F3R_OK) return st;
+  }
+  return F3R_OK;
+}
+
+static f3r_status read_initial(loader* L, const yaml_node_t* map) {
+  f3r_scene* s = L->scene;
+  f3r_status st = f3r_yaml_mapping(L, map, "initial");
+  if (st != F3R_OK) return st;
+  FOR_EACH_PAIR(L, map, ikey, ivalue) {
+    char name[96];
+    snprintf(name, sizeof name, "initial.%s", ikey);
+    if (!strcmp(ikey, "platform_pose")) st = f3r_yaml_vector(L, ivalue, name, s->platform_pose0, 3);
+    else if (!strcmp(ikey, "platform_velocity"))
+      st = f3r_yaml_vector(L, ivalue, name, s->platform_velocity0, 3);
+    else return f3r_yaml_fail(L, ivalue, name, "unknown key (allowed: platform_pose, platform_velocity)");
+    if (st != F3R_OK) return st;
+  }
+  return F3R_OK;
+}
+
+static f3r_status read_run(loader* L, const yaml_node_t* map) {
+  f3r_scene* s = L->scene;
+  f3r_status st = f3r_yaml_mapping(L, map, "run");
+  if (st != F3R_OK) return st;
+  FOR_EACH_PAIR(L, map, rkey, rvalue) {
+    char name[96];
+    snprintf(name, sizeof name, "run.%s", rkey);
+    if (!strcmp(rkey, "duration")) st = f3r_yaml_number(L, rvalue, name, &s->duration);
+    else if (!strcmp(rkey, "output_step")) st = f3r_yaml_number(L, rvalue, name, &s->output_step);
+    else if (!strcmp(rkey, "beam_points")) st = f3r_yaml_int(L, rvalue, name, &s->beam_points);
+    else return f3r_yaml_fail(L, rvalue, name, "unknown key (allowed: duration, output_step, beam_points)");
+    if (st != F3R_OK) return st;
+  }
+  return F3R_OK;
+}
+
 static f3r_status read_root(loader* L, const yaml_node_t* root) {
   f3r_scene* s = L->scene;
   f3r_status st = f3r_yaml_mapping(L, root, "scene");
@@ -270,54 +352,9 @@ static f3r_status read_root(loader* L, const yaml_node_t* root) {
     } else if (!strcmp(key, "links")) {
       st = read_links(L, value);
     } else if (!strcmp(key, "effects")) {
-      if ((st = f3r_yaml_mapping(L, value, "effects")) != F3R_OK) return st;
-      FOR_EACH_PAIR(L, value, ekey, evalue) {
-        char name[96];
-        snprintf(name, sizeof name, "effects.%s", ekey);
-        if (!strcmp(ekey, "exact_kinematics")) {
-          st = f3r_yaml_bool(L, evalue, name, &s->exact_kinematics);
-          s->explicit_settings |= F3R_EXPLICIT_EXACT_KINEMATICS;
-        } else if (!strcmp(ekey, "gravity")) {
-          st = f3r_yaml_vector(L, evalue, name, s->gravity, 3);
-        } else if (!strcmp(ekey, "payload")) {
-          const number_field f[] = {{"mass", &s->payload_mass}, {"inertia", &s->payload_inertia}};
-          st = f3r_yaml_numbers(L, evalue, name, f, 2);
-        } else if (!strcmp(ekey, "end_stops")) {
-          const number_field f[] = {{"min", &s->stroke_min}, {"max", &s->stroke_max},
-                                    {"restitution", &s->restitution}};
-          s->end_stops = 1;
-          st = f3r_yaml_numbers(L, evalue, name, f, 3);
-        } else if (!strcmp(ekey, "actuator_lag")) {
-          const number_field f[] = {{"time_constant", &s->actuator_lag}};
-          st = f3r_yaml_numbers(L, evalue, name, f, 1);
-        } else if (!strcmp(ekey, "joint_friction")) {
-          if ((st = f3r_yaml_mapping(L, evalue, name)) != F3R_OK) return st;
-          FOR_EACH_PAIR(L, evalue, fkey, fvalue) {
-            char field[128];
-            snprintf(field, sizeof field, "%s.%s", name, fkey);
-            double* target = !strcmp(fkey, "prismatic") ? s->friction_prismatic
-                             : !strcmp(fkey, "revolute") ? s->friction_revolute : NULL;
-            if (!target) return f3r_yaml_fail(L, fvalue, field, "unknown key (allowed: prismatic, revolute)");
-            if ((st = f3r_yaml_vector(L, fvalue, field, target, 3)) != F3R_OK) return st;
-          }
-        } else {
-          return f3r_yaml_fail(L, evalue, name,
-                      "unknown effect (allowed: exact_kinematics, gravity, payload, joint_friction, "
-                      "actuator_lag, end_stops)");
-        }
-        if (st != F3R_OK) return st;
-      }
+      st = read_effects(L, value);
     } else if (!strcmp(key, "initial")) {
-      if ((st = f3r_yaml_mapping(L, value, "initial")) != F3R_OK) return st;
-      FOR_EACH_PAIR(L, value, ikey, ivalue) {
-        char name[96];
-        snprintf(name, sizeof name, "initial.%s", ikey);
-        if (!strcmp(ikey, "platform_pose")) st = f3r_yaml_vector(L, ivalue, name, s->platform_pose0, 3);
-        else if (!strcmp(ikey, "platform_velocity"))
-          st = f3r_yaml_vector(L, ivalue, name, s->platform_velocity0, 3);
-        else return f3r_yaml_fail(L, ivalue, name, "unknown key (allowed: platform_pose, platform_velocity)");
-        if (st != F3R_OK) return st;
-      }
+      st = read_initial(L, value);
     } else if (!strcmp(key, "inputs")) {
       st = read_inputs(L, value);
     } else if (!strcmp(key, "solver")) {
@@ -326,16 +363,7 @@ static f3r_status read_root(loader* L, const yaml_node_t* root) {
       const number_field f[] = {{"end_effector", &s->accuracy}};
       st = f3r_yaml_numbers(L, value, "accuracy", f, 1);
     } else if (!strcmp(key, "run")) {
-      if ((st = f3r_yaml_mapping(L, value, "run")) != F3R_OK) return st;
-      FOR_EACH_PAIR(L, value, rkey, rvalue) {
-        char name[96];
-        snprintf(name, sizeof name, "run.%s", rkey);
-        if (!strcmp(rkey, "duration")) st = f3r_yaml_number(L, rvalue, name, &s->duration);
-        else if (!strcmp(rkey, "output_step")) st = f3r_yaml_number(L, rvalue, name, &s->output_step);
-        else if (!strcmp(rkey, "beam_points")) st = f3r_yaml_int(L, rvalue, name, &s->beam_points);
-        else return f3r_yaml_fail(L, rvalue, name, "unknown key (allowed: duration, output_step, beam_points)");
-        if (st != F3R_OK) return st;
-      }
+      st = read_run(L, value);
     } else {
       return f3r_yaml_fail(L, value, key,
                   "unknown section (allowed: geometry, platform, link, cylinder, links, effects, "
