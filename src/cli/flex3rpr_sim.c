@@ -139,8 +139,11 @@ static int parse_args(int argc, char** argv, cli_options* o) {
     fprintf(stderr, "flex3rpr_sim: give one of --ida, --erk, --dirk\n");
     return 0;
   }
-  if (o->formulation && strcmp(o->formulation, "dae") && strcmp(o->formulation, "minimal")) {
-    fprintf(stderr, "flex3rpr_sim: --formulation must be dae or minimal, got '%s'\n", o->formulation);
+  f3r_formulation formulation;
+  if (o->formulation && f3r_formulation_from_name(o->formulation, &formulation) != 0) {
+    fprintf(stderr, "flex3rpr_sim: --formulation must be %s or %s, got '%s'\n",
+            f3r_formulation_name(F3R_FORMULATION_DAE), f3r_formulation_name(F3R_FORMULATION_MINIMAL),
+            o->formulation);
     return 0;
   }
   return 1;
@@ -281,141 +284,129 @@ static double monotonic_seconds(void) {
   return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
 }
 
-int main(int argc, char** argv) {
-  cli_options o;
-  if (!parse_args(argc, argv, &o)) {
-    usage(stderr);
-    return 2;
+/* Options on the command line are explicit settings: the accuracy knob keeps them. */
+static void apply_options(const cli_options* o, f3r_scene* scene) {
+  if (o->formulation) {
+    f3r_formulation_from_name(o->formulation, &scene->formulation); /* parse_args checked it */
+    scene->explicit_settings |= F3R_EXPLICIT_FORMULATION;
   }
+  if (o->rtol > 0) scene->explicit_settings |= F3R_EXPLICIT_RTOL;
+  if (o->atol > 0) scene->explicit_settings |= F3R_EXPLICIT_ATOL;
+  if (o->exact_kinematics) scene->explicit_settings |= F3R_EXPLICIT_EXACT_KINEMATICS;
+  if (o->integrator_ida || o->integrator_erk || o->integrator_dirk) scene->explicit_settings |= F3R_EXPLICIT_INTEGRATOR;
+  if (o->table) scene->explicit_settings |= F3R_EXPLICIT_TABLE;
+  if (o->rtol > 0) scene->rtol = o->rtol;
+  if (o->max_order > 0) scene->max_order = (int)o->max_order;
+  if (o->atol > 0) scene->atol = o->atol;
+  if (o->output_step > 0) scene->output_step = o->output_step;
+  if (o->duration > 0) scene->duration = o->duration;
+  if (o->exact_kinematics) scene->exact_kinematics = 1;
+  if (o->integrator_ida) scene->integrator = F3R_INTEGRATOR_IDA;
+  if (o->integrator_erk || o->integrator_dirk) {
+    scene->integrator = o->integrator_erk ? F3R_INTEGRATOR_ERK : F3R_INTEGRATOR_DIRK;
+    scene->formulation = F3R_FORMULATION_MINIMAL;
+  }
+  if (o->table) snprintf(scene->table, sizeof scene->table, "%s", o->table);
+}
+
+/* The scene (file, overrides, options), what the accuracy knob chose for it in *choose_cpu s,
+ * and its model. 0 with a message when any of them fails. */
+static int resolve_model(const cli_options* o, f3r_scene* scene, f3r_accuracy_choice* choice,
+                         double* choose_cpu, f3r_model** model) {
   f3r_error err = {0};
-  f3r_scene scene;
-  const f3r_scene_options source = {.accuracy = o.accuracy, .overrides = o.sets, .override_count = o.n_sets};
-  if (f3r_scene_load_with(o.scene_path, &source, &scene, &err) != F3R_OK) {
+  const f3r_scene_options source = {.accuracy = o->accuracy, .overrides = o->sets, .override_count = o->n_sets};
+  if (f3r_scene_load_with(o->scene_path, &source, scene, &err) != F3R_OK) {
     fprintf(stderr, "flex3rpr_sim: %s\n", err.message);
-    return 1;
+    return 0;
   }
-  /* Options on the command line are explicit settings: the accuracy knob keeps them. */
-  if (o.formulation) {
-    scene.formulation = strcmp(o.formulation, "dae") ? F3R_FORMULATION_MINIMAL : F3R_FORMULATION_DAE;
-    scene.explicit_settings |= F3R_EXPLICIT_FORMULATION;
-  }
-  if (o.rtol > 0) scene.explicit_settings |= F3R_EXPLICIT_RTOL;
-  if (o.atol > 0) scene.explicit_settings |= F3R_EXPLICIT_ATOL;
-  if (o.exact_kinematics) scene.explicit_settings |= F3R_EXPLICIT_EXACT_KINEMATICS;
-  if (o.integrator_ida || o.integrator_erk || o.integrator_dirk) scene.explicit_settings |= F3R_EXPLICIT_INTEGRATOR;
-  if (o.table) scene.explicit_settings |= F3R_EXPLICIT_TABLE;
-  if (o.rtol > 0) scene.rtol = o.rtol;
-  if (o.max_order > 0) scene.max_order = (int)o.max_order;
-  if (o.atol > 0) scene.atol = o.atol;
-  if (o.output_step > 0) scene.output_step = o.output_step;
-  if (o.duration > 0) scene.duration = o.duration;
-  if (o.exact_kinematics) scene.exact_kinematics = 1;
-  if (o.integrator_ida) scene.integrator = F3R_INTEGRATOR_IDA;
-  if (o.integrator_erk || o.integrator_dirk) {
-    scene.integrator = o.integrator_erk ? F3R_INTEGRATOR_ERK : F3R_INTEGRATOR_DIRK;
-    scene.formulation = F3R_FORMULATION_MINIMAL;
-  }
-  if (o.table) snprintf(scene.table, sizeof scene.table, "%s", o.table);
+  apply_options(o, scene);
   const double choose_start = cpu_seconds();
-  f3r_accuracy_choice choice;
-  if (f3r_scene_validate(&scene, &err) != F3R_OK ||
-      f3r_accuracy_resolve(&scene, 0, &choice, &err) != F3R_OK) {
-    fprintf(stderr, "flex3rpr_sim: %s: %s\n", o.scene_path, err.message);
-    return 1;
-  }
-  const double choose_cpu = cpu_seconds() - choose_start;
-  f3r_model* model = NULL;
-  if (f3r_model_create(&scene, &model, &err) != F3R_OK) {
-    fprintf(stderr, "flex3rpr_sim: %s: %s\n", o.scene_path, err.message);
-    return 1;
-  }
-  if (o.check) { /* the scene, its overrides and the model are valid: what a sweep checks first */
-    printf("ok: %s, nq %d\n", o.scene_path, model->nq);
-    f3r_model_destroy(model);
+  if (f3r_scene_validate(scene, &err) != F3R_OK ||
+      f3r_accuracy_resolve(scene, 0, choice, &err) != F3R_OK) {
+    fprintf(stderr, "flex3rpr_sim: %s: %s\n", o->scene_path, err.message);
     return 0;
   }
-  if (o.geometry) {
-    print_geometry(model);
-    f3r_model_destroy(model);
+  *choose_cpu = cpu_seconds() - choose_start;
+  if (f3r_model_create(scene, model, &err) != F3R_OK) {
+    fprintf(stderr, "flex3rpr_sim: %s: %s\n", o->scene_path, err.message);
     return 0;
   }
-  if (choice.summary[0]) printf("%s\n", choice.summary);
-  if (scene.accuracy > 0 && !choice.request_met)
+  return 1;
+}
+
+static void report_choice(const cli_options* o, const f3r_scene* scene, const f3r_accuracy_choice* choice,
+                          double choose_cpu) {
+  if (choice->summary[0]) printf("%s\n", choice->summary);
+  if (scene->accuracy > 0 && !choice->request_met)
     fprintf(stderr, "flex3rpr_sim: warning: %s: the accuracy request %g m is not met: estimated %.3g m (see the summary)\n",
-            o.scene_path, scene.accuracy, choice.estimated_error);
-  if (scene.accuracy > 0)
-    printf("choice cpu time     %.6f s (%d linear models)\n", choose_cpu, choice.linear_evaluations);
-  if (o.linear_path) {
-    const int rc = write_linear_path(model, o.linear_path);
-    f3r_model_destroy(model);
-    return rc;
-  }
-  if (o.linearise_path) {
-    const int rc = write_state_space(model, o.linearise_path);
-    f3r_model_destroy(model);
-    return rc;
-  }
-  if (o.modal) {
-    const int rc = run_modal(model);
-    f3r_model_destroy(model);
-    return rc;
-  }
-  f3r_solver_settings settings = f3r_solver_settings_from_scene(&scene);
-  settings.analytic_jacobian = !o.fd_jacobian;
-  settings.dense_linear_solver = o.dense_linear_solver;
-  if (o.table) snprintf(settings.rk_table, sizeof settings.rk_table, "%s", o.table);
-  settings.stop_at_outputs = o.stop_at_outputs;
-  double held[F3R_MAX_Q] = {0};
-  for (int h = 0; h < o.n_holds; ++h)
-    if (o.holds[h].index >= model->nq) {
-      fprintf(stderr, "flex3rpr_sim: --hold index %d is beyond nq = %d\n", o.holds[h].index, model->nq);
-      f3r_model_destroy(model);
-      return 2;
-    }
-  f3r_sim* sim = NULL;
-  if (f3r_sim_create(model, &settings, &sim, &err) != F3R_OK) {
-    fprintf(stderr, "flex3rpr_sim: %s\n", err.message);
-    f3r_model_destroy(model);
-    return 1;
-  }
-  FILE* csv = NULL;
-  if (o.out_path) {
-    csv = fopen(o.out_path, "w");
-    if (!csv) {
-      fprintf(stderr, "flex3rpr_sim: cannot write %s\n", o.out_path);
-      f3r_sim_destroy(sim);
-      f3r_model_destroy(model);
-      return 1;
-    }
-    write_header(csv, model);
-    write_row(csv, model, f3r_sim_outputs(sim));
-  }
-  const long steps = (long)llround(scene.duration / scene.output_step);
-  double max_constraint = 0.0, max_energy_error = 0.0, max_energy = 0.0;
-  double max_deflection = 0.0, max_tip = 0.0; /* |w| over the beam stations, and at the tips */
-  static double shapes[3][101][F3R_MAX_MODES]; /* mode shapes at the stations (beam_points <= 101) */
+            o->scene_path, scene->accuracy, choice->estimated_error);
+  if (scene->accuracy > 0)
+    printf("choice cpu time     %.6f s (%d linear models)\n", choose_cpu, choice->linear_evaluations);
+}
+
+/* What a run measures for its summary. */
+typedef struct {
+  double max_constraint, max_energy_error, max_energy;
+  double max_deflection, max_tip; /* |w| over the beam stations, and at the tips */
+  double cpu_total, cpu_integrating, cpu_outputs;
+} run_stats;
+
+/* The mode shapes of every link at its beam_points stations (beam_points <= 101). */
+static void eval_mode_shapes(const f3r_model* model, int beam_points, double shapes[3][101][F3R_MAX_MODES]) {
   for (int i = 0; i < 3; ++i)
-    for (int k = 0; k < scene.beam_points; ++k)
+    for (int k = 0; k < beam_points; ++k)
       for (int j = 0; j < model->link[i].modes; ++j) {
         double dpsi;
         f3r_beam_mode_eval((f3r_beam_end)model->link[i].model, model->link[i].alpha[j],
-                           (double)k / (scene.beam_points - 1), &shapes[i][k][j], &dpsi, NULL);
+                           (double)k / (beam_points - 1), &shapes[i][k][j], &dpsi, NULL);
       }
+}
+
+static void track_maxima(run_stats* r, const f3r_model* model, int beam_points,
+                         double shapes[3][101][F3R_MAX_MODES], const f3r_outputs* out) {
+  r->max_constraint = fmax(r->max_constraint, out->constraint_residual);
+  r->max_energy_error = fmax(r->max_energy_error, out->energy_balance_error);
+  r->max_energy = fmax(r->max_energy, out->kinetic_energy + out->potential_energy);
+  for (int i = 0; i < 3; ++i) {
+    const f3r_link_params* lp = &model->link[i];
+    if (!lp->modes) continue;
+    r->max_tip = fmax(r->max_tip, fabs(out->tip_deflection[i]));
+    for (int k = 0; k < beam_points; ++k) {
+      double w = 0.0;
+      for (int j = 0; j < lp->modes; ++j) w += shapes[i][k][j] * out->q[lp->eta_index + j];
+      r->max_deflection = fmax(r->max_deflection, fabs(w));
+    }
+  }
+}
+
+/* Held forces change only at output times, exactly as in the node. */
+static f3r_status apply_holds(const cli_options* o, double output_step, f3r_sim* sim, double* held,
+                              f3r_error* err) {
+  int changed = 0;
+  const double t_now = f3r_sim_time(sim);
+  for (int h = 0; h < o->n_holds; ++h)
+    if (o->holds[h].t <= t_now + 1e-12 && held[o->holds[h].index] != o->holds[h].value &&
+        o->holds[h].t > t_now - 0.5 * output_step) {
+      held[o->holds[h].index] = o->holds[h].value;
+      changed = 1;
+    }
+  return changed ? f3r_sim_set_forces(sim, held, err) : F3R_OK;
+}
+
+/* Advances to the scene's duration output step by output step, writing rows to csv (when not
+ * NULL); returns 1 when the simulation failed (reported), 0 otherwise. */
+static int run_outputs(const cli_options* o, const f3r_scene* scene, const f3r_model* model, f3r_sim* sim,
+                       FILE* csv, run_stats* r) {
+  static double shapes[3][101][F3R_MAX_MODES]; /* mode shapes at the stations */
+  eval_mode_shapes(model, scene->beam_points, shapes);
+  const long steps = (long)llround(scene->duration / scene->output_step);
+  double held[F3R_MAX_Q] = {0};
+  f3r_error err = {0};
   int rc = 0;
   const double start = cpu_seconds();
-  double cpu_integrating = 0.0, cpu_outputs = 0.0;
   for (long k = 1; k <= steps; ++k) {
-    const double t = k == steps ? scene.duration : (double)k * scene.output_step;
-    /* Held forces change only at output times, exactly as in the node. */
-    int changed = 0;
-    const double t_now = f3r_sim_time(sim);
-    for (int h = 0; h < o.n_holds; ++h)
-      if (o.holds[h].t <= t_now + 1e-12 && held[o.holds[h].index] != o.holds[h].value &&
-          o.holds[h].t > t_now - 0.5 * scene.output_step) {
-        held[o.holds[h].index] = o.holds[h].value;
-        changed = 1;
-      }
-    if (changed && f3r_sim_set_forces(sim, held, &err) != F3R_OK) {
+    const double t = k == steps ? scene->duration : (double)k * scene->output_step;
+    if (apply_holds(o, scene->output_step, sim, held, &err) != F3R_OK) {
       fprintf(stderr, "flex3rpr_sim: %s\n", err.message);
       rc = 1;
       break;
@@ -424,60 +415,126 @@ int main(int argc, char** argv) {
     const f3r_status st = f3r_sim_advance(sim, t, &err);
     const double advanced = monotonic_seconds();
     const f3r_outputs* out = f3r_sim_outputs(sim);
-    cpu_outputs += monotonic_seconds() - advanced;
-    cpu_integrating += advanced - before;
+    r->cpu_outputs += monotonic_seconds() - advanced;
+    r->cpu_integrating += advanced - before;
     if (csv) write_row(csv, model, out);
     if (st != F3R_OK) {
       fprintf(stderr, "flex3rpr_sim: %s\n", err.message);
       rc = 1;
       break;
     }
-    max_constraint = fmax(max_constraint, out->constraint_residual);
-    max_energy_error = fmax(max_energy_error, out->energy_balance_error);
-    max_energy = fmax(max_energy, out->kinetic_energy + out->potential_energy);
-    for (int i = 0; i < 3; ++i) {
-      const f3r_link_params* lp = &model->link[i];
-      if (!lp->modes) continue;
-      max_tip = fmax(max_tip, fabs(out->tip_deflection[i]));
-      for (int k = 0; k < scene.beam_points; ++k) {
-        double w = 0.0;
-        for (int j = 0; j < lp->modes; ++j) w += shapes[i][k][j] * out->q[lp->eta_index + j];
-        max_deflection = fmax(max_deflection, fabs(w));
-      }
-    }
+    track_maxima(r, model, scene->beam_points, shapes, out);
   }
-  const double cpu_total = cpu_seconds() - start;
-  const f3r_outputs* out = f3r_sim_outputs(sim);
-  if (csv) fclose(csv);
-  printf("scene               %s\n", o.scene_path);
-  printf("formulation         %s, rtol %g, atol %g, %s\n",
-         scene.formulation == F3R_FORMULATION_DAE ? "dae" : "minimal", scene.rtol, scene.atol,
-         scene.integrator == F3R_INTEGRATOR_ERK    ? "ARKODE ERKStep"
-         : scene.integrator == F3R_INTEGRATOR_DIRK ? "ARKODE ARKStep, DIRK"
-         : o.fd_jacobian                           ? "IDA, difference-quotient Jacobian"
-                                                   : "IDA, analytic Jacobian");
-  if (scene.integrator != F3R_INTEGRATOR_IDA)
-    printf("butcher table       %s\n", scene.table[0] ? scene.table : "default");
-  if (scene.integrator == F3R_INTEGRATOR_IDA) printf("max BDF order       %d\n", scene.max_order);
+  r->cpu_total = cpu_seconds() - start;
+  return rc;
+}
+
+static void print_summary(const cli_options* o, const f3r_scene* scene, const f3r_model* model,
+                          const f3r_outputs* out, const run_stats* r) {
+  printf("scene               %s\n", o->scene_path);
+  printf("formulation         %s, rtol %g, atol %g, %s\n", f3r_formulation_name(scene->formulation),
+         scene->rtol, scene->atol,
+         scene->integrator == F3R_INTEGRATOR_ERK    ? "ARKODE ERKStep"
+         : scene->integrator == F3R_INTEGRATOR_DIRK ? "ARKODE ARKStep, DIRK"
+         : o->fd_jacobian                           ? "IDA, difference-quotient Jacobian"
+                                                    : "IDA, analytic Jacobian");
+  if (scene->integrator != F3R_INTEGRATOR_IDA)
+    printf("butcher table       %s\n", scene->table[0] ? scene->table : "default");
+  if (scene->integrator == F3R_INTEGRATOR_IDA) printf("max BDF order       %d\n", scene->max_order);
   printf("sundials            %s, %s\n", SUNDIALS_VERSION, F3R_SUNDIALS_BUILD);
-  printf("state dimension     %d (nq %d)\n", f3r_state_size(model, scene.formulation), model->nq);
+  printf("state dimension     %d (nq %d)\n", f3r_state_size(model, scene->formulation), model->nq);
   printf("simulated time      %.6g s\n", out->t);
   printf("steps               %ld\n", out->stats.steps);
   printf("residual evals      %ld\n", out->stats.residual_evals);
   printf("jacobian evals      %ld\n", out->stats.jacobian_evals);
-  printf("cpu time            %.6f s (integration %.6f s, outputs %.6f s)\n", cpu_total,
-         cpu_integrating, cpu_outputs);
+  printf("cpu time            %.6f s (integration %.6f s, outputs %.6f s)\n", r->cpu_total,
+         r->cpu_integrating, r->cpu_outputs);
   printf("real-time factor    %.3g (%.3g with the outputs)\n",
-         cpu_integrating > 0 ? out->t / cpu_integrating : INFINITY,
-         cpu_integrating + cpu_outputs > 0 ? out->t / (cpu_integrating + cpu_outputs) : INFINITY);
-  printf("max constraint res  %.3e m\n", max_constraint);
-  printf("energy balance err  %.3e J (%.3e of max T+V)\n", max_energy_error,
-         max_energy > 0 ? max_energy_error / max_energy : 0.0);
+         r->cpu_integrating > 0 ? out->t / r->cpu_integrating : INFINITY,
+         r->cpu_integrating + r->cpu_outputs > 0 ? out->t / (r->cpu_integrating + r->cpu_outputs) : INFINITY);
+  printf("max constraint res  %.3e m\n", r->max_constraint);
+  printf("energy balance err  %.3e J (%.3e of max T+V)\n", r->max_energy_error,
+         r->max_energy > 0 ? r->max_energy_error / r->max_energy : 0.0);
   printf("max deflection      %.6e m (largest |w| at %d stations a link; at the tips %.6e m)\n",
-         max_deflection, scene.beam_points, max_tip);
+         r->max_deflection, scene->beam_points, r->max_tip);
   printf("final pose          x_p %.9f y_p %.9f phi_p %.9f\n", out->q[F3R_Q_X], out->q[F3R_Q_Y], out->q[F3R_Q_PHI]);
-  if (o.out_path) printf("csv                 %s\n", o.out_path);
+  if (o->out_path) printf("csv                 %s\n", o->out_path);
+}
+
+/* The simulation with its CSV and summary; returns the exit code. */
+static int simulate(const cli_options* o, const f3r_scene* scene, const f3r_model* model) {
+  f3r_solver_settings settings = f3r_solver_settings_from_scene(scene);
+  settings.analytic_jacobian = !o->fd_jacobian;
+  settings.dense_linear_solver = o->dense_linear_solver;
+  if (o->table) snprintf(settings.rk_table, sizeof settings.rk_table, "%s", o->table);
+  settings.stop_at_outputs = o->stop_at_outputs;
+  for (int h = 0; h < o->n_holds; ++h)
+    if (o->holds[h].index >= model->nq) {
+      fprintf(stderr, "flex3rpr_sim: --hold index %d is beyond nq = %d\n", o->holds[h].index, model->nq);
+      return 2;
+    }
+  f3r_error err = {0};
+  f3r_sim* sim = NULL;
+  if (f3r_sim_create(model, &settings, &sim, &err) != F3R_OK) {
+    fprintf(stderr, "flex3rpr_sim: %s\n", err.message);
+    return 1;
+  }
+  FILE* csv = NULL;
+  if (o->out_path) {
+    csv = fopen(o->out_path, "w");
+    if (!csv) {
+      fprintf(stderr, "flex3rpr_sim: cannot write %s\n", o->out_path);
+      f3r_sim_destroy(sim);
+      return 1;
+    }
+    write_header(csv, model);
+    write_row(csv, model, f3r_sim_outputs(sim));
+  }
+  run_stats stats = {0};
+  const int rc = run_outputs(o, scene, model, sim, csv, &stats);
+  if (csv) fclose(csv);
+  print_summary(o, scene, model, f3r_sim_outputs(sim), &stats);
   f3r_sim_destroy(sim);
+  return rc;
+}
+
+/* --check and --geometry: the model only, before the accuracy knob's report. */
+static int describe_model(const cli_options* o, const f3r_model* model) {
+  if (o->check) /* the scene, its overrides and the model are valid: what a sweep checks first */
+    printf("ok: %s, nq %d\n", o->scene_path, model->nq);
+  else
+    print_geometry(model);
+  return 0;
+}
+
+/* The analyses that replace a simulation (--linear-path, --linearise, --modal): the exit code,
+ * or -1 when none was asked for. */
+static int analyse(const cli_options* o, const f3r_model* model) {
+  if (o->linear_path) return write_linear_path(model, o->linear_path);
+  if (o->linearise_path) return write_state_space(model, o->linearise_path);
+  if (o->modal) return run_modal(model);
+  return -1;
+}
+
+int main(int argc, char** argv) {
+  cli_options o;
+  if (!parse_args(argc, argv, &o)) {
+    usage(stderr);
+    return 2;
+  }
+  f3r_scene scene;
+  f3r_accuracy_choice choice;
+  double choose_cpu = 0.0;
+  f3r_model* model = NULL;
+  if (!resolve_model(&o, &scene, &choice, &choose_cpu, &model)) return 1;
+  int rc;
+  if (o.check || o.geometry) {
+    rc = describe_model(&o, model);
+  } else {
+    report_choice(&o, &scene, &choice, choose_cpu);
+    rc = analyse(&o, model);
+    if (rc < 0) rc = simulate(&o, &scene, model);
+  }
   f3r_model_destroy(model);
   return rc;
 }
