@@ -115,11 +115,10 @@ bool ReadBasePose(const ros::NodeHandle& pnh, std::array<double, 3>* pose, std::
   return false;
 }
 
-}  // namespace
-
-bool LoadParams(const ros::NodeHandle& pnh, NodeParams* p, std::string* error) {
+// ~scene, loaded with ~accuracy (m; the scene's accuracy.end_effector when 0).
+bool LoadScene(const ros::NodeHandle& pnh, NodeParams* p, std::string* error) {
   if (!Read(pnh, "scene", DefaultScenePath(), &p->scene_path, error)) return false;
-  double accuracy = 0.0;  // ~accuracy (m): the scene's accuracy.end_effector when 0
+  double accuracy = 0.0;
   if (!Read(pnh, "accuracy", 0.0, &accuracy, error)) return false;
   if (accuracy != 0.0 && !(accuracy >= 1e-9 && accuracy <= 1.0)) {
     std::ostringstream os;
@@ -132,7 +131,11 @@ bool LoadParams(const ros::NodeHandle& pnh, NodeParams* p, std::string* error) {
     *error = std::string("parameter ~scene: ") + err.message;
     return false;
   }
-  // Single entries of the scene may be overridden by parameter.
+  return true;
+}
+
+// The solver parameters and ~end_stops, which override single entries of the scene.
+bool ReadSolverParams(const ros::NodeHandle& pnh, NodeParams* p, std::string* error) {
   std::string formulation, integrator, table;
   if (!Read(pnh, "formulation", std::string(), &formulation, error) ||
       !Read(pnh, "integrator", std::string(), &integrator, error) ||
@@ -145,22 +148,16 @@ bool LoadParams(const ros::NodeHandle& pnh, NodeParams* p, std::string* error) {
   if (!table.empty()) p->scene.explicit_settings |= F3R_EXPLICIT_TABLE;
   if (pnh.hasParam("rtol")) p->scene.explicit_settings |= F3R_EXPLICIT_RTOL;
   if (pnh.hasParam("atol")) p->scene.explicit_settings |= F3R_EXPLICIT_ATOL;
-  if (!formulation.empty()) {
-    if (formulation == "dae") p->scene.formulation = F3R_FORMULATION_DAE;
-    else if (formulation == "minimal") p->scene.formulation = F3R_FORMULATION_MINIMAL;
-    else {
-      *error = "parameter ~formulation: '" + formulation + "' is not one of dae, minimal";
-      return false;
-    }
+  char allowed[64];
+  if (!formulation.empty() && f3r_formulation_from_name(formulation.c_str(), &p->scene.formulation) != 0) {
+    *error = "parameter ~formulation: '" + formulation + "' is not one of " +
+             f3r_formulation_names(allowed, sizeof allowed);
+    return false;
   }
-  if (!integrator.empty()) {
-    if (integrator == "ida") p->scene.integrator = F3R_INTEGRATOR_IDA;
-    else if (integrator == "erk") p->scene.integrator = F3R_INTEGRATOR_ERK;
-    else if (integrator == "dirk") p->scene.integrator = F3R_INTEGRATOR_DIRK;
-    else {
-      *error = "parameter ~integrator: '" + integrator + "' is not one of ida, erk, dirk";
-      return false;
-    }
+  if (!integrator.empty() && f3r_integrator_from_name(integrator.c_str(), &p->scene.integrator) != 0) {
+    *error = "parameter ~integrator: '" + integrator + "' is not one of " +
+             f3r_integrator_names(allowed, sizeof allowed);
+    return false;
   }
   if (!table.empty())  // checked with the scene below (solver.table)
     std::snprintf(p->scene.table, sizeof p->scene.table, "%s", table.c_str());
@@ -168,6 +165,13 @@ bool LoadParams(const ros::NodeHandle& pnh, NodeParams* p, std::string* error) {
       !Read(pnh, "atol", p->scene.atol, &p->scene.atol, error))
     return false;
   if (p->end_stops) p->scene.end_stops = 1;  // the scene's stroke becomes hard
+  return true;
+}
+
+// Validates the overridden scene, lets the accuracy knob fix what it left open, and derives the
+// solver settings.
+bool ResolveScene(const ros::NodeHandle& pnh, NodeParams* p, std::string* error) {
+  f3r_error err{};
   if (f3r_scene_validate(&p->scene, &err) != F3R_OK) {
     // name the parameter that set the field, where one did
     const std::string field = err.field;
@@ -188,7 +192,11 @@ bool LoadParams(const ros::NodeHandle& pnh, NodeParams* p, std::string* error) {
   }
   p->settings = f3r_solver_settings_from_scene(&p->scene);
   p->settings.stop_at_outputs = 1;  // commands take effect exactly at publish times
+  return true;
+}
 
+// Rates, queues, limits, frames' names and the base pose, read and range-checked.
+bool ReadRunParams(const ros::NodeHandle& pnh, NodeParams* p, std::string* error) {
   const bool read =
       Read(pnh, "publish_rate", 1000.0, &p->publish_rate, error) &&
       Read(pnh, "beam_points", p->scene.beam_points, &p->beam_points, error) &&
@@ -233,6 +241,11 @@ bool LoadParams(const ros::NodeHandle& pnh, NodeParams* p, std::string* error) {
     *error = "parameter ~beam_points: " + std::to_string(p->beam_points) + " is out of range 2..101";
     return false;
   }
+  return true;
+}
+
+// The frame names read by ReadRunParams, checked, and every frame the node publishes.
+bool MakeFrames(NodeParams* p, std::string* error) {
   if (!FrameName("tf_prefix", p->tf_prefix, error, true) || !FrameName("world_frame", p->world_frame, error) ||
       !FrameName("base_frame", p->base_frame, error))
     return false;
@@ -243,8 +256,12 @@ bool LoadParams(const ros::NodeHandle& pnh, NodeParams* p, std::string* error) {
              "'), so it cannot stand elsewhere; give a ~tf_prefix or a ~base_frame of its own";
     return false;
   }
-  // One clock: stamps follow /use_sim_time (simulated time, with /clock from this node, as
-  // gazebo_ros does), unless ~stamps says otherwise.
+  return true;
+}
+
+// One clock: stamps follow /use_sim_time (simulated time, with /clock from this node, as
+// gazebo_ros does), unless ~stamps says otherwise.
+bool ReadClock(const ros::NodeHandle& pnh, NodeParams* p, std::string* error) {
   bool use_sim_time = false;
   if (ros::param::has("/use_sim_time")) {
     XmlRpc::XmlRpcValue value;
@@ -269,6 +286,13 @@ bool LoadParams(const ros::NodeHandle& pnh, NodeParams* p, std::string* error) {
     return false;
   }
   return true;
+}
+
+}  // namespace
+
+bool LoadParams(const ros::NodeHandle& pnh, NodeParams* p, std::string* error) {
+  return LoadScene(pnh, p, error) && ReadSolverParams(pnh, p, error) && ResolveScene(pnh, p, error) &&
+         ReadRunParams(pnh, p, error) && MakeFrames(p, error) && ReadClock(pnh, p, error);
 }
 
 }  // namespace flex3rpr
