@@ -13,15 +13,6 @@ namespace flex3rpr {
 
 namespace {
 
-const char* ModelName(f3r_link_model m) {
-  switch (m) {
-    case F3R_LINK_RIGID: return "rigid";
-    case F3R_LINK_FIXED_PINNED: return "fixed_pinned";
-    case F3R_LINK_FIXED_FREE: return "fixed_free";
-  }
-  return "unknown";
-}
-
 // A planar pose (x, y, yaw about +Z) as a TF transform.
 void SetPlanar(geometry_msgs::TransformStamped* t, double x, double y, double yaw) {
   const Eigen::Isometry3d pose =
@@ -44,12 +35,19 @@ std::string Leg(int i, const char* suffix) { return "leg_" + std::to_string(i + 
 StateOutputs::StateOutputs(ros::NodeHandle& nh, ros::NodeHandle& pnh, const f3r_model& model,
                            const NodeParams& params)
     : model_(model), params_(params), frames_(params.frames) {
+  Advertise(nh, pnh);
+  PrepareMessages();
+  SendStaticFrames();
+  PrepareTransforms();
+}
+
+void StateOutputs::Advertise(ros::NodeHandle& nh, ros::NodeHandle& pnh) {
   // Each subscriber connection holds up to queue_size messages the node's network thread has not
   // sent yet; a recorder that must not lose any (record.launch) asks for a deep queue.
-  const uint32_t q = static_cast<uint32_t>(params.queue_size);
+  const uint32_t q = static_cast<uint32_t>(params_.queue_size);
   // In lockstep the node waits for a controller that may connect later: the present state is
   // latched, so that it gets it on connection instead of waiting for a period that never comes.
-  const bool latch = params.lockstep;
+  const bool latch = params_.lockstep;
   joints_pub_ = nh.advertise<sensor_msgs::JointState>("joint_states", q, latch);
   odom_pub_ = pnh.advertise<nav_msgs::Odometry>("odom", q, latch);
   status_pub_ = pnh.advertise<SimStatus>("status", q, latch);
@@ -64,8 +62,10 @@ StateOutputs::StateOutputs(ros::NodeHandle& nh, ros::NodeHandle& pnh, const f3r_
       [this](const ros::SingleSubscriberPublisher& subscriber) {
         if (have_transforms_ && paused_) subscriber.publish(tf_);
       });
-  if (params.publish_clock) clock_pub_ = nh.advertise<rosgraph_msgs::Clock>("/clock", q);
+  if (params_.publish_clock) clock_pub_ = nh.advertise<rosgraph_msgs::Clock>("/clock", q);
+}
 
+void StateOutputs::PrepareMessages() {
   for (int i = 0; i < 3; ++i) {
     joints_.name.push_back(Leg(i, "_revolute"));
     joints_.name.push_back(Leg(i, "_prismatic"));
@@ -76,10 +76,10 @@ StateOutputs::StateOutputs(ros::NodeHandle& nh, ros::NodeHandle& pnh, const f3r_
   odom_.header.frame_id = frames_.base;
   odom_.child_frame_id = frames_.platform;
 
-  const int nmodal = model.nq - F3R_Q_MODAL;
+  const int nmodal = model_.nq - F3R_Q_MODAL;
   for (int i = 0; i < 3; ++i) {
-    beam_.model[i] = ModelName(model.link[i].model);
-    beam_.modes[i] = static_cast<uint32_t>(model.link[i].modes);
+    beam_.model[i] = f3r_link_model_name(model_.link[i].model);
+    beam_.modes[i] = static_cast<uint32_t>(model_.link[i].modes);
   }
   beam_.modal.assign(static_cast<size_t>(nmodal), 0.0);
   beam_.modal_rate.assign(static_cast<size_t>(nmodal), 0.0);
@@ -96,45 +96,49 @@ StateOutputs::StateOutputs(ros::NodeHandle& nh, ros::NodeHandle& pnh, const f3r_
     m.color.r = 1.0f;
     m.color.g = 0.5f;
     m.color.a = 1.0f;
-    m.points.resize(static_cast<size_t>(params.beam_points));
+    m.points.resize(static_cast<size_t>(params_.beam_points));
     markers_.markers.push_back(m);
   }
 
-  // Static frames, as the URDF's fixed joints (scripts/make_urdf.py): world -> base, the nominal
-  // beam tips, the beams' clamped roots (station 0 is the piston, whatever the deflection) and
-  // the platform joints.
+  diagnostics_.status.resize(1);
+  diagnostics_.status[0].name = ros::this_node::getName() + ": simulation";
+  diagnostics_.status[0].hardware_id = "flex3rpr";
+}
+
+// Static frames, as the URDF's fixed joints (scripts/make_urdf.py): world -> base, the nominal
+// beam tips, the beams' clamped roots (station 0 is the piston, whatever the deflection) and
+// the platform joints.
+void StateOutputs::SendStaticFrames() {
   std::vector<geometry_msgs::TransformStamped> statics;
   if (frames_.base != frames_.world) {
     auto base = Frame(frames_.world, frames_.base);  // ~base_pose
-    SetPlanar(&base, params.base_pose[0], params.base_pose[1], params.base_pose[2]);
+    SetPlanar(&base, params_.base_pose[0], params_.base_pose[1], params_.base_pose[2]);
     statics.push_back(base);
   }
   for (int i = 0; i < 3; ++i) {
     auto tip = Frame(frames_.piston[i], frames_.tip_nominal[i]);
-    tip.transform.translation.x = model.link_length;
+    tip.transform.translation.x = model_.link_length;
     statics.push_back(tip);
     statics.push_back(Frame(frames_.piston[i], frames_.beam[i][0]));
     auto c = Frame(frames_.platform, frames_.platform_c[i]);
-    c.transform.translation.x = model.platform_radius * std::cos(model.platform_angle[i]);
-    c.transform.translation.y = model.platform_radius * std::sin(model.platform_angle[i]);
+    c.transform.translation.x = model_.platform_radius * std::cos(model_.platform_angle[i]);
+    c.transform.translation.y = model_.platform_radius * std::sin(model_.platform_angle[i]);
     statics.push_back(c);
   }
   for (auto& s : statics) s.header.stamp = ros::Time(0.0);
   static_tf_.sendTransform(statics);
+}
 
-  // Dynamic frames, all in the base frame but the legs' chain: 2 per leg, the platform, and the
-  // beam stations 1..N-1.
+// Dynamic frames, all in the base frame but the legs' chain: 2 per leg, the platform, and the
+// beam stations 1..N-1.
+void StateOutputs::PrepareTransforms() {
   for (int i = 0; i < 3; ++i) {
     tf_.transforms.push_back(Frame(frames_.base, frames_.cylinder[i]));
     tf_.transforms.push_back(Frame(frames_.cylinder[i], frames_.piston[i]));
   }
   tf_.transforms.push_back(Frame(frames_.base, frames_.platform));
   for (int i = 0; i < 3; ++i)
-    for (int k = 1; k < params.beam_points; ++k) tf_.transforms.push_back(Frame(frames_.base, frames_.beam[i][k]));
-
-  diagnostics_.status.resize(1);
-  diagnostics_.status[0].name = ros::this_node::getName() + ": simulation";
-  diagnostics_.status[0].hardware_id = "flex3rpr";
+    for (int k = 1; k < params_.beam_points; ++k) tf_.transforms.push_back(Frame(frames_.base, frames_.beam[i][k]));
 }
 
 void StateOutputs::FillTransforms(const f3r_outputs& out, const ros::Time& stamp) {

@@ -63,6 +63,12 @@ class StateOutputs {
   bool SubscribersConnected(int n) const;
 
  private:
+  // The constructor's parts: the topics, the preallocated messages, the static frames (sent
+  // once) and the dynamic frames' transforms.
+  void Advertise(ros::NodeHandle& nh, ros::NodeHandle& pnh);
+  void PrepareMessages();
+  void SendStaticFrames();
+  void PrepareTransforms();
   void FillTransforms(const f3r_outputs& out, const ros::Time& stamp);
   void PublishStatus(const f3r_outputs& out, const RunInfo& info);
   void PublishState(const f3r_outputs& out, const ros::Time& stamp);  // all but /tf and ~status
