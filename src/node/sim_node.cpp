@@ -70,7 +70,7 @@ bool SimNode::Init() {
   ROS_INFO("flex3rpr_node: scene %s, nq %d, %s, rtol %g, publishing at %g Hz of simulated time, "
            "real-time factor %g, %s stamps%s, frames under %s",
            params_.scene_path.c_str(), model_->nq,
-           params_.settings.formulation == F3R_FORMULATION_DAE ? "dae" : "minimal",
+           f3r_formulation_name(params_.settings.formulation),
            params_.settings.rtol, params_.publish_rate, params_.realtime_factor,
            params_.sim_stamps ? "simulated" : "wall-clock", params_.publish_clock ? " with /clock" : "",
            params_.frames.base.c_str());
@@ -189,35 +189,125 @@ void SimNode::AwaitCommand(double wall_now) {
                     f3r_sim_time(sim_.get()), waited);
 }
 
+// e.g. a recorder: nothing may be published before it listens. False after ~subscriber_timeout.
+bool SimNode::WaitForSubscribers() {
+  if (params_.wait_for_subscribers <= 0) return true;
+  const ros::WallTime until = ros::WallTime::now() + ros::WallDuration(params_.subscriber_timeout);
+  while (ros::ok() && !outputs_->SubscribersConnected(params_.wait_for_subscribers)) {
+    if (ros::WallTime::now() > until) {
+      ROS_ERROR("flex3rpr_node: ~wait_for_subscribers: an output topic lacks subscribers (%d, or those the "
+                "master lists) after %g s",
+                params_.wait_for_subscribers, params_.subscriber_timeout);
+      return false;
+    }
+    ros::spinOnce();
+    ros::WallDuration(0.02).sleep();
+  }
+  ROS_INFO("flex3rpr_node: every output topic has its subscribers (at least %d); starting",
+           params_.wait_for_subscribers);
+  return true;
+}
+
+// ~reset: time, commands and the stroke warnings start over.
+void SimNode::Restart(RunLoop* loop) {
+  f3r_error err{};
+  control_.reset_requested = false;
+  inputs_->Clear();
+  if (f3r_sim_reset(sim_.get(), &err) != F3R_OK) ROS_ERROR("flex3rpr_node: reset failed: %s", err.message);
+  periods_ = 0;
+  loop->was_running = false;
+  info_.last_error.clear();
+  info_.outside_stroke = {};
+  outputs_->RestartCount();
+  last_published_t_ = -1.0;  // time starts over
+  PublishAt(*f3r_sim_outputs(sim_.get()));
+}
+
+void SimNode::PublishDiagnosticsWhenDue(double now, RunLoop* loop) {
+  if (now - loop->last_diagnostics < kDiagnosticsSeconds) return;
+  info_.rejected_commands = inputs_->rejected();
+  outputs_->PublishDiagnostics(*f3r_sim_outputs(sim_.get()), info_);
+  // A period that waits for its command publishes nothing else: say so on ~status too.
+  if (info_.waiting_for_command > 0.0) outputs_->PublishStatusOnly(*f3r_sim_outputs(sim_.get()), info_);
+  loop->last_diagnostics = now;
+}
+
+void SimNode::IdlePaused(double now, RunLoop* loop) {
+  loop->was_running = false;
+  info_.behind = false;
+  info_.lag = 0.0;
+  // Not in lockstep: a controller answers every state it receives, and the state is latched.
+  if (!params_.lockstep && now - loop->last_paused_output >= kPausedPublishSeconds) {
+    info_.rejected_commands = inputs_->rejected();
+    outputs_->PublishPaused(*f3r_sim_outputs(sim_.get()), info_);
+    loop->last_paused_output = now;
+  }
+  ros::WallDuration(0.001).sleep();
+}
+
+// One period of a running simulation: advance, publish, pace. False when the run ends: the
+// duration is reached, or (exit code 2) a scripted run's integration stopped.
+bool SimNode::RunPeriod(double period, double now, RunLoop* loop, int* exit_code) {
+  waiting_since_ = -1.0;
+  info_.waiting_for_command = 0.0;
+  if (control_.pending_steps > 0) --control_.pending_steps;
+  if (!loop->was_running) pacer_->Start(now, f3r_sim_time(sim_.get()));
+  loop->was_running = !control_.paused;
+  if (!Step(period)) {
+    if (params_.duration > 0.0) {  // a scripted run (a recording) ends instead of waiting
+      *exit_code = 2;
+      PublishAt(*f3r_sim_outputs(sim_.get()));
+      return false;
+    }
+    control_.paused = true;
+    control_.pending_steps = 0;
+    info_.paused = true;
+    loop->was_running = false;
+    info_.rejected_commands = inputs_->rejected();
+    PublishAt(*f3r_sim_outputs(sim_.get()));
+    return true;
+  }
+  const f3r_outputs& out = *f3r_sim_outputs(sim_.get());
+  const double after = loop->Wall();
+  if (loop->first_period_wall < 0.0) {
+    loop->first_period_wall = after;
+    loop->first_period_t = out.t;
+  }
+  info_.wall_time = after - loop->start;
+  const double due = pacer_->Due(after, out.t);
+  ReportPace();
+  PublishPeriod(out);
+  if (loop->grace_pending) {
+    loop->grace_pending = false;
+    loop->held += SpinFor(params_.subscriber_grace).toSec();
+  }
+  if (params_.duration > 0.0 && out.t >= params_.duration - 0.5 * period) {
+    // The second factor leaves out the start (a controller's or recorder's connection, the
+    // first period's wait): what a closed loop sustains.
+    ROS_INFO("flex3rpr_node: reached the duration %g s (real-time factor %.3g; %.3g from the end of "
+             "the first period)",
+             out.t, out.t / info_.wall_time,
+             (out.t - loop->first_period_t) / std::max(after - loop->first_period_wall, 1e-9));
+    return false;
+  }
+  if (!control_.paused) {  // pace to the wall clock
+    const double ahead = due - loop->Wall();
+    if (ahead > 0.0) ros::WallDuration(ahead).sleep();
+  }
+  return true;
+}
+
 int SimNode::Run() {
   const double period = 1.0 / params_.publish_rate;
-  if (params_.wait_for_subscribers > 0) {  // e.g. a recorder: nothing may be published before it listens
-    const ros::WallTime until = ros::WallTime::now() + ros::WallDuration(params_.subscriber_timeout);
-    while (ros::ok() && !outputs_->SubscribersConnected(params_.wait_for_subscribers)) {
-      if (ros::WallTime::now() > until) {
-        ROS_ERROR("flex3rpr_node: ~wait_for_subscribers: an output topic lacks subscribers (%d, or those the "
-                  "master lists) after %g s",
-                  params_.wait_for_subscribers, params_.subscriber_timeout);
-        return 3;
-      }
-      ros::spinOnce();
-      ros::WallDuration(0.02).sleep();
-    }
-    ROS_INFO("flex3rpr_node: every output topic has its subscribers (at least %d); starting",
-             params_.wait_for_subscribers);
-  }
+  if (!WaitForSubscribers()) return 3;
   // A subscriber on simulated time, such as rosbag record, takes its first messages only once
   // /clock is past zero (ros::Time::waitForValid), and its subscription queues hold 100 each:
   // after the first period, and before it exits, the node holds ~subscriber_grace wall seconds.
+  RunLoop loop;
   const bool grace = params_.wait_for_subscribers > 0 && params_.subscriber_grace > 0.0;
-  bool grace_pending = grace;
-  const double start = ros::WallTime::now().toSec();
-  double held = 0.0;  // wall s spent in the grace holds, not the simulation's
-  double first_period_wall = -1.0, first_period_t = 0.0;
-  auto wall = [&]() { return ros::WallTime::now().toSec() - held; };
+  loop.grace_pending = grace;
+  loop.start = ros::WallTime::now().toSec();
   pacer_.reset(new Pacer(params_.realtime_factor));
-  bool was_running = false;  // the pacer is anchored when a run starts
-  double last_paused_output = -1e9, last_diagnostics = -1e9;
   control_.paused = params_.start_paused;
   info_.paused = control_.paused;
   info_.requested_realtime_factor = params_.realtime_factor;
@@ -226,40 +316,13 @@ int SimNode::Run() {
   int exit_code = 0;
   while (ros::ok()) {
     ros::spinOnce();
-    const double now = wall();
-    if (control_.reset_requested) {
-      f3r_error err{};
-      control_.reset_requested = false;
-      inputs_->Clear();
-      if (f3r_sim_reset(sim_.get(), &err) != F3R_OK) ROS_ERROR("flex3rpr_node: reset failed: %s", err.message);
-      periods_ = 0;
-      was_running = false;
-      info_.last_error.clear();
-      info_.outside_stroke = {};
-      outputs_->RestartCount();
-      last_published_t_ = -1.0;  // time starts over
-      PublishAt(*f3r_sim_outputs(sim_.get()));
-    }
-    if (now - last_diagnostics >= kDiagnosticsSeconds) {
-      info_.rejected_commands = inputs_->rejected();
-      outputs_->PublishDiagnostics(*f3r_sim_outputs(sim_.get()), info_);
-      // A period that waits for its command publishes nothing else: say so on ~status too.
-      if (info_.waiting_for_command > 0.0) outputs_->PublishStatusOnly(*f3r_sim_outputs(sim_.get()), info_);
-      last_diagnostics = now;
-    }
+    const double now = loop.Wall();
+    if (control_.reset_requested) Restart(&loop);
+    PublishDiagnosticsWhenDue(now, &loop);
     const bool run = !control_.paused || control_.pending_steps > 0;
     info_.paused = control_.paused;
     if (!run) {
-      was_running = false;
-      info_.behind = false;
-      info_.lag = 0.0;
-      // Not in lockstep: a controller answers every state it receives, and the state is latched.
-      if (!params_.lockstep && now - last_paused_output >= kPausedPublishSeconds) {
-        info_.rejected_commands = inputs_->rejected();
-        outputs_->PublishPaused(*f3r_sim_outputs(sim_.get()), info_);
-        last_paused_output = now;
-      }
-      ros::WallDuration(0.001).sleep();
+      IdlePaused(now, &loop);
       continue;
     }
     if (params_.lockstep && !inputs_->TakeOne()) {  // the period's command has not come yet
@@ -268,51 +331,7 @@ int SimNode::Run() {
       ros::getGlobalCallbackQueue()->callAvailable(ros::WallDuration(0.001));
       continue;
     }
-    waiting_since_ = -1.0;
-    info_.waiting_for_command = 0.0;
-    if (control_.pending_steps > 0) --control_.pending_steps;
-    if (!was_running) pacer_->Start(now, f3r_sim_time(sim_.get()));
-    was_running = !control_.paused;
-    if (!Step(period)) {
-      if (params_.duration > 0.0) {  // a scripted run (a recording) ends instead of waiting
-        exit_code = 2;
-        PublishAt(*f3r_sim_outputs(sim_.get()));
-        break;
-      }
-      control_.paused = true;
-      control_.pending_steps = 0;
-      info_.paused = true;
-      was_running = false;
-      info_.rejected_commands = inputs_->rejected();
-      PublishAt(*f3r_sim_outputs(sim_.get()));
-      continue;
-    }
-    const f3r_outputs& out = *f3r_sim_outputs(sim_.get());
-    const double after = wall();
-    if (first_period_wall < 0.0) {
-      first_period_wall = after;
-      first_period_t = out.t;
-    }
-    info_.wall_time = after - start;
-    const double due = pacer_->Due(after, out.t);
-    ReportPace();
-    PublishPeriod(out);
-    if (grace_pending) {
-      grace_pending = false;
-      held += SpinFor(params_.subscriber_grace).toSec();
-    }
-    if (params_.duration > 0.0 && out.t >= params_.duration - 0.5 * period) {
-      // The second factor leaves out the start (a controller's or recorder's connection, the
-      // first period's wait): what a closed loop sustains.
-      ROS_INFO("flex3rpr_node: reached the duration %g s (real-time factor %.3g; %.3g from the end of "
-               "the first period)",
-               out.t, out.t / info_.wall_time, (out.t - first_period_t) / std::max(after - first_period_wall, 1e-9));
-      break;
-    }
-    if (!control_.paused) {  // pace to the wall clock
-      const double ahead = due - wall();
-      if (ahead > 0.0) ros::WallDuration(ahead).sleep();
-    }
+    if (!RunPeriod(period, now, &loop, &exit_code)) break;
   }
   if (grace) SpinFor(params_.subscriber_grace);  // the subscribers take the last messages
   return exit_code;

@@ -33,6 +33,26 @@ class SimNode {
   static constexpr double kPausedPublishSeconds = 0.5;  // wall s between outputs while paused
   static constexpr double kDiagnosticsSeconds = 1.0;     // wall s between /diagnostics
 
+  // What Run keeps from one pass of its loop to the next.
+  struct RunLoop {
+    bool grace_pending = false;  // the ~subscriber_grace hold after the first period is to come
+    double start = 0.0;          // wall s when the loop began
+    double held = 0.0;           // wall s spent in the grace holds, not the simulation's
+    double first_period_wall = -1.0, first_period_t = 0.0;
+    bool was_running = false;    // the pacer is anchored when a run starts
+    double last_paused_output = -1e9, last_diagnostics = -1e9;
+    // Wall s without the grace holds: what the pacer and the intervals measure.
+    double Wall() const { return ros::WallTime::now().toSec() - held; }
+  };
+
+  // Run's parts: waiting for ~wait_for_subscribers (false when they do not come), ~reset, the
+  // periodic /diagnostics, a pass while paused, and one period of a running simulation (false
+  // when the run ends).
+  bool WaitForSubscribers();
+  void Restart(RunLoop* loop);
+  void PublishDiagnosticsWhenDue(double now, RunLoop* loop);
+  void IdlePaused(double now, RunLoop* loop);
+  bool RunPeriod(double period, double now, RunLoop* loop, int* exit_code);
   bool Step(double period);
   // One period: Step, then what follows every period (stroke check, publishing). False when the
   // integration stopped (the node then pauses, or ends a scripted run).
