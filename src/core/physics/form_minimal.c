@@ -279,6 +279,164 @@ static void minus_dependent_solve(const f3r_data* d, const double* X, int nz, do
   }
 }
 
+/* The Jacobian's products, column-major, in ws->jac_work (cleared per evaluation) and ws->dQ. */
+typedef struct {
+  double* Z;   /* nq x nq: d(M a)/dq + dh/dq + dk/dq - dQ/dq - d(G^T lambda)/dq */
+  double* H;   /* nq x nq: dh/dv - dQ/dv */
+  double* Gvq; /* 6 x nq: d(G v)/dq */
+  double* Caq; /* 6 x nq: d(G a)/dq + dgamma/dq */
+  double* gv;  /* 6 x nq: dgamma/dv */
+  double* Bd;  /* 6 x nz: B's dependent rows */
+  double* Vz;  /* nq x nz */
+  double* Az;  /* nq x nz */
+  double* Au;  /* nq x nz */
+  double* T;   /* nq x nz */
+  double* S6;  /* 6 x nz */
+  double* Qq;  /* nq x nq: dQ/dq */
+  double* Qv;  /* nq x nq: dQ/dv */
+} jacobian_products;
+
+static jacobian_products jacobian_products_in(f3r_workspace* ws, int nq, int nz) {
+  jacobian_products p;
+  p.Z = ws->jac_work;
+  p.H = p.Z + (size_t)nq * nq;
+  p.Gvq = p.H + (size_t)nq * nq;
+  p.Caq = p.Gvq + 6 * nq;
+  p.gv = p.Caq + 6 * nq;
+  p.Bd = p.gv + 6 * nq;
+  p.Vz = p.Bd + 6 * nz;
+  p.Az = p.Vz + (size_t)nq * nz;
+  p.Au = p.Az + (size_t)nq * nz;
+  p.T = p.Au + (size_t)nq * nz;
+  p.S6 = p.T + (size_t)nq * nz;
+  p.Qq = ws->dQ;
+  p.Qv = ws->dQ + (size_t)nq * nq;
+  return p;
+}
+
+/* Z, H, dQ/dq, dQ/dv and the constraints' derivatives at the state the residual left in ws,
+ * with the loop forces lambda held. */
+static void force_derivatives(const f3r_model* m, f3r_workspace* ws, const jacobian_products* p) {
+  const int nq = m->nq;
+  const f3r_data* d = &ws->data;
+  const double *q = ws->q, *v = ws->v, *a = d->a;
+  double *Z = p->Z, *H = p->H, *Qq = p->Qq, *Qv = p->Qv;
+  memset(ws->jac_work, 0, (2 * (size_t)nq * nq + 18 * (size_t)nq) * sizeof(double));
+  memset(ws->dQ, 0, 2 * (size_t)nq * nq * sizeof(double));
+  for (int e = 0; e < m->n_effects; ++e) {
+    if (m->effects[e]->add_dq) m->effects[e]->add_dq(m, q, v, d, 1.0, Qq, nq);
+    if (m->effects[e]->add_dv) m->effects[e]->add_dv(m, q, v, 1.0, Qv, nq);
+  }
+  f3r_add_mass_times_dq(m, q, a, 1.0, Z, nq);
+  f3r_add_velocity_forces_dq(m, q, v, 1.0, Z, nq);
+  f3r_add_elastic_forces_dq(m, 1.0, Z, nq);
+  f3r_data_add_constraint_transpose_times_dq(m, d, d->lambda, -1.0, Z, nq);
+  f3r_data_add_velocity_forces_dv(m, d, q, 1.0, H, nq);
+  for (size_t k = 0; k < (size_t)nq * nq; ++k) Z[k] -= Qq[k], H[k] -= Qv[k];
+  f3r_data_add_constraint_times_dq(m, d, v, 1.0, p->Gvq, 6);
+  f3r_data_add_constraint_times_dq(m, d, a, 1.0, p->Caq, 6);
+  f3r_data_add_constraint_bias_dq(m, d, v, 1.0, p->Caq, 6);
+  f3r_data_add_constraint_bias_dv(m, d, v, 1.0, p->gv, 6);
+}
+
+/* B's dependent rows (6 x nz): G_d^{-1} applied to -G_z's columns. */
+static void dependent_rows_of_B(const f3r_model* m, const f3r_data* d, int nz, double* Bd) {
+  double G[F3R_NCON * F3R_MAX_Q] = {0};
+  f3r_data_add_constraint_jacobian(m, d, -1.0, G, F3R_NCON);
+  minus_dependent_solve(d, G + F3R_NCON * F3R_Q_INDEPENDENT, nz, Bd);
+  for (size_t k = 0; k < 6 * (size_t)nz; ++k) Bd[k] = -Bd[k];
+}
+
+/* The legs' rows of out (nq x nz) from S6 (6 x nz). */
+static void set_leg_rows(const double* S6, int nq, int nz, double* out) {
+  for (int j = 0; j < nz; ++j)
+    for (int c = 0; c < F3R_Q_LEG_JOINTS; ++c) out[c + nq * j] = S6[c + 6 * j];
+}
+
+/* V_z, A_u, A_z: only their legs' rows are nonzero. */
+static void dependent_rates(const f3r_data* d, int nq, int nz, const jacobian_products* p) {
+  const double *Bd = p->Bd, *gv = p->gv, *Vz = p->Vz;
+  double* S6 = p->S6;
+  memset(p->Vz, 0, 3 * (size_t)nq * nz * sizeof(double));
+  times_B(p->Gvq, 6, Bd, nz, S6);
+  minus_dependent_solve(d, S6, nz, S6);
+  set_leg_rows(S6, nq, nz, p->Vz);
+  times_B(gv, 6, Bd, nz, S6);
+  minus_dependent_solve(d, S6, nz, S6);
+  set_leg_rows(S6, nq, nz, p->Au);
+  times_B(p->Caq, 6, Bd, nz, S6);
+  for (int j = 0; j < nz; ++j) /* + dgamma/dv V_z */
+    for (int r = 0; r < 6; ++r)
+      for (int c = 0; c < F3R_Q_LEG_JOINTS; ++c) S6[r + 6 * j] += gv[r + 6 * c] * Vz[c + nq * j];
+  minus_dependent_solve(d, S6, nz, S6);
+  set_leg_rows(S6, nq, nz, p->Az);
+}
+
+/* The reduced equations' rows in z and u: dF_u/dz = B^T (Z B + H V_z + M A_z) and
+ * dF_u/du = B^T (H B + M A_u), added into J. */
+static void add_force_blocks(const f3r_model* m, const f3r_data* d, const jacobian_products* p,
+                             double* J, int ld) {
+  const int nq = m->nq, nz = m->n_independent;
+  const double *H = p->H, *Bd = p->Bd, *Vz = p->Vz;
+  double* T = p->T;
+  times_B(p->Z, nq, Bd, nz, T);
+  double Mx[F3R_MAX_Q];
+  for (int j = 0; j < nz; ++j) {
+    for (int r = 0; r < nq; ++r)
+      for (int c = 0; c < F3R_Q_LEG_JOINTS; ++c) T[r + nq * j] += H[r + nq * c] * Vz[c + nq * j];
+    f3r_data_mass_times(m, d, p->Az + (size_t)nq * j, Mx);
+    for (int r = 0; r < nq; ++r) T[r + nq * j] += Mx[r];
+  }
+  add_B_transpose_times(Bd, T, nq, nz, 1.0, &F3R_AT(J, ld, nz, 0), ld);
+  times_B(H, nq, Bd, nz, T);
+  for (int j = 0; j < nz; ++j) {
+    f3r_data_mass_times(m, d, p->Au + (size_t)nq * j, Mx);
+    for (int r = 0; r < nq; ++r) T[r + nq * j] += Mx[r];
+  }
+  add_B_transpose_times(Bd, T, nq, nz, 1.0, &F3R_AT(J, ld, nz, nz), ld);
+}
+
+/* cj dF/dy' for z (identity), u (B^T M B) and the lag states (tau, with their own 1), and
+ * F_z = z' - u; the lag states enter R_rho with -1 and F_W with -rho'. */
+static void add_rate_and_lag_blocks(const f3r_model* m, f3r_workspace* ws, double cj,
+                                    const double* Bd, int w_at, double* J, int ld) {
+  const int nz = m->n_independent, lag_at = 2 * nz;
+  const double* v = ws->v;
+  for (int j = 0; j < nz; ++j) {
+    F3R_AT(J, ld, j, j) += cj;
+    F3R_AT(J, ld, j, nz + j) -= 1.0;
+  }
+  reduced_mass_blocks(m, ws);
+  add_reduced_mass(m, ws, cj, &F3R_AT(J, ld, nz, nz), ld);
+  for (int i = 0; i < m->n_lag; ++i) {
+    F3R_AT(J, ld, lag_at + i, lag_at + i) += 1.0 + cj * m->lag_time_constant;
+    for (int r = 0; r < nz; ++r) F3R_AT(J, ld, nz + r, lag_at + i) -= Bd[F3R_Q_RHO + i + 6 * r];
+    F3R_AT(J, ld, w_at, lag_at + i) -= v[F3R_Q_RHO + i];
+  }
+}
+
+/* The work row F_W = W' - Q . v: dF_W/dz = -(v^T dQ/dq B + (v^T dQ/dv + Q^T) V_z),
+ * dF_W/du = -(v^T dQ/dv + Q^T) B, dF_W/dW' = 1. */
+static void add_work_row(const f3r_model* m, const f3r_workspace* ws, double cj,
+                         const jacobian_products* p, int w_at, double* J, int ld) {
+  const int nq = m->nq, nz = m->n_independent;
+  const double *v = ws->v, *Qq = p->Qq, *Qv = p->Qv, *Bd = p->Bd, *Vz = p->Vz;
+  double wq[F3R_MAX_Q], wv[F3R_MAX_Q]; /* v^T dQ/dq and v^T dQ/dv + Q^T, as rows */
+  for (int c = 0; c < nq; ++c) {
+    double sq = 0.0, sv = ws->data.Q[c];
+    for (int r = 0; r < nq; ++r) sq += v[r] * Qq[r + nq * c], sv += v[r] * Qv[r + nq * c];
+    wq[c] = sq, wv[c] = sv;
+  }
+  for (int j = 0; j < nz; ++j) {
+    double dz = wq[F3R_Q_INDEPENDENT + j], du = wv[F3R_Q_INDEPENDENT + j];
+    for (int c = 0; c < F3R_Q_LEG_JOINTS; ++c)
+      dz += wq[c] * Bd[c + 6 * j] + wv[c] * Vz[c + nq * j], du += wv[c] * Bd[c + 6 * j];
+    F3R_AT(J, ld, w_at, j) -= dz;
+    F3R_AT(J, ld, w_at, nz + j) -= du;
+  }
+  F3R_AT(J, ld, w_at, w_at) += cj;
+}
+
 /* The analytic Jacobian of the minimal residual. With the loop forces lambda held, the reduced
  * equations vary as dF_u = B^T (dR - d(G^T lambda)/dq dq), R = M a + h + k - Q, and the loop
  * closure gives dq/dz = B, dv/dz = V_z, dv/du = B, da/dz = A_z, da/du = A_u, da/du' = B, whose
@@ -293,108 +451,15 @@ f3r_status f3r_minimal_jacobian(const f3r_model* m, double t, double cj, const d
                                 const double* yp, const double* held, double* J, int ld,
                                 f3r_workspace* ws) {
   const int nq = m->nq, nz = m->n_independent, ny = f3r_state_size(m, F3R_FORMULATION_MINIMAL);
-  const int lag_at = 2 * nz, w_at = ny - 1;
+  const int w_at = ny - 1;
   f3r_status st = f3r_minimal_residual(m, t, y, yp, held, ws->res_base, ws);
   if (st != F3R_OK) return st;
-  const f3r_data* d = &ws->data;
-  const double *q = ws->q, *v = ws->v, *a = d->a;
-  double* Z = ws->jac_work;             /* nq x nq */
-  double* H = Z + (size_t)nq * nq;      /* nq x nq */
-  double* Gvq = H + (size_t)nq * nq;    /* 6 x nq: d(G v)/dq */
-  double* Caq = Gvq + 6 * nq;           /* 6 x nq: d(G a)/dq + dgamma/dq */
-  double* gv = Caq + 6 * nq;            /* 6 x nq: dgamma/dv */
-  double* Bd = gv + 6 * nq;             /* 6 x nz: B's dependent rows */
-  double* Vz = Bd + 6 * nz;             /* nq x nz */
-  double* Az = Vz + (size_t)nq * nz;    /* nq x nz */
-  double* Au = Az + (size_t)nq * nz;    /* nq x nz */
-  double* T = Au + (size_t)nq * nz;     /* nq x nz */
-  double* S6 = T + (size_t)nq * nz;     /* 6 x nz */
-  double* Qq = ws->dQ;                  /* nq x nq: dQ/dq */
-  double* Qv = ws->dQ + (size_t)nq * nq;/* nq x nq: dQ/dv */
-  memset(ws->jac_work, 0, (2 * (size_t)nq * nq + 18 * (size_t)nq) * sizeof(double));
-  memset(ws->dQ, 0, 2 * (size_t)nq * nq * sizeof(double));
-  for (int e = 0; e < m->n_effects; ++e) {
-    if (m->effects[e]->add_dq) m->effects[e]->add_dq(m, q, v, d, 1.0, Qq, nq);
-    if (m->effects[e]->add_dv) m->effects[e]->add_dv(m, q, v, 1.0, Qv, nq);
-  }
-  f3r_add_mass_times_dq(m, q, a, 1.0, Z, nq);
-  f3r_add_velocity_forces_dq(m, q, v, 1.0, Z, nq);
-  f3r_add_elastic_forces_dq(m, 1.0, Z, nq);
-  f3r_data_add_constraint_transpose_times_dq(m, d, d->lambda, -1.0, Z, nq);
-  f3r_data_add_velocity_forces_dv(m, d, q, 1.0, H, nq);
-  for (size_t k = 0; k < (size_t)nq * nq; ++k) Z[k] -= Qq[k], H[k] -= Qv[k];
-  f3r_data_add_constraint_times_dq(m, d, v, 1.0, Gvq, 6);
-  f3r_data_add_constraint_times_dq(m, d, a, 1.0, Caq, 6);
-  f3r_data_add_constraint_bias_dq(m, d, v, 1.0, Caq, 6);
-  f3r_data_add_constraint_bias_dv(m, d, v, 1.0, gv, 6);
-
-  /* B's dependent rows: G_d^{-1} applied to -G_z's columns */
-  double G[F3R_NCON * F3R_MAX_Q] = {0};
-  f3r_data_add_constraint_jacobian(m, d, -1.0, G, F3R_NCON);
-  minus_dependent_solve(d, G + F3R_NCON * F3R_Q_INDEPENDENT, nz, Bd);
-  for (size_t k = 0; k < 6 * (size_t)nz; ++k) Bd[k] = -Bd[k];
-
-  /* V_z, A_u, A_z: only their legs' rows are nonzero */
-  memset(Vz, 0, 3 * (size_t)nq * nz * sizeof(double));
-  times_B(Gvq, 6, Bd, nz, S6);
-  minus_dependent_solve(d, S6, nz, S6);
-  for (int j = 0; j < nz; ++j)
-    for (int c = 0; c < F3R_Q_LEG_JOINTS; ++c) Vz[c + nq * j] = S6[c + 6 * j];
-  times_B(gv, 6, Bd, nz, S6);
-  minus_dependent_solve(d, S6, nz, S6);
-  for (int j = 0; j < nz; ++j)
-    for (int c = 0; c < F3R_Q_LEG_JOINTS; ++c) Au[c + nq * j] = S6[c + 6 * j];
-  times_B(Caq, 6, Bd, nz, S6);
-  for (int j = 0; j < nz; ++j) /* + dgamma/dv V_z */
-    for (int r = 0; r < 6; ++r)
-      for (int c = 0; c < F3R_Q_LEG_JOINTS; ++c) S6[r + 6 * j] += gv[r + 6 * c] * Vz[c + nq * j];
-  minus_dependent_solve(d, S6, nz, S6);
-  for (int j = 0; j < nz; ++j)
-    for (int c = 0; c < F3R_Q_LEG_JOINTS; ++c) Az[c + nq * j] = S6[c + 6 * j];
-
-  /* dF_u/dz = B^T (Z B + H V_z + M A_z) */
-  times_B(Z, nq, Bd, nz, T);
-  double Mx[F3R_MAX_Q];
-  for (int j = 0; j < nz; ++j) {
-    for (int r = 0; r < nq; ++r)
-      for (int c = 0; c < F3R_Q_LEG_JOINTS; ++c) T[r + nq * j] += H[r + nq * c] * Vz[c + nq * j];
-    f3r_data_mass_times(m, d, Az + (size_t)nq * j, Mx);
-    for (int r = 0; r < nq; ++r) T[r + nq * j] += Mx[r];
-  }
-  add_B_transpose_times(Bd, T, nq, nz, 1.0, &F3R_AT(J, ld, nz, 0), ld);
-  /* dF_u/du = B^T (H B + M A_u) */
-  times_B(H, nq, Bd, nz, T);
-  for (int j = 0; j < nz; ++j) {
-    f3r_data_mass_times(m, d, Au + (size_t)nq * j, Mx);
-    for (int r = 0; r < nq; ++r) T[r + nq * j] += Mx[r];
-  }
-  add_B_transpose_times(Bd, T, nq, nz, 1.0, &F3R_AT(J, ld, nz, nz), ld);
-  /* cj dF/dy': identity for z and W, B^T M B for u, tau for the lag states; F_z = z' - u */
-  for (int j = 0; j < nz; ++j) {
-    F3R_AT(J, ld, j, j) += cj;
-    F3R_AT(J, ld, j, nz + j) -= 1.0;
-  }
-  reduced_mass_blocks(m, ws);
-  add_reduced_mass(m, ws, cj, &F3R_AT(J, ld, nz, nz), ld);
-  for (int i = 0; i < m->n_lag; ++i) {
-    F3R_AT(J, ld, lag_at + i, lag_at + i) += 1.0 + cj * m->lag_time_constant;
-    for (int r = 0; r < nz; ++r) F3R_AT(J, ld, nz + r, lag_at + i) -= Bd[F3R_Q_RHO + i + 6 * r];
-    F3R_AT(J, ld, w_at, lag_at + i) -= v[F3R_Q_RHO + i];
-  }
-  /* F_W = W' - Q . v */
-  double wq[F3R_MAX_Q], wv[F3R_MAX_Q]; /* v^T dQ/dq and v^T dQ/dv + Q^T, as rows */
-  for (int c = 0; c < nq; ++c) {
-    double sq = 0.0, sv = d->Q[c];
-    for (int r = 0; r < nq; ++r) sq += v[r] * Qq[r + nq * c], sv += v[r] * Qv[r + nq * c];
-    wq[c] = sq, wv[c] = sv;
-  }
-  for (int j = 0; j < nz; ++j) {
-    double dz = wq[F3R_Q_INDEPENDENT + j], du = wv[F3R_Q_INDEPENDENT + j];
-    for (int c = 0; c < F3R_Q_LEG_JOINTS; ++c)
-      dz += wq[c] * Bd[c + 6 * j] + wv[c] * Vz[c + nq * j], du += wv[c] * Bd[c + 6 * j];
-    F3R_AT(J, ld, w_at, j) -= dz;
-    F3R_AT(J, ld, w_at, nz + j) -= du;
-  }
-  F3R_AT(J, ld, w_at, w_at) += cj;
+  const jacobian_products p = jacobian_products_in(ws, nq, nz);
+  force_derivatives(m, ws, &p);
+  dependent_rows_of_B(m, &ws->data, nz, p.Bd);
+  dependent_rates(&ws->data, nq, nz, &p);
+  add_force_blocks(m, &ws->data, &p, J, ld);
+  add_rate_and_lag_blocks(m, ws, cj, p.Bd, w_at, J, ld);
+  add_work_row(m, ws, cj, &p, w_at, J, ld);
   return F3R_OK;
 }
