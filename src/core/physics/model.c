@@ -30,25 +30,10 @@ static void collect_breakpoints(f3r_model* m) {
   m->n_breakpoints = unique;
 }
 
-f3r_status f3r_model_create(const f3r_scene* source, f3r_model** out, f3r_error* err) {
-  if (!source || !out) return f3r_error_set(err, F3R_ERR_ARGUMENT, "f3r_model_create: NULL argument");
-  *out = NULL;
-  f3r_model* m = malloc(sizeof *m);
-  if (!m) return f3r_error_set(err, F3R_ERR_MEMORY, "f3r_model_create: out of memory");
-  /* The scene first, then everything after it cleared but the breakpoints' room (written up to
-   * n_breakpoints): the same as calloc and a copy for everything read, without writing the
-   * tables' and the breakpoints' unused 220 kB. */
-  f3r_scene_copy(&m->scene, source);
-  const size_t points = offsetof(f3r_model, breakpoints), points_end = points + sizeof m->breakpoints;
-  memset((char*)m + sizeof m->scene, 0, points - sizeof m->scene);
-  memset((char*)m + points_end, 0, sizeof *m - points_end);
-  const f3r_scene* scene = &m->scene; /* the model's own copy: what it is built from */
-  f3r_status st = f3r_scene_validate(scene, err);
-  if (st != F3R_OK) {
-    free(m);
-    return st;
-  }
-
+/* The bodies: joint and platform geometry, the links' and cylinders' masses and inertias, the
+ * platform's with its payload, and the effects' constants. */
+static void fill_bodies(f3r_model* m) {
+  const f3r_scene* scene = &m->scene;
   const double base_radius = scene->base_side / sqrt(3.0);
   m->platform_radius = scene->platform_side / sqrt(3.0);
   for (int i = 0; i < 3; ++i) {
@@ -82,37 +67,40 @@ f3r_status f3r_model_create(const f3r_scene* source, f3r_model** out, f3r_error*
   m->stroke_max = scene->stroke_max;
   m->restitution = scene->restitution;
   m->exact_kinematics = scene->exact_kinematics;
+}
 
-  /* Mode counts are numbers here: `modes: auto`, or none under an accuracy request, is the
-   * accuracy knob's to resolve (f3r_accuracy_resolve, above the model), so that building a model
-   * never runs one. */
-  int open_modes[3];
+/* Mode counts are numbers here: `modes: auto`, or none under an accuracy request, is the
+ * accuracy knob's to resolve (f3r_accuracy_resolve, above the model), so that building a model
+ * never runs one. */
+static f3r_status check_modes_resolved(const f3r_scene* scene, f3r_error* err) {
   for (int i = 0; i < 3; ++i) {
     const f3r_link_scene* L = &scene->links[i];
-    open_modes[i] = L->model == F3R_LINK_RIGID ? 0 : L->modes;
-    if (L->model != F3R_LINK_RIGID && (L->modes == F3R_MODES_AUTO || L->modes == 0)) {
-      free(m);
+    if (L->model != F3R_LINK_RIGID && (L->modes == F3R_MODES_AUTO || L->modes == 0))
       return f3r_error_set(err, F3R_ERR_SCENE,
                            "links[%d].modes: left open (auto, or none under an accuracy request): "
                            "resolve it with f3r_accuracy_resolve before building the model", i);
-    }
   }
+  return F3R_OK;
+}
+
+/* The coordinate layout (each link's modal coordinates after the 9 rigid ones: m->nq) and each
+ * flexible link's modal constants, stiffnesses and clamped frequencies. */
+static f3r_status fill_links(f3r_model* m, f3r_error* err) {
+  const f3r_scene* scene = &m->scene;
+  const double l = m->link_length;
   int next = 9;
   const double EI_l3 = m->bending_stiffness / (l * l * l);
   for (int i = 0; i < 3; ++i) {
     f3r_link_params* lp = &m->link[i];
     lp->model = scene->links[i].model;
-    lp->modes = open_modes[i];
+    lp->modes = lp->model == F3R_LINK_RIGID ? 0 : scene->links[i].modes;
     lp->eta_index = next;
     next += lp->modes;
     if (!lp->modes) continue;
     if (f3r_beam_mode_constants((f3r_beam_end)lp->model, lp->modes, lp->alpha, lp->mean,
-                                lp->first_moment, lp->tip)) {
-      const int modes = lp->modes;
-      free(m);
+                                lp->first_moment, lp->tip))
       return f3r_error_set(err, F3R_ERR_SCENE, "links[%d].modes: %d is out of range 1..%d", i,
-                           modes, F3R_MAX_MODES);
-    }
+                           lp->modes, F3R_MAX_MODES);
     for (int j = 0; j < lp->modes; ++j) {
       const double a2 = lp->alpha[j] * lp->alpha[j];
       lp->stiffness[j] = EI_l3 * a2 * a2; /* int psi_j''^2 = alpha_j^4 (beam_modes.h) */
@@ -120,11 +108,13 @@ f3r_status f3r_model_create(const f3r_scene* source, f3r_model** out, f3r_error*
     }
   }
   m->nq = next;
-  collect_breakpoints(m);
-  f3r_model_compile_effects(m);
-  m->n_independent = next - 6;
+  return F3R_OK;
+}
 
-  /* The branch of each leg's direction is fixed by the scene's initial pose. */
+/* The branch of each leg's direction is fixed by the scene's initial pose; the loop closure then
+ * checks that the legs reach it. */
+static f3r_status close_initial_pose(f3r_model* m, f3r_error* err) {
+  const f3r_scene* scene = &m->scene;
   double q[F3R_MAX_Q] = {0};
   for (int k = 0; k < 3; ++k) q[F3R_Q_X + k] = scene->platform_pose0[k];
   for (int i = 0; i < 3; ++i) {
@@ -135,10 +125,39 @@ f3r_status f3r_model_create(const f3r_scene* source, f3r_model** out, f3r_error*
   }
   for (int i = 0; i < 3; ++i)
     for (int j = 0; j < m->link[i].modes; ++j) q[m->link[i].eta_index + j] = scene->links[i].eta0[j];
-  if (f3r_model_close_loops(m, q) != F3R_OK) {
-    st = f3r_error_set(err, F3R_ERR_SCENE, "initial.platform_pose: (%g, %g, %g) cannot be reached by the legs",
-                       scene->platform_pose0[0], scene->platform_pose0[1], scene->platform_pose0[2]);
-    free(m); /* after the message: scene is the model's copy */
+  if (f3r_model_close_loops(m, q) != F3R_OK)
+    return f3r_error_set(err, F3R_ERR_SCENE, "initial.platform_pose: (%g, %g, %g) cannot be reached by the legs",
+                         scene->platform_pose0[0], scene->platform_pose0[1], scene->platform_pose0[2]);
+  return F3R_OK;
+}
+
+f3r_status f3r_model_create(const f3r_scene* source, f3r_model** out, f3r_error* err) {
+  if (!source || !out) return f3r_error_set(err, F3R_ERR_ARGUMENT, "f3r_model_create: NULL argument");
+  *out = NULL;
+  f3r_model* m = malloc(sizeof *m);
+  if (!m) return f3r_error_set(err, F3R_ERR_MEMORY, "f3r_model_create: out of memory");
+  /* The scene first, then everything after it cleared but the breakpoints' room (written up to
+   * n_breakpoints): the same as calloc and a copy for everything read, without writing the
+   * tables' and the breakpoints' unused 220 kB. */
+  f3r_scene_copy(&m->scene, source);
+  const size_t points = offsetof(f3r_model, breakpoints), points_end = points + sizeof m->breakpoints;
+  memset((char*)m + sizeof m->scene, 0, points - sizeof m->scene);
+  memset((char*)m + points_end, 0, sizeof *m - points_end);
+  /* the model's own copy is what it is built from, and what the messages quote: free m after */
+  f3r_status st = f3r_scene_validate(&m->scene, err);
+  if (st == F3R_OK) {
+    fill_bodies(m);
+    st = check_modes_resolved(&m->scene, err);
+  }
+  if (st == F3R_OK) st = fill_links(m, err);
+  if (st == F3R_OK) {
+    collect_breakpoints(m);
+    f3r_model_compile_effects(m);
+    m->n_independent = m->nq - 6;
+    st = close_initial_pose(m, err);
+  }
+  if (st != F3R_OK) {
+    free(m);
     return st;
   }
   *out = m;
