@@ -234,8 +234,8 @@ static int table_known(f3r_integrator integrator, const char* name) {
   return 0;
 }
 
-f3r_status f3r_scene_validate(const f3r_scene* s, f3r_error* err) {
-  char name[64];
+/* The geometry and the bodies' dimensions and densities. */
+static f3r_status validate_bodies(const f3r_scene* s, f3r_error* err) {
   CHECK_POSITIVE("geometry.base_side", s->base_side);
   CHECK_POSITIVE("geometry.platform_side", s->platform_side);
   if (!(s->platform_side < s->base_side))
@@ -255,39 +255,50 @@ f3r_status f3r_scene_validate(const f3r_scene* s, f3r_error* err) {
                            "%g must be smaller than outer_diameter %g", s->cylinder_inner_diameter,
                            s->cylinder_outer_diameter);
   CHECK_POSITIVE("cylinder.density", s->cylinder_density);
-  for (int i = 0; i < 3; ++i) {
-    const f3r_link_scene* L = &s->links[i];
-    snprintf(name, sizeof name, "links[%d].model", i);
-    if (L->model != F3R_LINK_RIGID && L->model != F3R_LINK_FIXED_PINNED &&
-        L->model != F3R_LINK_FIXED_FREE)
-      return f3r_scene_error(err, name, NULL, "%d is not one of rigid, fixed_pinned, fixed_free",
-                             (int)L->model);
-    snprintf(name, sizeof name, "links[%d].modes", i);
-    if (L->model == F3R_LINK_RIGID) {
-      if (L->modes != 0)
-        return f3r_scene_error(err, name, NULL, "%d given for a rigid link, which has no modes",
-                               L->modes);
-    } else if (L->modes == F3R_MODES_AUTO) {
-      snprintf(name, sizeof name, "links[%d].auto_tolerance", i);
-      CHECK_RANGE(name, L->auto_tolerance, 1e-12, 0.5);
-    } else if (L->modes == 0 && s->accuracy > 0.0) {
-      /* left to the accuracy knob */
-    } else if (L->modes < 1 || L->modes > F3R_MAX_MODES) {
-      return f3r_scene_error(err, name, NULL, "%d is out of range 1..%d", L->modes, F3R_MAX_MODES);
-    }
-    for (int j = 0; j < F3R_MAX_MODES; ++j) {
-      CHECK_RANGE_AT(L->eta0[j], -0.1, 0.1, "links[%d].initial_deflection[%d]", i, j);
-      CHECK_RANGE_AT(L->eta_rate0[j], -100.0, 100.0, "links[%d].initial_rate[%d]", i, j);
-      const int open = L->modes == F3R_MODES_AUTO || (L->modes == 0 && L->model != F3R_LINK_RIGID);
-      if (!open && j >= L->modes && (L->eta0[j] != 0.0 || L->eta_rate0[j] != 0.0)) {
-        char list[64];
-        snprintf(list, sizeof list, "links[%d].initial_deflection", i);
-        snprintf(name, sizeof name, "%s[%d]", list, j);
-        return f3r_scene_error(err, name, list, "mode %d given but the link has %d modes", j + 1,
-                               L->modes);
-      }
+  return F3R_OK;
+}
+
+/* Link i's model, its mode count and its initial modal state. */
+static f3r_status validate_link(const f3r_scene* s, int i, f3r_error* err) {
+  char name[64];
+  const f3r_link_scene* L = &s->links[i];
+  snprintf(name, sizeof name, "links[%d].model", i);
+  if (L->model != F3R_LINK_RIGID && L->model != F3R_LINK_FIXED_PINNED &&
+      L->model != F3R_LINK_FIXED_FREE)
+    return f3r_scene_error(err, name, NULL, "%d is not one of rigid, fixed_pinned, fixed_free",
+                           (int)L->model);
+  snprintf(name, sizeof name, "links[%d].modes", i);
+  if (L->model == F3R_LINK_RIGID) {
+    if (L->modes != 0)
+      return f3r_scene_error(err, name, NULL, "%d given for a rigid link, which has no modes",
+                             L->modes);
+  } else if (L->modes == F3R_MODES_AUTO) {
+    snprintf(name, sizeof name, "links[%d].auto_tolerance", i);
+    CHECK_RANGE(name, L->auto_tolerance, 1e-12, 0.5);
+  } else if (L->modes == 0 && s->accuracy > 0.0) {
+    /* left to the accuracy knob */
+  } else if (L->modes < 1 || L->modes > F3R_MAX_MODES) {
+    return f3r_scene_error(err, name, NULL, "%d is out of range 1..%d", L->modes, F3R_MAX_MODES);
+  }
+  for (int j = 0; j < F3R_MAX_MODES; ++j) {
+    CHECK_RANGE_AT(L->eta0[j], -0.1, 0.1, "links[%d].initial_deflection[%d]", i, j);
+    CHECK_RANGE_AT(L->eta_rate0[j], -100.0, 100.0, "links[%d].initial_rate[%d]", i, j);
+    const int open = L->modes == F3R_MODES_AUTO || (L->modes == 0 && L->model != F3R_LINK_RIGID);
+    if (!open && j >= L->modes && (L->eta0[j] != 0.0 || L->eta_rate0[j] != 0.0)) {
+      char list[64];
+      snprintf(list, sizeof list, "links[%d].initial_deflection", i);
+      snprintf(name, sizeof name, "%s[%d]", list, j);
+      return f3r_scene_error(err, name, list, "mode %d given but the link has %d modes", j + 1,
+                             L->modes);
     }
   }
+  return F3R_OK;
+}
+
+/* The effects (gravity, friction, damping, actuator lag, end stops, payload) and the initial
+ * platform pose and velocity. */
+static f3r_status validate_effects_and_pose(const f3r_scene* s, f3r_error* err) {
+  char name[64];
   for (int k = 0; k < 3; ++k) {
     CHECK_RANGE_AT(s->gravity[k], -1e3, 1e3, "effects.gravity[%d]", k);
     CHECK_RANGE_AT(s->friction_prismatic[k], 0.0, 1e6, "effects.joint_friction.prismatic[%d]", k);
@@ -313,6 +324,12 @@ f3r_status f3r_scene_validate(const f3r_scene* s, f3r_error* err) {
     CHECK_RANGE_AT(s->platform_pose0[k], k < 2 ? -1.0 : -1e3, k < 2 ? 1.0 : 1e3, "initial.platform_pose[%d]", k);
     CHECK_RANGE_AT(s->platform_velocity0[k], -1e3, 1e3, "initial.platform_velocity[%d]", k);
   }
+  return F3R_OK;
+}
+
+/* Every scripted input: a known kind, finite parameters and a well-formed shape. */
+static f3r_status validate_inputs(const f3r_scene* s, f3r_error* err) {
+  char name[64];
   for (int n = 0; n < F3R_RIGID_FORCES; ++n) {
     const f3r_input* in = &s->inputs[n];
     snprintf(name, sizeof name, "inputs.%s", kInputNames[n]);
@@ -324,6 +341,12 @@ f3r_status f3r_scene_validate(const f3r_scene* s, f3r_error* err) {
     f3r_status st = validate_input_shape(in, name, err);
     if (st != F3R_OK) return st;
   }
+  return F3R_OK;
+}
+
+/* The solver (formulation, integrator, Butcher table, tolerances), the accuracy request and the
+ * run's duration and output. */
+static f3r_status validate_solver_and_run(const f3r_scene* s, f3r_error* err) {
   if (s->formulation != F3R_FORMULATION_DAE && s->formulation != F3R_FORMULATION_MINIMAL)
     return f3r_scene_error(err, "solver.formulation", NULL, "%d is not one of dae, minimal",
                            (int)s->formulation);
@@ -356,4 +379,14 @@ f3r_status f3r_scene_validate(const f3r_scene* s, f3r_error* err) {
     return f3r_scene_error(err, "run.beam_points", NULL, "%d is out of range 2..101",
                            s->beam_points);
   return F3R_OK;
+}
+
+/* Section by section; the first error found is the one reported. */
+f3r_status f3r_scene_validate(const f3r_scene* s, f3r_error* err) {
+  f3r_status st = validate_bodies(s, err);
+  for (int i = 0; st == F3R_OK && i < 3; ++i) st = validate_link(s, i, err);
+  if (st == F3R_OK) st = validate_effects_and_pose(s, err);
+  if (st == F3R_OK) st = validate_inputs(s, err);
+  if (st == F3R_OK) st = validate_solver_and_run(s, err);
+  return st;
 }
