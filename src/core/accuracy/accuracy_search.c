@@ -174,15 +174,84 @@ static void measure_extent(const f3r_scene* s, f3r_mode_search* ms) {
   ms->far = ms->extent > FAR_SHARE * s->platform_side || ms->rotation > FAR_ROTATION;
 }
 
-f3r_status f3r_mode_search_init(const f3r_scene* s, unsigned chosen, f3r_mode_search* ms, f3r_error* err) {
-  memset(ms, 0, sizeof *ms);
-  double fastest = 0.0; /* sampling: the output step, fine enough for the fastest input */
+/* The first sampling: the output step, fine enough for the fastest input, and at most
+ * MAX_SAMPLES samples. */
+static void sample_for_inputs(const f3r_scene* s, f3r_mode_search* ms) {
+  double fastest = 0.0;
   for (int k = 0; k < F3R_RIGID_FORCES; ++k) fastest = fmax(fastest, f3r_input_max_frequency(&s->inputs[k]));
   double h = s->output_step;
   if (fastest > 0.0) h = fmin(h, 1.0 / (20.0 * fastest));
   if (s->duration / h > MAX_SAMPLES - 1) h = s->duration / (MAX_SAMPLES - 1);
   ms->count = (int)ceil(s->duration / h - 1e-9) + 1;
   ms->dt = s->duration / (ms->count - 1);
+}
+
+/* The reference and scratch paths at the current sampling; 0 without memory. */
+static int allocate_paths(f3r_mode_search* ms) {
+  ms->ref = malloc((size_t)ms->count * 3 * sizeof(double));
+  ms->path = malloc((size_t)ms->count * 3 * sizeof(double));
+  return ms->ref && ms->path;
+}
+
+/* Hz: the lowest elastic frequency of the linear model at the least mode counts (0: none). */
+static f3r_status first_elastic_frequency(const f3r_scene* s, const f3r_mode_search* ms,
+                                          double* first, f3r_error* err) {
+  *first = 0.0;
+  int modes[3];
+  uniform(ms, 1, modes);
+  f3r_model* model = NULL;
+  f3r_linear_model* lin = NULL;
+  f3r_status st = f3r_model_with_modes(s, modes, 0, &model, err);
+  if (st == F3R_OK) st = f3r_linearise(model, &lin, err);
+  if (st == F3R_OK) {
+    const double top = lin->omega2[lin->n - 1];
+    for (int j = 0; j < lin->n && *first == 0.0; ++j)
+      if (lin->omega2[j] > 1e-8 * top) *first = sqrt(lin->omega2[j]) / (2.0 * M_PI);
+  }
+  f3r_linear_destroy(lin);
+  f3r_model_destroy(model);
+  return st;
+}
+
+/* The second-order estimate, where the first-order path stays near the pose. Its remainder
+ * oscillates with the vibration itself, so its sampling must resolve the first elastic mode too
+ * (20 samples a period); a run too long for that is estimated as a far one. */
+static f3r_status use_second_order(const f3r_scene* s, f3r_mode_search* ms, f3r_error* err) {
+  double first;
+  f3r_status st = first_elastic_frequency(s, ms, &first, err);
+  if (st != F3R_OK) return st;
+  double fine = ms->dt;
+  if (first > 0.0) fine = fmin(fine, 1.0 / (20.0 * first));
+  const double samples = ceil(s->duration / fine - 1e-9) + 1;
+  if (samples > MAX_SAMPLES) {
+    ms->far = 1;
+    return F3R_OK;
+  }
+  if ((int)samples != ms->count) {
+    memo_clear(ms); /* paths at the old sampling */
+    ms->count = (int)samples;
+    ms->dt = s->duration / (ms->count - 1);
+    free(ms->ref);
+    free(ms->path);
+    if (!allocate_paths(ms)) return f3r_error_set(err, F3R_ERR_MEMORY, "accuracy: out of memory");
+  }
+  ms->order = 2;
+  ms->ref_r = 0; /* the first-order reference is no longer the one compared with */
+  /* Vibration can drive an unactuated platform away at second order although the first-order
+   * path stays put (free_vibration_long: 0.1 mm at first order, 4 cm at second order in 2 s);
+   * then the path leaves the pose after all. */
+  if ((st = reference_for(s, ms, 1, err)) != F3R_OK) return st;
+  measure_extent(s, ms);
+  if (ms->far) {
+    ms->order = 1;
+    ms->ref_r = 0;
+  }
+  return F3R_OK;
+}
+
+f3r_status f3r_mode_search_init(const f3r_scene* s, unsigned chosen, f3r_mode_search* ms, f3r_error* err) {
+  memset(ms, 0, sizeof *ms);
+  sample_for_inputs(s, ms);
   for (int i = 0; i < 3; ++i) {
     if (!f3r_is_flexible(s, i)) chosen &= ~(1u << i);
     ms->low[i] = lowest_modes(s, i);
@@ -198,9 +267,7 @@ f3r_status f3r_mode_search_init(const f3r_scene* s, unsigned chosen, f3r_mode_se
     ms->far = 1;
     return F3R_OK;
   }
-  ms->ref = malloc((size_t)ms->count * 3 * sizeof(double));
-  ms->path = malloc((size_t)ms->count * 3 * sizeof(double));
-  if (!ms->ref || !ms->path) {
+  if (!allocate_paths(ms)) {
     f3r_mode_search_free(ms);
     return f3r_error_set(err, F3R_ERR_MEMORY, "accuracy: out of memory");
   }
@@ -209,55 +276,7 @@ f3r_status f3r_mode_search_init(const f3r_scene* s, unsigned chosen, f3r_mode_se
   if (st != F3R_OK) return st;
   measure_extent(s, ms);
   if (ms->far) return F3R_OK;
-  /* The second-order remainder oscillates with the vibration itself, so its sampling must
-   * resolve the first elastic mode too (20 samples a period); a run too long for that is
-   * estimated as a far one. */
-  double first = 0.0;
-  {
-    int modes[3];
-    uniform(ms, 1, modes);
-    f3r_model* model = NULL;
-    f3r_linear_model* lin = NULL;
-    st = f3r_model_with_modes(s, modes, 0, &model, err);
-    if (st == F3R_OK) st = f3r_linearise(model, &lin, err);
-    if (st == F3R_OK) {
-      const double top = lin->omega2[lin->n - 1];
-      for (int j = 0; j < lin->n && first == 0.0; ++j)
-        if (lin->omega2[j] > 1e-8 * top) first = sqrt(lin->omega2[j]) / (2.0 * M_PI);
-    }
-    f3r_linear_destroy(lin);
-    f3r_model_destroy(model);
-    if (st != F3R_OK) return st;
-  }
-  double fine = ms->dt;
-  if (first > 0.0) fine = fmin(fine, 1.0 / (20.0 * first));
-  const double samples = ceil(s->duration / fine - 1e-9) + 1;
-  if (samples > MAX_SAMPLES) {
-    ms->far = 1;
-    return F3R_OK;
-  }
-  if ((int)samples != ms->count) {
-    memo_clear(ms); /* paths at the old sampling */
-    ms->count = (int)samples;
-    ms->dt = s->duration / (ms->count - 1);
-    free(ms->ref);
-    free(ms->path);
-    ms->ref = malloc((size_t)ms->count * 3 * sizeof(double));
-    ms->path = malloc((size_t)ms->count * 3 * sizeof(double));
-    if (!ms->ref || !ms->path) return f3r_error_set(err, F3R_ERR_MEMORY, "accuracy: out of memory");
-  }
-  ms->order = 2;
-  ms->ref_r = 0; /* the first-order reference is no longer the one compared with */
-  /* Vibration can drive an unactuated platform away at second order although the first-order
-   * path stays put (free_vibration_long: 0.1 mm at first order, 4 cm at second order in 2 s);
-   * then the path leaves the pose after all. */
-  if ((st = reference_for(s, ms, 1, err)) != F3R_OK) return st;
-  measure_extent(s, ms);
-  if (ms->far) {
-    ms->order = 1;
-    ms->ref_r = 0;
-  }
-  return F3R_OK;
+  return use_second_order(s, ms, err);
 }
 
 /* The fewest modes whose linear path stays within target of its reference: uniform r on the
