@@ -112,9 +112,11 @@ static void memo_clear(f3r_mode_search* ms) {
   ms->memo_used = ms->memo_next = 0;
 }
 
+/* Safe to call twice (init frees on its own failure, and its caller frees again). */
 void f3r_mode_search_free(f3r_mode_search* ms) {
   free(ms->ref);
   free(ms->path);
+  ms->ref = ms->path = NULL;
   memo_clear(ms);
 }
 
