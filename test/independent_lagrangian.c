@@ -41,8 +41,8 @@ static void deflection(const f3r_model* m, int i, const double* q, const double*
 }
 
 /* Beam point position at xi for complex-perturbed coordinates q + i h qd. */
-static void position_complex(const f3r_model* m, int i, const double* q, const double* qd,
-                             double h, double xi, double complex out[2]) {
+static void position_complex(const f3r_model* m, int i, const double* q, const double* qd, double h,
+                             double xi, double complex out[2]) {
   const double l = m->link_length;
   const double complex rho = q[i] + I * h * qd[i];
   const double complex th = q[3 + i] + I * h * qd[3 + i];
@@ -128,8 +128,10 @@ void indep_lagrange(const f3r_model* m, const double* q, const double* qd, const
     memcpy(qm, q, sizeof qm);
     qp[j] += step;
     qm[j] -= step;
-    const double dTdq = (indep_kinetic_energy(m, qp, qd) - indep_kinetic_energy(m, qm, qd)) / (2 * step);
-    const double dVdq = (indep_potential_energy(m, qp) - indep_potential_energy(m, qm)) / (2 * step);
+    const double dTdq =
+        (indep_kinetic_energy(m, qp, qd) - indep_kinetic_energy(m, qm, qd)) / (2 * step);
+    const double dVdq =
+        (indep_potential_energy(m, qp) - indep_potential_energy(m, qm)) / (2 * step);
     out[j] = dpdt - dTdq + dVdq;
   }
 }
@@ -142,7 +144,8 @@ double indep_gravity_potential(const f3r_model* m, const double* q) {
   for (int i = 0; i < 3; ++i) {
     const double c = cos(q[3 + i]), s = sin(q[3 + i]);
     const double half = m->cylinder_length / 2.0;
-    V -= m->cylinder_mass * (g[0] * (m->base_joint[i][0] + half * c) + g[1] * (m->base_joint[i][1] + half * s));
+    V -= m->cylinder_mass *
+         (g[0] * (m->base_joint[i][0] + half * c) + g[1] * (m->base_joint[i][1] + half * s));
     double integral = 0.0;
     for (int k = 0; k < PANELS * POINTS; ++k) {
       double complex r[2];

@@ -49,7 +49,9 @@ std::vector<double> LinearPath(const f3r_scene& s, double dt, int count) {
   LinearPtr lin = Linearise(m.get());
   std::vector<double> pose(3 * count);
   f3r_error err{};
-  EXPECT_EQ(f3r_linear_response(lin.get(), m.get(), dt, count, 1, pose.data(), nullptr, &err), F3R_OK) << err.message;
+  EXPECT_EQ(f3r_linear_response(lin.get(), m.get(), dt, count, 1, pose.data(), nullptr, &err),
+            F3R_OK)
+      << err.message;
   return pose;
 }
 
@@ -64,7 +66,9 @@ std::vector<double> NonlinearPath(const f3r_scene& s, double dt, int count, doub
   SimPtr sim(raw);
   std::vector<double> pose(3 * count);
   for (int k = 0; k < count; ++k) {
-    if (k) { EXPECT_EQ(f3r_sim_advance(sim.get(), k * dt, &err), F3R_OK) << err.message; }
+    if (k) {
+      EXPECT_EQ(f3r_sim_advance(sim.get(), k * dt, &err), F3R_OK) << err.message;
+    }
     const f3r_outputs* o = f3r_sim_outputs(sim.get());
     for (int c = 0; c < 3; ++c) pose[3 * k + c] = o->q[F3R_Q_X + c];
   }
@@ -75,7 +79,8 @@ std::vector<double> NonlinearPath(const f3r_scene& s, double dt, int count, doub
 f3r_scene OpenScene(const char* file) {
   f3r_scene s;
   f3r_error err{};
-  if (f3r_scene_load(ScenePath(file).c_str(), &s, &err) != F3R_OK) throw std::runtime_error(err.message);
+  if (f3r_scene_load(ScenePath(file).c_str(), &s, &err) != F3R_OK)
+    throw std::runtime_error(err.message);
   for (int i = 0; i < 3; ++i) s.explicit_settings &= ~(F3R_EXPLICIT_MODES << i);
   return s;
 }
@@ -89,7 +94,8 @@ double MaxDistance(const std::vector<double>& a, const std::vector<double>& b) {
 
 double Extent(const std::vector<double>& a) {
   double worst = 0;
-  for (size_t k = 0; k < a.size() / 3; ++k) worst = std::max(worst, std::hypot(a[3 * k] - a[0], a[3 * k + 1] - a[1]));
+  for (size_t k = 0; k < a.size() / 3; ++k)
+    worst = std::max(worst, std::hypot(a[3 * k] - a[0], a[3 * k + 1] - a[1]));
   return worst;
 }
 
@@ -112,10 +118,14 @@ TEST(Linear, ModesSolveTheGeneralizedEigenproblemAsEigenDoes) {
     for (int j = 0; j < n; ++j) EXPECT_NEAR(lin->omega2[j], eig.eigenvalues()[j], 1e-9 * top) << j;
     const Eigen::MatrixXd Phi = Mat(lin->shapes, n, n);
     EXPECT_LT((Phi.transpose() * M * Phi - Eigen::MatrixXd::Identity(n, n)).norm(), 1e-9);
-    EXPECT_LT((K * Phi - M * Phi * Eigen::VectorXd(Eigen::Map<const Eigen::VectorXd>(lin->omega2, n)).asDiagonal()).norm(),
-              1e-8 * top * M.norm());
+    EXPECT_LT(
+        (K * Phi -
+         M * Phi * Eigen::VectorXd(Eigen::Map<const Eigen::VectorXd>(lin->omega2, n)).asDiagonal())
+            .norm(),
+        1e-8 * top * M.norm());
     const Eigen::MatrixXd D = Mat(lin->damping, n, n);
-    for (int j = 0; j < n; ++j) EXPECT_NEAR(lin->modal_damping[j], Phi.col(j).dot(D * Phi.col(j)), 1e-9 * (1 + D.norm()));
+    for (int j = 0; j < n; ++j)
+      EXPECT_NEAR(lin->modal_damping[j], Phi.col(j).dot(D * Phi.col(j)), 1e-9 * (1 + D.norm()));
   }
 }
 
@@ -134,8 +144,10 @@ TEST(Linear, ResponseEqualsDirectIntegrationOfTheLinearOde) {
   const double dt = s.duration / (count - 1);
   std::vector<double> pose(3 * count);
   f3r_error err{};
-  ASSERT_EQ(f3r_linear_response(lin.get(), m.get(), dt, count, 1, pose.data(), nullptr, &err), F3R_OK);
-  const Eigen::MatrixXd M = Mat(lin->mass, n, n), K = Mat(lin->stiffness, n, n), U = Mat(lin->input, n, F3R_RIGID_FORCES);
+  ASSERT_EQ(f3r_linear_response(lin.get(), m.get(), dt, count, 1, pose.data(), nullptr, &err),
+            F3R_OK);
+  const Eigen::MatrixXd M = Mat(lin->mass, n, n), K = Mat(lin->stiffness, n, n),
+                        U = Mat(lin->input, n, F3R_RIGID_FORCES);
   const Eigen::VectorXd f0 = Eigen::Map<const Eigen::VectorXd>(lin->static_force, n);
   const Eigen::LLT<Eigen::MatrixXd> Mi(M);
   auto force = [&](double t) {  // the inputs, linear between samples as the response takes them
@@ -143,7 +155,8 @@ TEST(Linear, ResponseEqualsDirectIntegrationOfTheLinearOde) {
     const double a = (t - k * dt) / dt;
     Eigen::VectorXd u(F3R_RIGID_FORCES);
     for (int f = 0; f < F3R_RIGID_FORCES; ++f)
-      u[f] = (1 - a) * f3r_input_value(&s.inputs[f], k * dt) + a * f3r_input_value(&s.inputs[f], (k + 1) * dt);
+      u[f] = (1 - a) * f3r_input_value(&s.inputs[f], k * dt) +
+             a * f3r_input_value(&s.inputs[f], (k + 1) * dt);
     return Eigen::VectorXd(f0 + U * u);
   };
   auto rhs = [&](double t, const Eigen::VectorXd& x) {
@@ -153,8 +166,8 @@ TEST(Linear, ResponseEqualsDirectIntegrationOfTheLinearOde) {
     return d;
   };
   Eigen::VectorXd x = Eigen::VectorXd::Zero(2 * n);  // deviation from the initial pose, rates
-  x[3] = 1e-4;      // link 1, mode 1 (z index 3)
-  x[n + 1] = 1e-3;  // Y_p rate
+  x[3] = 1e-4;                                       // link 1, mode 1 (z index 3)
+  x[n + 1] = 1e-3;                                   // Y_p rate
   const int sub = 400;
   const double h = dt / sub;
   double worst = 0, scale = 0;
@@ -163,8 +176,8 @@ TEST(Linear, ResponseEqualsDirectIntegrationOfTheLinearOde) {
     scale = std::max(scale, std::hypot(x[0], x[1]));
     for (int j = 0; j < sub && k + 1 < count; ++j) {
       const double t = k * dt + j * h;
-      const Eigen::VectorXd k1 = rhs(t, x), k2 = rhs(t + h / 2, x + h / 2 * k1), k3 = rhs(t + h / 2, x + h / 2 * k2),
-                            k4 = rhs(t + h, x + h * k3);
+      const Eigen::VectorXd k1 = rhs(t, x), k2 = rhs(t + h / 2, x + h / 2 * k1),
+                            k3 = rhs(t + h / 2, x + h / 2 * k2), k4 = rhs(t + h, x + h * k3);
       x += h / 6 * (k1 + 2 * k2 + 2 * k3 + k4);
     }
   }
@@ -194,15 +207,19 @@ TEST(Linear, SmallMotionFollowsTheNonlinearSimulation) {
 TEST(Linear, SecondOrderCorrectionFollowsTheResonantDrift) {
   f3r_scene s;
   f3r_error err{};
-  ASSERT_EQ(f3r_scene_load(ScenePath("resonance_damped.yaml").c_str(), &s, &err), F3R_OK) << err.message;
+  ASSERT_EQ(f3r_scene_load(ScenePath("resonance_damped.yaml").c_str(), &s, &err), F3R_OK)
+      << err.message;
   const int count = 251;
   const double dt = s.duration / (count - 1);
   ModelPtr m = MakeModel(s);
   LinearPtr lin = Linearise(m.get());
   std::vector<double> first(3 * count), second(3 * count);
   int unreachable = -1;
-  ASSERT_EQ(f3r_linear_response(lin.get(), m.get(), dt, count, 1, first.data(), nullptr, &err), F3R_OK);
-  ASSERT_EQ(f3r_linear_response(lin.get(), m.get(), dt, count, 2, second.data(), &unreachable, &err), F3R_OK);
+  ASSERT_EQ(f3r_linear_response(lin.get(), m.get(), dt, count, 1, first.data(), nullptr, &err),
+            F3R_OK);
+  ASSERT_EQ(
+      f3r_linear_response(lin.get(), m.get(), dt, count, 2, second.data(), &unreachable, &err),
+      F3R_OK);
   EXPECT_EQ(unreachable, 0);
   const std::vector<double> nonlin = NonlinearPath(s, dt, count, 1e-9);
   const double e1 = MaxDistance(first, nonlin), e2 = MaxDistance(second, nonlin);
@@ -226,18 +243,26 @@ TEST(Linear, DifferenceResponseFollowsExactKinematicsAtSmallAmplitude) {
     LinearPtr lin = Linearise(m.get());
     std::vector<double> pose(3 * count), zero(3 * count, 0.0);
     f3r_error err{};
-    ASSERT_EQ(f3r_linear_difference_response(lin.get(), m.get(), e.get(), dt, count, pose.data(), nullptr, &err), F3R_OK)
+    ASSERT_EQ(f3r_linear_difference_response(lin.get(), m.get(), e.get(), dt, count, pose.data(),
+                                             nullptr, &err),
+              F3R_OK)
         << err.message;
     *linear = MaxDistance(pose, zero);
-    if (nonlinear) *nonlinear = MaxDistance(NonlinearPath(s, dt, count, 1e-11), NonlinearPath(exact, dt, count, 1e-11));
-    ASSERT_EQ(f3r_linear_difference_response(lin.get(), m.get(), m.get(), dt, count, pose.data(), nullptr, &err), F3R_OK);
+    if (nonlinear)
+      *nonlinear =
+          MaxDistance(NonlinearPath(s, dt, count, 1e-11), NonlinearPath(exact, dt, count, 1e-11));
+    ASSERT_EQ(f3r_linear_difference_response(lin.get(), m.get(), m.get(), dt, count, pose.data(),
+                                             nullptr, &err),
+              F3R_OK);
     EXPECT_EQ(MaxDistance(pose, zero), 0.0);
   };
   double linear = 0, nonlinear = 0, doubled = 0;
   effects(100.0, &linear, &nonlinear);
   effects(200.0, &doubled, nullptr);
-  std::printf("exact kinematics' effect: linear estimate %.4g m, nonlinear runs %.4g m; at twice the amplitude %.4g m\n",
-              linear, nonlinear, doubled);
+  std::printf(
+      "exact kinematics' effect: linear estimate %.4g m, nonlinear runs %.4g m; at twice the "
+      "amplitude %.4g m\n",
+      linear, nonlinear, doubled);
   EXPECT_GT(linear, 0.0);
   EXPECT_NEAR(linear / nonlinear, 1.0, 0.2);
   EXPECT_NEAR(doubled / linear, 4.0, 0.04);
@@ -246,14 +271,17 @@ TEST(Linear, DifferenceResponseFollowsExactKinematicsAtSmallAmplitude) {
 TEST(Accuracy, ModeSearchStopsWhereTheLinearPathIsWithinTheTarget) {
   f3r_scene s;
   f3r_error err{};
-  ASSERT_EQ(f3r_scene_load(ScenePath("resonance_damped.yaml").c_str(), &s, &err), F3R_OK) << err.message;
+  ASSERT_EQ(f3r_scene_load(ScenePath("resonance_damped.yaml").c_str(), &s, &err), F3R_OK)
+      << err.message;
   s.duration = 0.05;
   int loose[3], tight[3], evals = 0;
   double estimate = 0, extent = 0;
-  ASSERT_EQ(f3r_accuracy_modes(&s, 7u, 1e-3, loose, &estimate, &extent, &evals, &err), F3R_OK) << err.message;
+  ASSERT_EQ(f3r_accuracy_modes(&s, 7u, 1e-3, loose, &estimate, &extent, &evals, &err), F3R_OK)
+      << err.message;
   EXPECT_LE(estimate, 1e-3);
   for (int i = 0; i < 3; ++i) EXPECT_EQ(loose[i], 1);
-  ASSERT_EQ(f3r_accuracy_modes(&s, 7u, 1e-7, tight, &estimate, &extent, &evals, &err), F3R_OK) << err.message;
+  ASSERT_EQ(f3r_accuracy_modes(&s, 7u, 1e-7, tight, &estimate, &extent, &evals, &err), F3R_OK)
+      << err.message;
   EXPECT_LE(estimate, 1e-7);
   EXPECT_GT(tight[0], 1);  // link 1 carries the resonant input
   // The estimate is what it says: the second-order linear path at those modes against the same
@@ -264,7 +292,8 @@ TEST(Accuracy, ModeSearchStopsWhereTheLinearPathIsWithinTheTarget) {
   f3r_scene at = s, ref = s;
   for (int i = 0; i < 3; ++i) {
     at.links[i].modes = tight[i];
-    ref.links[i].modes = r <= 3 ? 3 * r + 3 : F3R_MAX_MODES;  // beyond 3 the search bisects against 20
+    ref.links[i].modes =
+        r <= 3 ? 3 * r + 3 : F3R_MAX_MODES;  // beyond 3 the search bisects against 20
   }
   auto second = [&](const f3r_scene& sc, double dt, int n) {
     ModelPtr mm = MakeModel(sc);
@@ -277,7 +306,8 @@ TEST(Accuracy, ModeSearchStopsWhereTheLinearPathIsWithinTheTarget) {
   const double h = std::min(s.output_step, 1.0 / (20 * 227.160707));
   const int samples = static_cast<int>(std::ceil(s.duration / h - 1e-9)) + 1;
   const double dt = s.duration / (samples - 1);
-  EXPECT_NEAR(MaxDistance(second(at, dt, samples), second(ref, dt, samples)), estimate, 1e-3 * estimate + 1e-15);
+  EXPECT_NEAR(MaxDistance(second(at, dt, samples), second(ref, dt, samples)), estimate,
+              1e-3 * estimate + 1e-15);
   (void)count;
 }
 
@@ -289,7 +319,8 @@ TEST(Accuracy, ExplicitSettingsWinAndAreReported) {
   s.duration = 0.02;
   s.rtol = 3e-6;
   s.integrator = F3R_INTEGRATOR_ERK;
-  s.explicit_settings |= F3R_EXPLICIT_RTOL | F3R_EXPLICIT_INTEGRATOR | F3R_EXPLICIT_EXACT_KINEMATICS;
+  s.explicit_settings |=
+      F3R_EXPLICIT_RTOL | F3R_EXPLICIT_INTEGRATOR | F3R_EXPLICIT_EXACT_KINEMATICS;
   f3r_accuracy_choice c;
   ASSERT_EQ(f3r_accuracy_choose(&s, 1e-5, 0, &c, &err), F3R_OK) << err.message;
   for (int i = 0; i < 3; ++i) EXPECT_EQ(c.modes[i], 3);
@@ -297,7 +328,8 @@ TEST(Accuracy, ExplicitSettingsWinAndAreReported) {
   EXPECT_EQ(c.integrator, F3R_INTEGRATOR_ERK);
   EXPECT_EQ(c.exact_kinematics, 0);
   EXPECT_NE(std::strstr(c.summary, "links[0]: 3 modes, as the scene sets"), nullptr) << c.summary;
-  EXPECT_NE(std::strstr(c.summary, "exact kinematics: off, as the scene sets"), nullptr) << c.summary;
+  EXPECT_NE(std::strstr(c.summary, "exact kinematics: off, as the scene sets"), nullptr)
+      << c.summary;
 }
 
 // A request below what the scene's own solver delivers: the choice still runs, and says plainly
@@ -344,7 +376,8 @@ TEST(Accuracy, AnUnreachableRequestIsReportedWithItsLargestPart) {
 TEST(Accuracy, ASceneAtRestNeedsNoLinearModelAndTheLoosestSolver) {
   f3r_scene s;
   f3r_error err{};
-  ASSERT_EQ(f3r_scene_load_accuracy(ScenePath("rest.yaml").c_str(), 1e-4, &s, &err), F3R_OK) << err.message;
+  ASSERT_EQ(f3r_scene_load_accuracy(ScenePath("rest.yaml").c_str(), 1e-4, &s, &err), F3R_OK)
+      << err.message;
   s.explicit_settings &= ~(7u * F3R_EXPLICIT_MODES);
   f3r_accuracy_choice c;
   ASSERT_EQ(f3r_accuracy_resolve(&s, 0, &c, &err), F3R_OK) << err.message;
@@ -352,7 +385,8 @@ TEST(Accuracy, ASceneAtRestNeedsNoLinearModelAndTheLoosestSolver) {
   for (int i = 0; i < 3; ++i) EXPECT_EQ(s.links[i].modes, 1);
   double loosest = 0;
   for (int k = 0; k < f3r_solver_relation_count; ++k)
-    if (!std::strcmp(f3r_solver_relations[k].kind, "flexible") && f3r_solver_relations[k].error <= 1e-4 / 4)
+    if (!std::strcmp(f3r_solver_relations[k].kind, "flexible") &&
+        f3r_solver_relations[k].error <= 1e-4 / 4)
       loosest = std::max(loosest, f3r_solver_relations[k].rtol);
   EXPECT_EQ(s.rtol, loosest);
 }
@@ -451,11 +485,14 @@ TEST(Accuracy, ImpactsTakeTheMostFaithfulModelAndSayWhy) {
   f3r_accuracy_choice c;
   ASSERT_EQ(f3r_accuracy_choose(&s, 1e-3, 0, &c, &err), F3R_OK) << err.message;
   for (int i = 0; i < 3; ++i)
-    if (s.links[i].model != F3R_LINK_RIGID) { EXPECT_EQ(c.modes[i], F3R_MAX_MODES) << c.summary; }
+    if (s.links[i].model != F3R_LINK_RIGID) {
+      EXPECT_EQ(c.modes[i], F3R_MAX_MODES) << c.summary;
+    }
   EXPECT_EQ(c.exact_kinematics, 1) << c.summary;
   EXPECT_LE(c.solver_error, 1e-3 / 1e5) << c.summary;
   EXPECT_EQ(c.linear_evaluations, 1) << "only the extent's reference: " << c.summary;
-  EXPECT_NE(std::strstr(c.summary, "impacts are outside the linear estimate"), nullptr) << c.summary;
+  EXPECT_NE(std::strstr(c.summary, "impacts are outside the linear estimate"), nullptr)
+      << c.summary;
   EXPECT_NE(std::strstr(c.brief, "without the impacts"), nullptr) << c.brief;
   s.end_stops = 0;
   ASSERT_EQ(f3r_accuracy_choose(&s, 1e-3, 0, &c, &err), F3R_OK) << err.message;
@@ -470,13 +507,16 @@ TEST(Accuracy, ImpactsTakeTheMostFaithfulModelAndSayWhy) {
 TEST(Accuracy, ThePilotPairRunsWhereTheLinearEstimateComesNearTheShare) {
   f3r_error err{};
   f3r_accuracy_choice c;
-  f3r_scene pinned = OpenScene("paper_sim3_fixed_pinned.yaml"), free_links = OpenScene("paper_sim3_fixed_free.yaml");
+  f3r_scene pinned = OpenScene("paper_sim3_fixed_pinned.yaml"),
+            free_links = OpenScene("paper_sim3_fixed_free.yaml");
   ASSERT_EQ(f3r_accuracy_choose(&pinned, 1e-3, 0, &c, &err), F3R_OK) << err.message;
   EXPECT_NE(std::strstr(c.summary, "not checked"), nullptr) << c.summary;
   EXPECT_EQ(c.pilot_ratio, 1.0) << c.summary;
   EXPECT_EQ(c.modes[0], 1) << c.summary;
   int linear_only[3];
-  ASSERT_EQ(f3r_accuracy_modes(&free_links, 7u, 0.5e-4, linear_only, nullptr, nullptr, nullptr, &err), F3R_OK);
+  ASSERT_EQ(
+      f3r_accuracy_modes(&free_links, 7u, 0.5e-4, linear_only, nullptr, nullptr, nullptr, &err),
+      F3R_OK);
   ASSERT_EQ(f3r_accuracy_choose(&free_links, 1e-4, 0, &c, &err), F3R_OK) << err.message;
   EXPECT_GT(c.pilot_ratio, 10.0) << c.summary;
   EXPECT_GT(c.modes[0], linear_only[0]) << c.summary;
@@ -490,7 +530,8 @@ TEST(Accuracy, ThePilotPairRunsWhereTheLinearEstimateComesNearTheShare) {
 TEST(Accuracy, ExactKinematicsIsOnWhereverTheSceneLeavesItOpen) {
   f3r_error err{};
   f3r_accuracy_choice c;
-  for (const char* file : {"paper_sim1.yaml", "paper_sim3_fixed_pinned.yaml", "resonance_damped.yaml"}) {
+  for (const char* file :
+       {"paper_sim1.yaml", "paper_sim3_fixed_pinned.yaml", "resonance_damped.yaml"}) {
     f3r_scene s = OpenScene(file);
     ASSERT_FALSE(s.explicit_settings & F3R_EXPLICIT_EXACT_KINEMATICS) << file;
     for (double request : {1e-3, 1e-5}) {
@@ -499,7 +540,9 @@ TEST(Accuracy, ExactKinematicsIsOnWhereverTheSceneLeavesItOpen) {
       EXPECT_EQ(c.kinematics_error, 0.0) << c.summary;
       EXPECT_EQ(c.kinematics_effect, 0.0) << "not estimated: " << c.summary;
       EXPECT_EQ(c.kinematics_linear, 0.0) << "not estimated: " << c.summary;
-      EXPECT_NE(std::strstr(c.summary, "exact kinematics: on: it costs no measurable CPU time"), nullptr) << c.summary;
+      EXPECT_NE(std::strstr(c.summary, "exact kinematics: on: it costs no measurable CPU time"),
+                nullptr)
+          << c.summary;
       f3r_scene applied = s;
       f3r_accuracy_apply(&c, &applied);
       EXPECT_EQ(applied.exact_kinematics, 1);
@@ -507,7 +550,8 @@ TEST(Accuracy, ExactKinematicsIsOnWhereverTheSceneLeavesItOpen) {
   }
   f3r_scene pinned = OpenScene("paper_sim3_fixed_pinned.yaml");
   ASSERT_EQ(f3r_accuracy_choose(&pinned, 1e-5, 0, &c, &err), F3R_OK) << err.message;
-  EXPECT_EQ(c.pilot, 0) << "the mode estimate is far below its share, and nothing else needs a pilot: " << c.summary;
+  EXPECT_EQ(c.pilot, 0)
+      << "the mode estimate is far below its share, and nothing else needs a pilot: " << c.summary;
   EXPECT_LE(c.estimated_error, 1e-5) << c.summary;
 }
 
@@ -518,7 +562,8 @@ TEST(Accuracy, ExactKinematicsIsOnWhereverTheSceneLeavesItOpen) {
 // as well.
 TEST(Accuracy, ExactKinematicsTheSceneTurnsOffIsEstimatedAndCounted) {
   f3r_error err{};
-  f3r_scene pinned = OpenScene("paper_sim3_fixed_pinned.yaml"), free_links = OpenScene("paper_sim3_fixed_free.yaml");
+  f3r_scene pinned = OpenScene("paper_sim3_fixed_pinned.yaml"),
+            free_links = OpenScene("paper_sim3_fixed_free.yaml");
   for (f3r_scene* s : {&pinned, &free_links}) {
     s->exact_kinematics = 0;
     s->explicit_settings |= F3R_EXPLICIT_EXACT_KINEMATICS;
@@ -530,13 +575,16 @@ TEST(Accuracy, ExactKinematicsTheSceneTurnsOffIsEstimatedAndCounted) {
   EXPECT_GT(c.kinematics_linear, 0.0) << c.summary;
   EXPECT_LT(100.0 * c.kinematics_linear, F3R_ACCURACY_KINEMATICS_SHARE * 1e-3) << c.summary;
   EXPECT_EQ(c.kinematics_error, c.kinematics_linear) << c.summary;
-  EXPECT_NE(std::strstr(c.summary, "exact kinematics: off, as the scene sets; its linear estimate"), nullptr) << c.summary;
+  EXPECT_NE(std::strstr(c.summary, "exact kinematics: off, as the scene sets; its linear estimate"),
+            nullptr)
+      << c.summary;
   ASSERT_EQ(f3r_accuracy_choose(&pinned, 1e-5, 0, &c, &err), F3R_OK) << err.message;
   EXPECT_EQ(c.pilot, 1) << c.summary;
   EXPECT_EQ(c.exact_kinematics, 0) << c.summary;
   EXPECT_GT(c.kinematics_effect, 0.0) << c.summary;
   EXPECT_EQ(c.kinematics_error, c.kinematics_effect) << c.summary;
-  EXPECT_DOUBLE_EQ(c.estimated_error, c.model_error + c.kinematics_error + c.solver_error) << c.summary;
+  EXPECT_DOUBLE_EQ(c.estimated_error, c.model_error + c.kinematics_error + c.solver_error)
+      << c.summary;
   EXPECT_NE(std::strstr(c.summary, "a pilot estimates its effect"), nullptr) << c.summary;
   ASSERT_EQ(f3r_accuracy_choose(&free_links, 1e-3, 0, &c, &err), F3R_OK) << err.message;
   EXPECT_EQ(c.pilot, 1) << c.summary;
@@ -548,7 +596,8 @@ TEST(Accuracy, ExactKinematicsTheSceneTurnsOffIsEstimatedAndCounted) {
   ASSERT_EQ(f3r_accuracy_choose(&free_links, 1e-4, 0, &c, &err), F3R_OK) << err.message;
   EXPECT_GT(c.kinematics_error, c.model_error) << c.summary;
   EXPECT_EQ(c.request_met, 0) << c.summary;
-  EXPECT_NE(std::strstr(c.summary, "the largest part is exact kinematics' effect"), nullptr) << c.summary;
+  EXPECT_NE(std::strstr(c.summary, "the largest part is exact kinematics' effect"), nullptr)
+      << c.summary;
   EXPECT_NE(std::strstr(c.summary, "the scene turns it off"), nullptr) << c.summary;
 }
 
@@ -565,7 +614,8 @@ TEST(Accuracy, ACheckThatCostsMoreThanATighterSolverIsSkipped) {
   f3r_accuracy_choice c;
   ASSERT_EQ(f3r_accuracy_choose(&s, request, 0, &c, &err), F3R_OK) << err.message;
   ASSERT_EQ(c.pilot, 0) << c.summary;  // no pilot ran for the modes or exact kinematics
-  const double budget = std::max(request - c.model_error - c.kinematics_error, F3R_ACCURACY_SOLVER_SHARE * request);
+  const double budget =
+      std::max(request - c.model_error - c.kinematics_error, F3R_ACCURACY_SOLVER_SHARE * request);
   auto cheapest = [](double limit) {
     const f3r_solver_relation* best = nullptr;
     for (int k = 0; k < f3r_solver_relation_count; ++k) {
@@ -581,11 +631,13 @@ TEST(Accuracy, ACheckThatCostsMoreThanATighterSolverIsSkipped) {
   ASSERT_NE(within, nullptr);
   ASSERT_NE(safe, nullptr);
   ASSERT_GT(within->error, 0.1 * budget) << "the relation within the budget would need no check";
-  double tight = 0.0, tight_cost = 1.0; /* the pilot's: the loosest minimal IDA within its resolution */
+  double tight = 0.0,
+         tight_cost = 1.0; /* the pilot's: the loosest minimal IDA within its resolution */
   for (int k = 0; k < f3r_solver_relation_count; ++k) {
     const f3r_solver_relation& r = f3r_solver_relations[k];
     if (!std::strcmp(r.kind, "flexible") && r.formulation == F3R_FORMULATION_MINIMAL &&
-        r.integrator == F3R_INTEGRATOR_IDA && r.error <= 0.1 * F3R_ACCURACY_MODEL_SHARE * request && r.rtol > tight) {
+        r.integrator == F3R_INTEGRATOR_IDA && r.error <= 0.1 * F3R_ACCURACY_MODEL_SHARE * request &&
+        r.rtol > tight) {
       tight = r.rtol;
       tight_cost = r.cost;
     }

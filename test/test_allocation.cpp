@@ -31,11 +31,12 @@ void* realloc(void* p, size_t n) {
 
 namespace {
 
-long AllocationsWhileStepping(const std::string& scene, f3r_formulation form, f3r_integrator integrator,
-                              long* steps) {
+long AllocationsWhileStepping(const std::string& scene, f3r_formulation form,
+                              f3r_integrator integrator, long* steps) {
   f3r_scene s;
   f3r_error err{};
-  if (f3r_scene_load(ScenePath(scene).c_str(), &s, &err) != F3R_OK) throw std::runtime_error(err.message);
+  if (f3r_scene_load(ScenePath(scene).c_str(), &s, &err) != F3R_OK)
+    throw std::runtime_error(err.message);
   s.formulation = form;
   s.integrator = integrator;
   auto m = MakeModel(s);

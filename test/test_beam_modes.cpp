@@ -79,11 +79,31 @@ class Mp {
   mpfr_ptr p() { return v_; }
   mpfr_srcptr p() const { return v_; }
   double d() const { return mpfr_get_d(v_, MPFR_RNDN); }
-  friend Mp operator+(const Mp& x, const Mp& y) { Mp r; mpfr_add(r.v_, x.v_, y.v_, MPFR_RNDN); return r; }
-  friend Mp operator-(const Mp& x, const Mp& y) { Mp r; mpfr_sub(r.v_, x.v_, y.v_, MPFR_RNDN); return r; }
-  friend Mp operator*(const Mp& x, const Mp& y) { Mp r; mpfr_mul(r.v_, x.v_, y.v_, MPFR_RNDN); return r; }
-  friend Mp operator/(const Mp& x, const Mp& y) { Mp r; mpfr_div(r.v_, x.v_, y.v_, MPFR_RNDN); return r; }
-  Mp operator-() const { Mp r; mpfr_neg(r.v_, v_, MPFR_RNDN); return r; }
+  friend Mp operator+(const Mp& x, const Mp& y) {
+    Mp r;
+    mpfr_add(r.v_, x.v_, y.v_, MPFR_RNDN);
+    return r;
+  }
+  friend Mp operator-(const Mp& x, const Mp& y) {
+    Mp r;
+    mpfr_sub(r.v_, x.v_, y.v_, MPFR_RNDN);
+    return r;
+  }
+  friend Mp operator*(const Mp& x, const Mp& y) {
+    Mp r;
+    mpfr_mul(r.v_, x.v_, y.v_, MPFR_RNDN);
+    return r;
+  }
+  friend Mp operator/(const Mp& x, const Mp& y) {
+    Mp r;
+    mpfr_div(r.v_, x.v_, y.v_, MPFR_RNDN);
+    return r;
+  }
+  Mp operator-() const {
+    Mp r;
+    mpfr_neg(r.v_, v_, MPFR_RNDN);
+    return r;
+  }
 
  private:
   mpfr_t v_;
@@ -165,9 +185,9 @@ TEST(BeamModes, NullOutputsAreAllowed) {
   f3r_beam_mode_eval(F3R_BEAM_FIXED_FREE, alpha[0], 0.5, nullptr, nullptr, nullptr);
   f3r_beam_mode_eval(F3R_BEAM_FIXED_FREE, alpha[0], 0.5, nullptr, &v, nullptr);
   EXPECT_TRUE(std::isfinite(v));
-  EXPECT_EQ(f3r_beam_modal_integrals(F3R_BEAM_FIXED_FREE, 3, nullptr, nullptr, nullptr, nullptr,
-                                     nullptr),
-            0);
+  EXPECT_EQ(
+      f3r_beam_modal_integrals(F3R_BEAM_FIXED_FREE, 3, nullptr, nullptr, nullptr, nullptr, nullptr),
+      0);
 }
 
 TEST(BeamModes, OrthonormalAtTwentyModes) {
@@ -184,9 +204,10 @@ TEST(BeamModes, OrthonormalAtTwentyModes) {
         const double expected = i == j ? scale : 0.0;  // alpha_i^4 delta_ij
         worst_k = std::max(worst_k, std::fabs(bending[i * kR + j] - expected) / scale);
       }
-    std::printf("end %d, r = %d: max|int psi_j^2 - 1| = %.2e, max|int psi_i psi_j| = %.2e, "
-                "max bending error / (alpha_i alpha_j)^2 = %.2e\n",
-                end, kR, worst_norm, worst_off, worst_k);
+    std::printf(
+        "end %d, r = %d: max|int psi_j^2 - 1| = %.2e, max|int psi_i psi_j| = %.2e, "
+        "max bending error / (alpha_i alpha_j)^2 = %.2e\n",
+        end, kR, worst_norm, worst_off, worst_k);
     EXPECT_LT(worst_norm, 1e-12) << "end " << end;
     EXPECT_LT(worst_off, 1e-12) << "end " << end;
     EXPECT_LT(worst_k, 1e-12) << "end " << end;
@@ -229,7 +250,8 @@ TEST(BeamModes, ModelConstantsMatchQuadratureAndPrintedForms) {
   }
   double alpha[1];
   EXPECT_EQ(f3r_beam_mode_constants(F3R_BEAM_FIXED_FREE, 0, alpha, nullptr, nullptr, nullptr), -1);
-  EXPECT_EQ(f3r_beam_mode_constants(F3R_BEAM_FIXED_FREE, kR + 1, alpha, nullptr, nullptr, nullptr), -1);
+  EXPECT_EQ(f3r_beam_mode_constants(F3R_BEAM_FIXED_FREE, kR + 1, alpha, nullptr, nullptr, nullptr),
+            -1);
 }
 
 TEST(BeamModes, FewerModesGiveTheLeadingBlock) {
@@ -270,7 +292,8 @@ TEST(BeamModes, BoundaryConditionsAndTip) {
         // (truncation ~ (h a)^4 a^3, rounding ~ 1e-14 a^3 for h = 0.01/a).
         const double h = 0.01 / a;
         double f[5];
-        for (int k = 0; k < 5; ++k) f3r_beam_mode_eval(end, a, 1.0 - k * h, nullptr, nullptr, &f[k]);
+        for (int k = 0; k < 5; ++k)
+          f3r_beam_mode_eval(end, a, 1.0 - k * h, nullptr, nullptr, &f[k]);
         const double d3 = (25 * f[0] - 48 * f[1] + 36 * f[2] - 16 * f[3] + 3 * f[4]) / (12 * h);
         EXPECT_NEAR(d3, 0.0, 1e-6 * a * a * a) << "no shear at the free tip, mode " << j + 1;
       }
@@ -305,13 +328,13 @@ TEST(BeamModes, RejectsBadCounts) {
   for (int bad : {-1, 0, kR + 1}) {
     EXPECT_EQ(f3r_beam_roots(F3R_BEAM_FIXED_FREE, bad, a), -1) << bad;
     EXPECT_EQ(f3r_beam_roots(F3R_BEAM_FIXED_PINNED, bad, a), -1) << bad;
-    EXPECT_EQ(f3r_beam_modal_integrals(F3R_BEAM_FIXED_PINNED, bad, a, nullptr, nullptr, nullptr,
-                                       nullptr),
-              -1)
+    EXPECT_EQ(
+        f3r_beam_modal_integrals(F3R_BEAM_FIXED_PINNED, bad, a, nullptr, nullptr, nullptr, nullptr),
+        -1)
         << bad;
-    EXPECT_EQ(f3r_beam_modal_integrals(F3R_BEAM_FIXED_FREE, bad, nullptr, nullptr, nullptr,
-                                       nullptr, a),
-              -1)
+    EXPECT_EQ(
+        f3r_beam_modal_integrals(F3R_BEAM_FIXED_FREE, bad, nullptr, nullptr, nullptr, nullptr, a),
+        -1)
         << bad;
   }
   EXPECT_EQ(f3r_gauss_legendre(0, x, w), -1);

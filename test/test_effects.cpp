@@ -23,13 +23,15 @@ void EnergyBalanceOverRun(const f3r_scene& s, int steps, double* worst, double* 
     ASSERT_EQ(f3r_sim_advance(sim.get(), k * 1e-3, &err), F3R_OK) << err.message;
     const f3r_outputs* o = f3r_sim_outputs(sim.get());
     *worst = std::max(*worst, o->energy_balance_error);
-    *scale = std::max({*scale, o->kinetic_energy + o->potential_energy, std::fabs(o->external_work)});
+    *scale =
+        std::max({*scale, o->kinetic_energy + o->potential_energy, std::fabs(o->external_work)});
     if (final_work) *final_work = o->external_work;
   }
 }
 
 f3r_scene Flexible() {
-  f3r_scene s = SceneWithLinks(F3R_LINK_FIXED_FREE, 3, F3R_LINK_FIXED_PINNED, 2, F3R_LINK_FIXED_FREE, 1);
+  f3r_scene s =
+      SceneWithLinks(F3R_LINK_FIXED_FREE, 3, F3R_LINK_FIXED_PINNED, 2, F3R_LINK_FIXED_FREE, 1);
   s.formulation = F3R_FORMULATION_DAE;
   return s;
 }
@@ -51,7 +53,9 @@ TEST(Effects, GravityIsMinusTheGradientOfAnIndependentPotential) {
     const double h = 1e-6;
     qp[j] += h;
     qm[j] -= h;
-    const double dV = (indep_gravity_potential(m.get(), qp.data()) - indep_gravity_potential(m.get(), qm.data())) / (2 * h);
+    const double dV = (indep_gravity_potential(m.get(), qp.data()) -
+                       indep_gravity_potential(m.get(), qm.data())) /
+                      (2 * h);
     EXPECT_NEAR(Q[j], -dV, 1e-7 * (1.0 + std::fabs(dV))) << "coordinate " << j;
   }
 }
@@ -69,7 +73,8 @@ TEST(Effects, DerivativesOfAllEffectsMatchFiniteDifferences) {
   const int nq = m->nq;
   std::mt19937 rng(9);
   RandomState st = MakeRandomState(m.get(), rng);
-  std::vector<double> dq((size_t)nq * nq, 0.0), dv((size_t)nq * nq, 0.0), Qp(F3R_MAX_Q), Qm(F3R_MAX_Q);
+  std::vector<double> dq((size_t)nq * nq, 0.0), dv((size_t)nq * nq, 0.0), Qp(F3R_MAX_Q),
+      Qm(F3R_MAX_Q);
   f3r_add_generalized_forces_dq(m.get(), st.q.data(), st.v.data(), 1.0, dq.data(), nq);
   f3r_add_generalized_forces_dv(m.get(), st.q.data(), st.v.data(), 1.0, dv.data(), nq);
   for (int j = 0; j < nq; ++j) {
@@ -78,11 +83,14 @@ TEST(Effects, DerivativesOfAllEffectsMatchFiniteDifferences) {
       const double h = 1e-6;
       xp[j] += h;
       xm[j] -= h;
-      f3r_generalized_forces(m.get(), 0.1, nullptr, which ? st.q.data() : xp.data(), which ? xp.data() : st.v.data(), Qp.data());
-      f3r_generalized_forces(m.get(), 0.1, nullptr, which ? st.q.data() : xm.data(), which ? xm.data() : st.v.data(), Qm.data());
+      f3r_generalized_forces(m.get(), 0.1, nullptr, which ? st.q.data() : xp.data(),
+                             which ? xp.data() : st.v.data(), Qp.data());
+      f3r_generalized_forces(m.get(), 0.1, nullptr, which ? st.q.data() : xm.data(),
+                             which ? xm.data() : st.v.data(), Qm.data());
       const auto& A = which ? dv : dq;
       for (int i = 0; i < nq; ++i)
-        EXPECT_NEAR(A[(size_t)j * nq + i], (Qp[i] - Qm[i]) / (2 * h), 1e-6 * (1 + std::fabs(A[(size_t)j * nq + i])))
+        EXPECT_NEAR(A[(size_t)j * nq + i], (Qp[i] - Qm[i]) / (2 * h),
+                    1e-6 * (1 + std::fabs(A[(size_t)j * nq + i])))
             << (which ? "dQ/dv" : "dQ/dq") << " row " << i << " column " << j;
     }
   }
@@ -105,8 +113,10 @@ std::set<int> ChangedRows(const f3r_scene& a, const f3r_scene& b) {
   }
   for (int k = 2 * nq; k < ny; ++k) y[k] = u(rng);
   WorkspacePtr wa(f3r_workspace_create(ma.get())), wb(f3r_workspace_create(mb.get()));
-  f3r_residual(ma.get(), F3R_FORMULATION_DAE, 0.01, y.data(), yp.data(), nullptr, ra.data(), wa.get());
-  f3r_residual(mb.get(), F3R_FORMULATION_DAE, 0.01, y.data(), yp.data(), nullptr, rb.data(), wb.get());
+  f3r_residual(ma.get(), F3R_FORMULATION_DAE, 0.01, y.data(), yp.data(), nullptr, ra.data(),
+               wa.get());
+  f3r_residual(mb.get(), F3R_FORMULATION_DAE, 0.01, y.data(), yp.data(), nullptr, rb.data(),
+               wb.get());
   std::set<int> rows;
   for (int k = 0; k < ny; ++k)
     if (ra[k] != rb[k]) rows.insert(k);
@@ -169,7 +179,8 @@ TEST(Effects, EverythingOffIsTheRigidModel) {
 
 TEST(Effects, EnergyBalancesWithGravityFrictionDampingAndPayload) {
   for (auto form : {F3R_FORMULATION_DAE, F3R_FORMULATION_MINIMAL}) {
-    f3r_scene s = SceneWithLinks(F3R_LINK_FIXED_FREE, 2, F3R_LINK_FIXED_FREE, 2, F3R_LINK_FIXED_FREE, 2);
+    f3r_scene s =
+        SceneWithLinks(F3R_LINK_FIXED_FREE, 2, F3R_LINK_FIXED_FREE, 2, F3R_LINK_FIXED_FREE, 2);
     s.formulation = form;
     s.gravity[1] = -9.81 * std::sin(0.2);
     s.gravity[2] = -9.81 * std::cos(0.2);
@@ -248,7 +259,8 @@ TEST(Effects, LongTablesGiveTheValueOfTheirInterval) {
     int k = 1;
     while (table.table_time[k] < at) ++k;
     if (table.table_hold) return table.table_value[k - 1];
-    const double w = (at - table.table_time[k - 1]) / (table.table_time[k] - table.table_time[k - 1]);
+    const double w =
+        (at - table.table_time[k - 1]) / (table.table_time[k] - table.table_time[k - 1]);
     return table.table_value[k - 1] + w * (table.table_value[k] - table.table_value[k - 1]);
   };
   for (int hold = 0; hold < 2; ++hold) {
@@ -258,12 +270,14 @@ TEST(Effects, LongTablesGiveTheValueOfTheirInterval) {
       const double a = table.table_time[k], b = table.table_time[k + 1];
       probes.insert(probes.end(), {a, std::nextafter(a, b), 0.5 * (a + b), std::nextafter(b, a)});
     }
-    for (double at : probes) ASSERT_EQ(f3r_input_value(&table, at), reference(at)) << "t = " << at << ", hold " << hold;
+    for (double at : probes)
+      ASSERT_EQ(f3r_input_value(&table, at), reference(at)) << "t = " << at << ", hold " << hold;
   }
 }
 
 TEST(Effects, AStepInputEqualsHeldForcesAppliedAtTheSameTime) {
-  f3r_scene scripted = SceneWithLinks(F3R_LINK_FIXED_FREE, 2, F3R_LINK_FIXED_FREE, 2, F3R_LINK_FIXED_FREE, 2);
+  f3r_scene scripted =
+      SceneWithLinks(F3R_LINK_FIXED_FREE, 2, F3R_LINK_FIXED_FREE, 2, F3R_LINK_FIXED_FREE, 2);
   scripted.inputs[0].kind = F3R_INPUT_STEP;
   scripted.inputs[0].t0 = 0.005;
   scripted.inputs[0].before = 0.0;
@@ -296,7 +310,8 @@ namespace {
 
 TEST(Effects, ActuatorLagFollowsTheFirstOrderResponse) {
   for (auto form : {F3R_FORMULATION_DAE, F3R_FORMULATION_MINIMAL}) {
-    f3r_scene s = SceneWithLinks(F3R_LINK_FIXED_FREE, 1, F3R_LINK_FIXED_FREE, 1, F3R_LINK_FIXED_FREE, 1);
+    f3r_scene s =
+        SceneWithLinks(F3R_LINK_FIXED_FREE, 1, F3R_LINK_FIXED_FREE, 1, F3R_LINK_FIXED_FREE, 1);
     s.formulation = form;
     s.actuator_lag = 0.004;
     s.inputs[0].kind = F3R_INPUT_STEP;
@@ -305,7 +320,8 @@ TEST(Effects, ActuatorLagFollowsTheFirstOrderResponse) {
     s.rtol = 1e-10;
     s.atol = 1e-12;
     auto m = MakeModel(s);
-    EXPECT_EQ(f3r_state_size(m.get(), form), form == F3R_FORMULATION_DAE ? 2 * 12 + 12 + 3 + 1 : 2 * 6 + 3 + 1);
+    EXPECT_EQ(f3r_state_size(m.get(), form),
+              form == F3R_FORMULATION_DAE ? 2 * 12 + 12 + 3 + 1 : 2 * 6 + 3 + 1);
     f3r_sim* raw = nullptr;
     f3r_error err{};
     ASSERT_EQ(f3r_sim_create(m.get(), nullptr, &raw, &err), F3R_OK) << err.message;
@@ -322,7 +338,11 @@ TEST(Effects, AllEffectsTogetherKeepTheEnergyBalance) {
   for (auto form : {F3R_FORMULATION_DAE, F3R_FORMULATION_MINIMAL}) {
     f3r_scene s;
     f3r_error err{};
-    ASSERT_EQ(f3r_scene_load((std::string(F3R_SOURCE_DIR) + "/test/scenes/all_effects.yaml").c_str(), &s, &err), F3R_OK) << err.message;
+    ASSERT_EQ(
+        f3r_scene_load((std::string(F3R_SOURCE_DIR) + "/test/scenes/all_effects.yaml").c_str(), &s,
+                       &err),
+        F3R_OK)
+        << err.message;
     s.formulation = form;
     s.rtol = 1e-10;
     s.atol = 1e-12;
@@ -356,7 +376,8 @@ double EffectiveMass(const f3r_model* m, const double* q, int leg) {
 TEST(Effects, EndStopImpactsAreLocatedAndObeyTheRestitutionLaw) {
   f3r_scene s;
   f3r_error err{};
-  ASSERT_EQ(f3r_scene_load(ScenePath("end_stop_impact.yaml").c_str(), &s, &err), F3R_OK) << err.message;
+  ASSERT_EQ(f3r_scene_load(ScenePath("end_stop_impact.yaml").c_str(), &s, &err), F3R_OK)
+      << err.message;
   s.rtol = 1e-10;
   s.atol = 1e-12;
   auto m = MakeModel(s);
@@ -382,8 +403,10 @@ TEST(Effects, EndStopImpactsAreLocatedAndObeyTheRestitutionLaw) {
     // Normal kinetic energy 1/2 m_eff rho'^2 falls to c^2 of itself; nothing else changes.
     // The record's state is the one just before the restart: recompute m_eff at the stop.
     std::vector<double> q(r.q, r.q + m->nq);
-    const double normal_before = 0.5 * EffectiveMass(m.get(), q.data(), 0) * r.rate_before * r.rate_before;
-    EXPECT_NEAR(r.kinetic_before - r.kinetic_after, (1 - c * c) * normal_before, 1e-3 * normal_before)
+    const double normal_before =
+        0.5 * EffectiveMass(m.get(), q.data(), 0) * r.rate_before * r.rate_before;
+    EXPECT_NEAR(r.kinetic_before - r.kinetic_after, (1 - c * c) * normal_before,
+                1e-3 * normal_before)
         << "t = " << r.t;
   }
   EXPECT_GE(seen, 3) << "the pulses drive piston 1 into its stops repeatedly";

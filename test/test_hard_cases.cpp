@@ -42,7 +42,8 @@ Outcome Simulate(const f3r_scene& scene, double dt, const f3r_solver_settings* s
   f3r_solver_settings set = settings ? *settings : f3r_solver_settings_from_scene(&scene);
   f3r_sim* raw = nullptr;
   f3r_error err{};
-  if (f3r_sim_create(r.model.get(), &set, &raw, &err) != F3R_OK) throw std::runtime_error(err.message);
+  if (f3r_sim_create(r.model.get(), &set, &raw, &err) != F3R_OK)
+    throw std::runtime_error(err.message);
   r.sim.reset(raw);
   r.samples.push_back(*f3r_sim_outputs(raw));
   const long n = std::lround(scene.duration / dt);
@@ -68,7 +69,8 @@ double RelativeEnergyError(const Outcome& r) {
 
 bool AllFinite(const f3r_outputs& o, int nq) {
   for (int n = 0; n < nq; ++n)
-    if (!std::isfinite(o.q[n]) || !std::isfinite(o.v[n]) || !std::isfinite(o.forces[n])) return false;
+    if (!std::isfinite(o.q[n]) || !std::isfinite(o.v[n]) || !std::isfinite(o.forces[n]))
+      return false;
   return std::isfinite(o.kinetic_energy) && std::isfinite(o.potential_energy) &&
          std::isfinite(o.external_work) && std::isfinite(o.actuation_condition);
 }
@@ -92,7 +94,8 @@ TEST_P(ManyModes, TwentyModesRunWithEnergyBalance) {
   ASSERT_EQ(f3r_beam_modal_integrals(end, 20, nullptr, nullptr, gram.data(), nullptr, nullptr), 0);
   double gram_error = 0.0;
   for (int i = 0; i < 20; ++i)
-    for (int j = 0; j < 20; ++j) gram_error = std::max(gram_error, std::fabs(gram[i * 20 + j] - (i == j)));
+    for (int j = 0; j < 20; ++j)
+      gram_error = std::max(gram_error, std::fabs(gram[i * 20 + j] - (i == j)));
   EXPECT_LT(gram_error, 1e-12);
 
   f3r_scene scene = SceneFromText("links: {model: " + model + ", modes: 20}\n" + kSmoothInputs +
@@ -100,8 +103,8 @@ TEST_P(ManyModes, TwentyModesRunWithEnergyBalance) {
   Outcome r = Simulate(scene, 1e-3);
   ASSERT_EQ(r.status, F3R_OK) << r.error;
   const double energy = RelativeEnergyError(r);
-  std::printf("measured: %s r = 20: Gram error %.1e, energy balance %.1e, %ld steps\n", model.c_str(),
-              gram_error, energy, r.samples.back().stats.steps);
+  std::printf("measured: %s r = 20: Gram error %.1e, energy balance %.1e, %ld steps\n",
+              model.c_str(), gram_error, energy, r.samples.back().stats.steps);
   EXPECT_LT(energy, 1e-8);
 }
 
@@ -128,9 +131,10 @@ TEST(Stiff, UnexcitedHighModesDoNotLimitTheStep) {
   const long stiff = StepsWithStiffness(73e11, kSmoothInputs, 2, &energy_stiff);
   const long nominal5 = StepsWithStiffness(73e9, kSmoothInputs, 5, nullptr);
   const long stiff5 = StepsWithStiffness(73e11, kSmoothInputs, 5, nullptr);
-  std::printf("measured: r = 10, smooth forcing, max_order 2: %ld steps at E, %ld at 100 E (ratio "
-              "%.2f); max_order 5: %ld and %ld (ratio %.2f)\n",
-              nominal, stiff, double(stiff) / nominal, nominal5, stiff5, double(stiff5) / nominal5);
+  std::printf(
+      "measured: r = 10, smooth forcing, max_order 2: %ld steps at E, %ld at 100 E (ratio "
+      "%.2f); max_order 5: %ld and %ld (ratio %.2f)\n",
+      nominal, stiff, double(stiff) / nominal, nominal5, stiff5, double(stiff5) / nominal5);
   // Modes 10x higher in frequency that carry no energy must not cost more steps.
   EXPECT_LT(double(stiff) / nominal, 1.5);
   EXPECT_LT(energy_stiff, 1e-4);
@@ -141,8 +145,10 @@ TEST(Stiff, AStepAtTimeZeroExcitesHighModesThatMustBeResolved) {
   double energy = 0.0;
   const long smooth = StepsWithStiffness(73e11, kSmoothInputs, 2, nullptr);
   const long stepped = StepsWithStiffness(73e11, step, 5, &energy);
-  std::printf("measured: r = 10, 100 E, step force at t = 0: %ld steps (max_order 5) against %ld "
-              "smooth (max_order 2): %.0fx\n", stepped, smooth, double(stepped) / smooth);
+  std::printf(
+      "measured: r = 10, 100 E, step force at t = 0: %ld steps (max_order 5) against %ld "
+      "smooth (max_order 2): %.0fx\n",
+      stepped, smooth, double(stepped) / smooth);
   EXPECT_GT(stepped, 20 * smooth);  // the excited modes are resolved, not stepped over
   EXPECT_LT(energy, 1e-6);
 }
@@ -169,7 +175,8 @@ constexpr double kFirstNaturalHz = 227.160707;
 
 // Runs a resonance scene for `periods` forcing periods, 64 samples a period, at rtol 1e-9; the
 // tip amplitude of link 1 in each period (and the scene as run, when asked).
-void ResonanceAmplitudes(const char* file, int periods, f3r_scene* run_scene, std::vector<double>* amp) {
+void ResonanceAmplitudes(const char* file, int periods, f3r_scene* run_scene,
+                         std::vector<double>* amp) {
   f3r_scene scene = LoadScene(ScenePath(file));
   scene.rtol = 1e-9;
   scene.atol = 1e-11;
@@ -189,8 +196,10 @@ TEST(Resonance, UndampedAmplitudeGrowsLinearly) {
   const double c = amp[49] / 50.0;
   double worst = 0.0;
   for (int k = 10; k < 50; ++k) worst = std::max(worst, std::fabs(amp[k] / (k + 1) / c - 1.0));
-  std::printf("measured: undamped resonance: A_50 / A_25 = %.3f, max deviation from linear growth "
-              "%.1f %% (periods 10..50)\n", amp[49] / amp[24], 100 * worst);
+  std::printf(
+      "measured: undamped resonance: A_50 / A_25 = %.3f, max deviation from linear growth "
+      "%.1f %% (periods 10..50)\n",
+      amp[49] / amp[24], 100 * worst);
   EXPECT_NEAR(amp[49] / amp[24], 2.0, 0.1);
   EXPECT_LT(worst, 0.1);
 }
@@ -204,13 +213,15 @@ double LinearisedTipAmplitude(const f3r_scene& scene, double hz, double torque) 
   std::vector<double> q(F3R_MAX_Q), v(F3R_MAX_Q), y(ny), yp(ny), held(m->nq, 0.0);
   EXPECT_EQ(f3r_model_initial_state(m.get(), q.data(), v.data()), F3R_OK);
   EXPECT_EQ(f3r_consistent_state(m.get(), F3R_FORMULATION_MINIMAL, 0.0, q.data(), v.data(), nullptr,
-                                 nullptr, 0.0, y.data(), yp.data(), nullptr, ws.get()), F3R_OK);
+                                 nullptr, 0.0, y.data(), yp.data(), nullptr, ws.get()),
+            F3R_OK);
   // At rest with no forces the equilibrium has y' = 0 apart from z' = u = 0.
   std::fill(yp.begin(), yp.end(), 0.0);
   std::vector<double> r0(ny), r1(ny);
   auto rows = [&](std::vector<double>& yy, std::vector<double>& yyp, std::vector<double>& hh,
                   std::vector<double>& out) {
-    f3r_residual(m.get(), F3R_FORMULATION_MINIMAL, 0.0, yy.data(), yyp.data(), hh.data(), out.data(), ws.get());
+    f3r_residual(m.get(), F3R_FORMULATION_MINIMAL, 0.0, yy.data(), yyp.data(), hh.data(),
+                 out.data(), ws.get());
   };
   rows(y, yp, held, r0);
   using cd = std::complex<double>;
@@ -254,7 +265,8 @@ double LinearisedTipAmplitude(const f3r_scene& scene, double hz, double torque) 
     z[k] = s / A[k * nz + k];
   }
   cd tip = 0.0;
-  for (int j = 0; j < m->link[0].modes; ++j) tip += m->link[0].tip[j] * z[m->link[0].eta_index - 6 + j];
+  for (int j = 0; j < m->link[0].modes; ++j)
+    tip += m->link[0].tip[j] * z[m->link[0].eta_index - 6 + j];
   return std::abs(tip);
 }
 
@@ -264,8 +276,9 @@ TEST(Resonance, DampedAmplitudeSettlesAtTheLinearisedSteadyState) {
   ASSERT_NO_FATAL_FAILURE(ResonanceAmplitudes("resonance_damped.yaml", 60, &scene, &amp));
   const double settled = amp[amp.size() - 1];
   const double predicted = LinearisedTipAmplitude(scene, kFirstNaturalHz, 0.2);
-  std::printf("measured: damped resonance (zeta 0.02): tip amplitude %.4e m, linearised %.4e m (%.2f %%)\n",
-              settled, predicted, 100 * (settled / predicted - 1));
+  std::printf(
+      "measured: damped resonance (zeta 0.02): tip amplitude %.4e m, linearised %.4e m (%.2f %%)\n",
+      settled, predicted, 100 * (settled / predicted - 1));
   EXPECT_NEAR(amp[amp.size() - 1] / amp[amp.size() - 6], 1.0, 0.01);  // settled
   EXPECT_NEAR(settled / predicted, 1.0, 0.02);
 }
@@ -291,13 +304,16 @@ TEST(LongRun, SixtySecondsOfFreeVibration) {
   double constraint = 0.0, apart = 0.0, travelled = 0.0;
   for (const auto& o : d.samples) constraint = std::max(constraint, o.constraint_residual);
   for (size_t k = 0; k < d.samples.size(); ++k) {
-    apart = std::max(apart, std::hypot(d.samples[k].q[6] - e.samples[k].q[6], d.samples[k].q[7] - e.samples[k].q[7]));
+    apart = std::max(apart, std::hypot(d.samples[k].q[6] - e.samples[k].q[6],
+                                       d.samples[k].q[7] - e.samples[k].q[7]));
     travelled = std::max(travelled, std::hypot(e.samples[k].q[6], e.samples[k].q[7]));
   }
   const double drift_erk = RelativeEnergyError(e), drift_dae = RelativeEnergyError(d);
-  std::printf("measured: 60 s free vibration: energy drift %.1e (minimal, ERK 1e-9), %.1e (dae, IDA "
-              "1e-9); dae constraint residual %.1e m; platform travelled %.2f m, formulations apart "
-              "%.1e m\n", drift_erk, drift_dae, constraint, travelled, apart);
+  std::printf(
+      "measured: 60 s free vibration: energy drift %.1e (minimal, ERK 1e-9), %.1e (dae, IDA "
+      "1e-9); dae constraint residual %.1e m; platform travelled %.2f m, formulations apart "
+      "%.1e m\n",
+      drift_erk, drift_dae, constraint, travelled, apart);
   EXPECT_LT(drift_erk, 1e-6);
   EXPECT_LT(constraint, 1e-10);
   EXPECT_GT(travelled, 1.0);
@@ -315,12 +331,14 @@ TEST(ExtremeSpeed, PaperSimulation2FormulationsAgree) {
   Outcome dae = Simulate(scene, 1e-3, &set);
   ASSERT_EQ(minimal.status, F3R_OK) << minimal.error;
   ASSERT_EQ(dae.status, F3R_OK) << dae.error;
-  const double turned = minimal.samples.back().q[8], gap = std::fabs(turned - dae.samples.back().q[8]);
+  const double turned = minimal.samples.back().q[8],
+               gap = std::fabs(turned - dae.samples.back().q[8]);
   double piston_speed = 0.0;
   for (const auto& o : minimal.samples) piston_speed = std::max(piston_speed, std::fabs(o.v[0]));
-  std::printf("measured: paper sim. 2: phi_p turns %.1f rad, pistons up to %.1f m/s; formulations "
-              "apart %.1e rad; energy balance %.1e / %.1e\n",
-              turned, piston_speed, gap, RelativeEnergyError(minimal), RelativeEnergyError(dae));
+  std::printf(
+      "measured: paper sim. 2: phi_p turns %.1f rad, pistons up to %.1f m/s; formulations "
+      "apart %.1e rad; energy balance %.1e / %.1e\n",
+      turned, piston_speed, gap, RelativeEnergyError(minimal), RelativeEnergyError(dae));
   EXPECT_GT(std::fabs(turned), 40.0);
   EXPECT_LT(gap, 1e-6);
   EXPECT_LT(RelativeEnergyError(minimal), 1e-7);
@@ -329,9 +347,10 @@ TEST(ExtremeSpeed, PaperSimulation2FormulationsAgree) {
 
 // --- 6. singular pose ---------------------------------------------------------------------------
 TEST(SingularPose, HomeIsTypeTwoSingularAndTheRunGoesThrough) {
-  f3r_scene scene = SceneFromText("links: {model: fixed_free, modes: 2}\n"
-                                  "inputs: {platform_force_x: {amplitude: 5.0, frequency: 20.0}}\n"
-                                  "run: {duration: 0.1}\n");
+  f3r_scene scene = SceneFromText(
+      "links: {model: fixed_free, modes: 2}\n"
+      "inputs: {platform_force_x: {amplitude: 5.0, frequency: 20.0}}\n"
+      "run: {duration: 0.1}\n");
   Outcome r = Simulate(scene, 1e-3);
   ASSERT_EQ(r.status, F3R_OK) << r.error;
   EXPECT_GE(r.samples.front().actuation_condition, 1e12);  // legs through P: no moment
@@ -349,11 +368,13 @@ TEST(SingularPose, HomeIsTypeTwoSingularAndTheRunGoesThrough) {
 // polynomial and the path agrees with the minimal formulation's.
 TEST(CommandHold, DaeThroughFiveHundredHoldsAgreesWithMinimal) {
   std::string text = "links: {model: fixed_free, modes: 3}\ninputs:\n";
-  const char* names[] = {"rho_1", "rho_2", "rho_3", "theta_1", "theta_2", "theta_3", "platform_force_x"};
+  const char* names[] = {"rho_1",   "rho_2",   "rho_3",           "theta_1",
+                         "theta_2", "theta_3", "platform_force_x"};
   for (int n = 0; n < 7; ++n) {
     std::string times, values;
     for (int k = 0; k < 500; ++k) {
-      const double t = k * 1e-3, c20 = std::cos(2 * M_PI * 20 * t), c200 = std::cos(2 * M_PI * 200 * t);
+      const double t = k * 1e-3, c20 = std::cos(2 * M_PI * 20 * t),
+                   c200 = std::cos(2 * M_PI * 200 * t);
       const double f = n < 3 ? -50 + 50 * c20 : n < 6 ? 5 * c200 : 100 * c20;
       char buf[64];
       std::snprintf(buf, sizeof buf, "%s%.3f", k ? ", " : "", t);
@@ -361,8 +382,8 @@ TEST(CommandHold, DaeThroughFiveHundredHoldsAgreesWithMinimal) {
       std::snprintf(buf, sizeof buf, "%s%.12g", k ? ", " : "", f);
       values += buf;
     }
-    text += std::string("  ") + names[n] + ": {table: {interpolation: hold, time: [" + times + "], value: [" +
-            values + "]}}\n";
+    text += std::string("  ") + names[n] + ": {table: {interpolation: hold, time: [" + times +
+            "], value: [" + values + "]}}\n";
   }
   text += "run: {duration: 0.5}\n";
   f3r_scene scene = SceneFromText(text);
@@ -395,12 +416,14 @@ TEST(CommandHold, ExplicitStagesAtARestartTakeTheNewForce) {
     char buf[64];
     std::snprintf(buf, sizeof buf, "%s%.3f", k ? ", " : "", k * 1e-3);
     times += buf;
-    std::snprintf(buf, sizeof buf, "%s%.6g", k ? ", " : "", 5.0 * std::cos(2 * M_PI * 200 * k * 1e-3));
+    std::snprintf(buf, sizeof buf, "%s%.6g", k ? ", " : "",
+                  5.0 * std::cos(2 * M_PI * 200 * k * 1e-3));
     values += buf;
   }
-  f3r_scene scene = SceneFromText("links: {model: fixed_free, modes: 3}\ninputs:\n  theta_1: {table: "
-                                  "{interpolation: hold, time: [" + times + "], value: [" + values +
-                                  "]}}\nrun: {duration: 0.05}\n");
+  f3r_scene scene = SceneFromText(
+      "links: {model: fixed_free, modes: 3}\ninputs:\n  theta_1: {table: "
+      "{interpolation: hold, time: [" +
+      times + "], value: [" + values + "]}}\nrun: {duration: 0.05}\n");
   f3r_solver_settings ida = f3r_solver_settings_from_scene(&scene), erk = ida;
   ida.rtol = 1e-11;
   ida.atol = 1e-13;
@@ -415,8 +438,9 @@ TEST(CommandHold, ExplicitStagesAtARestartTakeTheNewForce) {
     ASSERT_EQ(e.status, F3R_OK) << e.error;
     double apart = 0.0;
     for (size_t k = 0; k < e.samples.size(); ++k)
-      apart = std::max(apart, std::hypot(e.samples[k].q[F3R_Q_X] - reference.samples[k].q[F3R_Q_X],
-                                         e.samples[k].q[F3R_Q_Y] - reference.samples[k].q[F3R_Q_Y]));
+      apart =
+          std::max(apart, std::hypot(e.samples[k].q[F3R_Q_X] - reference.samples[k].q[F3R_Q_X],
+                                     e.samples[k].q[F3R_Q_Y] - reference.samples[k].q[F3R_Q_Y]));
     std::printf("measured: 50 holds, %s at rtol 1e-8 apart from IDA at 1e-11 by %.1e m\n",
                 integrator == F3R_INTEGRATOR_ERK ? "ERK" : "DIRK", apart);
     EXPECT_LT(apart, 2e-8) << integrator;  // 5.5e-7 (ERK) with the old force at the first stage
@@ -429,9 +453,10 @@ TEST(CommandHold, ExplicitStagesAtARestartTakeTheNewForce) {
 // fell off end_stop_impact's table times: IDASetStopTime was then behind the solver's time).
 // Every integrator, unpaced and against the same run sampled on the breakpoints.
 TEST(HardCases, OutputsOffTheBreakpointsNeverStepAcrossOne) {
-  f3r_scene scene = SceneFromText("links: {model: fixed_free, modes: 2}\ninputs:\n  rho_1:\n    table:\n"
-                                  "      time:  [0.0, 0.001, 0.010, 0.011]\n"
-                                  "      value: [0.0, 20.0, 20.0, 0.0]\nrun: {duration: 0.03}\n");
+  f3r_scene scene = SceneFromText(
+      "links: {model: fixed_free, modes: 2}\ninputs:\n  rho_1:\n    table:\n"
+      "      time:  [0.0, 0.001, 0.010, 0.011]\n"
+      "      value: [0.0, 20.0, 20.0, 0.0]\nrun: {duration: 0.03}\n");
   for (f3r_integrator integrator : {F3R_INTEGRATOR_IDA, F3R_INTEGRATOR_ERK, F3R_INTEGRATOR_DIRK}) {
     f3r_solver_settings set = f3r_solver_settings_from_scene(&scene);
     set.integrator = integrator;
@@ -443,13 +468,15 @@ TEST(HardCases, OutputsOffTheBreakpointsNeverStepAcrossOne) {
     ASSERT_EQ(f3r_sim_create(model.get(), &set, &raw, &err), F3R_OK) << err.message;
     SimPtr sim(raw);
     for (double t : {0.0009999, 0.0099999, 0.0109999, 0.03}) {
-      ASSERT_EQ(f3r_sim_advance(raw, t, &err), F3R_OK) << integrator << " to " << t << ": " << err.message;
+      ASSERT_EQ(f3r_sim_advance(raw, t, &err), F3R_OK)
+          << integrator << " to " << t << ": " << err.message;
     }
     const f3r_outputs end = *f3r_sim_outputs(raw);
     Outcome on_grid = Simulate(scene, 1e-3, &set);  // outputs on every breakpoint
     ASSERT_EQ(on_grid.status, F3R_OK) << on_grid.error;
     const f3r_outputs& ref = on_grid.samples.back();
-    EXPECT_LT(std::hypot(end.q[F3R_Q_X] - ref.q[F3R_Q_X], end.q[F3R_Q_Y] - ref.q[F3R_Q_Y]), 1e-5) << integrator;
+    EXPECT_LT(std::hypot(end.q[F3R_Q_X] - ref.q[F3R_Q_X], end.q[F3R_Q_Y] - ref.q[F3R_Q_Y]), 1e-5)
+        << integrator;
     EXPECT_GE(end.stats.restarts, 3) << integrator << ": a restart at each breakpoint";
   }
 }
@@ -457,8 +484,9 @@ TEST(HardCases, OutputsOffTheBreakpointsNeverStepAcrossOne) {
 class LegCollapse : public ::testing::TestWithParam<std::tuple<f3r_formulation, f3r_integrator>> {};
 
 TEST_P(LegCollapse, StopsWithASpecificErrorAndAGoodState) {
-  f3r_scene scene = SceneFromText("links: {model: fixed_free, modes: 2}\ninputs: {rho_1: {offset: -200.0}}\n"
-                                  "run: {duration: 0.3}\n");
+  f3r_scene scene = SceneFromText(
+      "links: {model: fixed_free, modes: 2}\ninputs: {rho_1: {offset: -200.0}}\n"
+      "run: {duration: 0.3}\n");
   f3r_solver_settings set = f3r_solver_settings_from_scene(&scene);
   set.formulation = std::get<0>(GetParam());
   set.integrator = std::get<1>(GetParam());
@@ -471,16 +499,18 @@ TEST_P(LegCollapse, StopsWithASpecificErrorAndAGoodState) {
   EXPECT_LT(last.energy_balance_error, 1e-6);
 }
 
-INSTANTIATE_TEST_SUITE_P(Formulations, LegCollapse,
-                         ::testing::Values(std::make_tuple(F3R_FORMULATION_MINIMAL, F3R_INTEGRATOR_IDA),
-                                           std::make_tuple(F3R_FORMULATION_DAE, F3R_INTEGRATOR_IDA),
-                                           std::make_tuple(F3R_FORMULATION_MINIMAL, F3R_INTEGRATOR_ERK),
-                                           std::make_tuple(F3R_FORMULATION_MINIMAL, F3R_INTEGRATOR_DIRK)));
+INSTANTIATE_TEST_SUITE_P(
+    Formulations, LegCollapse,
+    ::testing::Values(std::make_tuple(F3R_FORMULATION_MINIMAL, F3R_INTEGRATOR_IDA),
+                      std::make_tuple(F3R_FORMULATION_DAE, F3R_INTEGRATOR_IDA),
+                      std::make_tuple(F3R_FORMULATION_MINIMAL, F3R_INTEGRATOR_ERK),
+                      std::make_tuple(F3R_FORMULATION_MINIMAL, F3R_INTEGRATOR_DIRK)));
 
 TEST(SingularPose, WithEndStopsTheLegBouncesInstead) {
-  f3r_scene scene = SceneFromText("links: {model: fixed_free, modes: 2}\ninputs: {rho_1: {offset: -20.0}}\n"
-                                  "effects: {end_stops: {min: -0.1, max: 0.3, restitution: 0.5}}\n"
-                                  "run: {duration: 0.3}\n");
+  f3r_scene scene = SceneFromText(
+      "links: {model: fixed_free, modes: 2}\ninputs: {rho_1: {offset: -20.0}}\n"
+      "effects: {end_stops: {min: -0.1, max: 0.3, restitution: 0.5}}\n"
+      "run: {duration: 0.3}\n");
   Outcome r = Simulate(scene, 1e-3);
   EXPECT_GT(r.samples.back().impacts, 0);
   for (const auto& o : r.samples) EXPECT_TRUE(AllFinite(o, r.model->nq));
@@ -506,8 +536,9 @@ TEST(DiscontinuousCommands, HeldStepsEveryMillisecondEqualAScriptedProfile) {
     vals += buf;
   }
   // the tolerance the bound was set at (the default is looser: 6 digits on the headline)
-  const std::string common = "links: {model: fixed_free, modes: 2}\nrun: {duration: 1.0}\n"
-                             "solver: {rtol: 1.0e-8, atol: 1.0e-10}\n";
+  const std::string common =
+      "links: {model: fixed_free, modes: 2}\nrun: {duration: 1.0}\n"
+      "solver: {rtol: 1.0e-8, atol: 1.0e-10}\n";
   f3r_scene scripted = SceneFromText(common + table + vals + "]\n");
   f3r_scene held_scene = SceneFromText(common);
   Outcome a = Simulate(scripted, 1e-3);
@@ -526,22 +557,25 @@ TEST(DiscontinuousCommands, HeldStepsEveryMillisecondEqualAScriptedProfile) {
     ASSERT_EQ(f3r_sim_set_forces(raw, held.data(), &err), F3R_OK) << err.message;
     ASSERT_EQ(f3r_sim_advance(raw, (k + 1) * 1e-3, &err), F3R_OK) << err.message;
     const f3r_outputs* o = f3r_sim_outputs(raw);
-    apart = std::max(apart, std::hypot(o->q[6] - a.samples[k + 1].q[6], o->q[7] - a.samples[k + 1].q[7]));
+    apart = std::max(apart,
+                     std::hypot(o->q[6] - a.samples[k + 1].q[6], o->q[7] - a.samples[k + 1].q[7]));
   }
   const f3r_sim_stats stats = f3r_sim_outputs(raw)->stats;
-  std::printf("measured: 1000 held steps: %ld restarts, %ld nonlinear failures, %ld error test "
-              "failures; apart from the scripted run by %.1e m\n",
-              stats.restarts, stats.nonlinear_failures, stats.error_test_failures, apart);
+  std::printf(
+      "measured: 1000 held steps: %ld restarts, %ld nonlinear failures, %ld error test "
+      "failures; apart from the scripted run by %.1e m\n",
+      stats.restarts, stats.nonlinear_failures, stats.error_test_failures, apart);
   EXPECT_GE(stats.restarts, n - 1);
   EXPECT_LT(apart, 1e-9);
 }
 
 // --- 8. impacts ---------------------------------------------------------------------------------
 TEST(Impacts, RepeatedImpactsAreLocatedAndLoseRestitutionSquared) {
-  f3r_scene scene = SceneFromText("links: {model: fixed_free, modes: 2}\n"
-                                  "inputs: {rho_1: {offset: 200.0}}\n"
-                                  "effects: {end_stops: {min: -0.1, max: 0.15, restitution: 0.6}}\n"
-                                  "solver: {rtol: 1.0e-10, atol: 1.0e-12}\nrun: {duration: 0.2}\n");
+  f3r_scene scene = SceneFromText(
+      "links: {model: fixed_free, modes: 2}\n"
+      "inputs: {rho_1: {offset: 200.0}}\n"
+      "effects: {end_stops: {min: -0.1, max: 0.15, restitution: 0.6}}\n"
+      "solver: {rtol: 1.0e-10, atol: 1.0e-12}\nrun: {duration: 0.2}\n");
   auto m = MakeModel(scene);
   f3r_solver_settings set = f3r_solver_settings_from_scene(&scene);
   f3r_sim* raw = nullptr;
@@ -557,22 +591,28 @@ TEST(Impacts, RepeatedImpactsAreLocatedAndLoseRestitutionSquared) {
     if (o->impacts > seen) {
       const f3r_impact_record& rec = o->last_impact;
       // The event time is off by the stroke error over the rate: 1e-10 s is ~1e-10 m here.
-      worst_location = std::max(worst_location, std::fabs(rec.rho - 0.15) / std::fabs(rec.rate_before));
+      worst_location =
+          std::max(worst_location, std::fabs(rec.rho - 0.15) / std::fabs(rec.rate_before));
       // Newton's law: the normal component keeps e^2 of its kinetic energy.
-      worst_energy = std::max(worst_energy, std::fabs(rec.rate_after * rec.rate_after / (rec.rate_before * rec.rate_before) - 0.36));
+      worst_energy = std::max(
+          worst_energy,
+          std::fabs(rec.rate_after * rec.rate_after / (rec.rate_before * rec.rate_before) - 0.36));
       // Newton's law on the constrained system: the normal rate reverses with factor e.
-      worst_law = std::max(worst_law, std::fabs(rec.rate_after + 0.6 * rec.rate_before) / std::fabs(rec.rate_before));
+      worst_law = std::max(worst_law, std::fabs(rec.rate_after + 0.6 * rec.rate_before) /
+                                          std::fabs(rec.rate_before));
       seen = o->impacts;
     }
     if (st != F3R_OK) {
       // Resting contact is not modelled: the run must say so rather than chatter.
-      EXPECT_NE(std::string(err.message).find("rests against its end stop"), std::string::npos) << err.message;
+      EXPECT_NE(std::string(err.message).find("rests against its end stop"), std::string::npos)
+          << err.message;
       break;
     }
   }
-  std::printf("measured: %ld impacts; located within %.1e s; restitution law within %.1e, normal "
-              "energy ratio e^2 within %.1e; deepest penetration %.1e m\n", seen, worst_location,
-              worst_law, worst_energy, deepest);
+  std::printf(
+      "measured: %ld impacts; located within %.1e s; restitution law within %.1e, normal "
+      "energy ratio e^2 within %.1e; deepest penetration %.1e m\n",
+      seen, worst_location, worst_law, worst_energy, deepest);
   EXPECT_GE(seen, 3);
   EXPECT_LT(worst_location, 1e-10);
   EXPECT_LT(worst_energy, 1e-9);
@@ -593,12 +633,14 @@ TEST_P(HugeInputs, CompleteWithEnergyBalanceOrStopClearly) {
   } else {
     EXPECT_FALSE(r.error.empty());
   }
-  std::printf("measured: %s: %s\n", GetParam().c_str(), r.status == F3R_OK ? "completed" : r.error.c_str());
+  std::printf("measured: %s: %s\n", GetParam().c_str(),
+              r.status == F3R_OK ? "completed" : r.error.c_str());
 }
 
 INSTANTIATE_TEST_SUITE_P(ForceAndTorque, HugeInputs,
                          ::testing::Values("rho_1: {offset: 1.0e5}", "rho_2: {offset: -1.0e5}",
-                                           "theta_1: {offset: 1.0e3}", "platform_torque: {offset: 1.0e3}"));
+                                           "theta_1: {offset: 1.0e3}",
+                                           "platform_torque: {offset: 1.0e3}"));
 
 }  // namespace
 
@@ -616,15 +658,19 @@ TEST(RecoverableErrors, ImpossibleConfigurationsAndNaNGiveAStatusNotNaN) {
     std::vector<double> q(F3R_MAX_Q), v(F3R_MAX_Q), y(ny), yp(ny), res(ny, 0.0);
     ASSERT_EQ(f3r_model_initial_state(m.get(), q.data(), v.data()), F3R_OK);
     ASSERT_EQ(f3r_consistent_state(m.get(), form, 0.0, q.data(), v.data(), nullptr, nullptr, 0.0,
-                                   y.data(), yp.data(), nullptr, ws.get()), F3R_OK);
+                                   y.data(), yp.data(), nullptr, ws.get()),
+              F3R_OK);
     std::vector<double> bad = y;
     bad[0] = std::nan("");
-    EXPECT_NE(f3r_residual(m.get(), form, 0.0, bad.data(), yp.data(), nullptr, res.data(), ws.get()), F3R_OK);
+    EXPECT_NE(
+        f3r_residual(m.get(), form, 0.0, bad.data(), yp.data(), nullptr, res.data(), ws.get()),
+        F3R_OK);
     if (form == F3R_FORMULATION_MINIMAL) {
       bad = y;
       bad[3] = 5.0;  // eta_11 = 5 m: a tip deflection no leg can close
-      EXPECT_EQ(f3r_residual(m.get(), form, 0.0, bad.data(), yp.data(), nullptr, res.data(), ws.get()),
-                F3R_ERR_SINGULAR);
+      EXPECT_EQ(
+          f3r_residual(m.get(), form, 0.0, bad.data(), yp.data(), nullptr, res.data(), ws.get()),
+          F3R_ERR_SINGULAR);
     }
   }
 }

@@ -14,8 +14,9 @@
 namespace {
 
 std::string Path(const char* name) {
-  return std::string(name).find('/') == std::string::npos ? ScenePath(name)
-                                                          : std::string(F3R_SOURCE_DIR) + "/" + name;
+  return std::string(name).find('/') == std::string::npos
+             ? ScenePath(name)
+             : std::string(F3R_SOURCE_DIR) + "/" + name;
 }
 
 class SchurLinearSolver : public ::testing::TestWithParam<f3r_formulation> {};
@@ -38,7 +39,8 @@ TEST_P(SchurLinearSolver, SolvesTheIterationMatrixAsAFullPivotingLuDoes) {
     ASSERT_EQ(f3r_sim_advance(sim.get(), 0.037, &err), F3R_OK) << err.message;  // a moving state
     const int ny = f3r_state_size(m.get(), form);
     const int nz = form == F3R_FORMULATION_MINIMAL ? m->n_independent : m->nq;
-    std::vector<double> y(f3r_sim_state(sim.get()), f3r_sim_state(sim.get()) + ny), yp(ny, 0.0), res(ny);
+    std::vector<double> y(f3r_sim_state(sim.get()), f3r_sim_state(sim.get()) + ny), yp(ny, 0.0),
+        res(ny);
     WorkspacePtr ws(f3r_workspace_create(m.get()));
     if (form == F3R_FORMULATION_MINIMAL)
       ASSERT_EQ(f3r_explicit_rhs(m.get(), 0.037, y.data(), nullptr, yp.data(), ws.get()), F3R_OK);
@@ -58,8 +60,8 @@ TEST_P(SchurLinearSolver, SolvesTheIterationMatrixAsAFullPivotingLuDoes) {
     for (double cj : {2.0e2, 3.1e4, 6.0e6}) {  // from a slow BDF step to the first step's
       cj_now = cj;
       SUNMatZero(J);
-      ASSERT_EQ(f3r_residual_jacobian(m.get(), form, 0.037, cj, y.data(),
-                                      yp.data(), nullptr, SM_DATA_D(J), ny, ws.get()),
+      ASSERT_EQ(f3r_residual_jacobian(m.get(), form, 0.037, cj, y.data(), yp.data(), nullptr,
+                                      SM_DATA_D(J), ny, ws.get()),
                 F3R_OK);
       Eigen::Map<Eigen::MatrixXd> A(SM_DATA_D(J), ny, ny);
       const Eigen::MatrixXd full = A;  // the solver must not change J

@@ -49,13 +49,16 @@ TEST_F(Fixture, BadEffortCommandsNameTheFieldAndChangeNothing) {
   EXPECT_EQ(flex3rpr::DecodeEffortCommand(m, *model, limits, &forces), "leg_force[1] is NaN");
   m.leg_force[1] = 0;
   m.cylinder_torque[2] = INFINITY;
-  EXPECT_EQ(flex3rpr::DecodeEffortCommand(m, *model, limits, &forces), "cylinder_torque[2] is infinite");
+  EXPECT_EQ(flex3rpr::DecodeEffortCommand(m, *model, limits, &forces),
+            "cylinder_torque[2] is infinite");
   m.cylinder_torque[2] = 0;
   m.platform[0] = 2e3;
-  EXPECT_EQ(flex3rpr::DecodeEffortCommand(m, *model, limits, &forces), "platform[0] = 2000 exceeds the limit 1000");
+  EXPECT_EQ(flex3rpr::DecodeEffortCommand(m, *model, limits, &forces),
+            "platform[0] = 2000 exceeds the limit 1000");
   m.platform[0] = 0;
   m.modal = {1.0};
-  EXPECT_EQ(flex3rpr::DecodeEffortCommand(m, *model, limits, &forces), "modal has 1 values, expected 0 or 6");
+  EXPECT_EQ(flex3rpr::DecodeEffortCommand(m, *model, limits, &forces),
+            "modal has 1 values, expected 0 or 6");
   for (double f : forces) EXPECT_EQ(f, 42.0);
 }
 
@@ -74,7 +77,8 @@ TEST_F(Fixture, WrenchInATurnedFrameIsTurnedIntoTheBase) {
   w.header.frame_id = "platform";
   w.wrench.force.x = 1.0;
   w.wrench.torque.z = 0.5;
-  ASSERT_EQ(flex3rpr::DecodeWrench(w, flex3rpr::YawRotation(M_PI / 2), limits, *model, &forces), "");
+  ASSERT_EQ(flex3rpr::DecodeWrench(w, flex3rpr::YawRotation(M_PI / 2), limits, *model, &forces),
+            "");
   EXPECT_NEAR(forces[6], 0.0, 1e-15);
   EXPECT_NEAR(forces[7], 1.0, 1e-15);
   EXPECT_EQ(forces[8], 0.5);
@@ -119,16 +123,21 @@ TEST_F(Fixture, ShippedUrdfMatchesAndAMovedJointIsNamed) {
   s.stroke_max = 0.25;
   ASSERT_EQ(f3r_model_create(&s, &other, &err), F3R_OK);
   why = flex3rpr::CheckUrdf(urdf, *other, &frames);
-  EXPECT_NE(why.find("leg_1_prismatic upper limit (geometry.stroke_max) is 0.2 m in the URDF but 0.25"),
-            std::string::npos) << why;
+  EXPECT_NE(
+      why.find("leg_1_prismatic upper limit (geometry.stroke_max) is 0.2 m in the URDF but 0.25"),
+      std::string::npos)
+      << why;
   f3r_model_destroy(other);
   // Frames the node would publish that the URDF lacks, or stations it has too many of.
-  const flex3rpr::FrameNames prefixed = flex3rpr::MakeFrameNames("robot1/", "world", "robot1/base", 11);
+  const flex3rpr::FrameNames prefixed =
+      flex3rpr::MakeFrameNames("robot1/", "world", "robot1/base", 11);
   why = flex3rpr::CheckUrdf(urdf, *model, &prefixed);
   EXPECT_NE(why.find("lacks link robot1/base"), std::string::npos) << why;
   const flex3rpr::FrameNames fewer = flex3rpr::MakeFrameNames("", "world", "base", 5);
   why = flex3rpr::CheckUrdf(urdf, *model, &fewer);
-  EXPECT_NE(why.find("more beam stations than ~beam_points = 5 (link leg_1_beam_5)"), std::string::npos) << why;
+  EXPECT_NE(why.find("more beam stations than ~beam_points = 5 (link leg_1_beam_5)"),
+            std::string::npos)
+      << why;
   const flex3rpr::FrameNames more = flex3rpr::MakeFrameNames("", "world", "base", 12);
   why = flex3rpr::CheckUrdf(urdf, *model, &more);
   EXPECT_NE(why.find("lacks link leg_1_beam_11"), std::string::npos) << why;
@@ -151,8 +160,8 @@ namespace {
 
 std::string Generate(const std::string& args, const std::string& out) {
   const std::string dir = F3R_SOURCE_DIR;
-  const std::string cmd = "F3R_CLI=" + std::string(F3R_CLI) + " /usr/bin/python3 " + dir + "/scripts/make_urdf.py " +
-                          args + " --out " + out;
+  const std::string cmd = "F3R_CLI=" + std::string(F3R_CLI) + " /usr/bin/python3 " + dir +
+                          "/scripts/make_urdf.py " + args + " --out " + out;
   return std::system(cmd.c_str()) == 0 ? out : "";
 }
 
@@ -170,7 +179,8 @@ TEST(Urdf, PassesCheckUrdfAndIsWhatItsGeneratorWrites) {
 // own check for those frames.
 TEST(Urdf, GeneratedForAnySettingIsCompleteAndMatchesTheModel) {
   const std::string scene = std::string(F3R_SOURCE_DIR) + "/config/scenes/end_stop_impact.yaml";
-  const std::string path = Generate("--scene " + scene + " --beam-points 5 --prefix robot2", "/tmp/f3r_urdf_5.urdf");
+  const std::string path =
+      Generate("--scene " + scene + " --beam-points 5 --prefix robot2", "/tmp/f3r_urdf_5.urdf");
   ASSERT_FALSE(path.empty());
   EXPECT_EQ(std::system(("check_urdf " + path + " > /dev/null").c_str()), 0);
   std::ifstream in(path);
@@ -180,13 +190,15 @@ TEST(Urdf, GeneratedForAnySettingIsCompleteAndMatchesTheModel) {
   ASSERT_TRUE(u);
   std::set<std::string> names;
   for (const auto& l : u->links_) EXPECT_TRUE(names.insert(l.first).second) << l.first;
-  for (const auto& j : u->joints_) EXPECT_TRUE(names.insert(j.first).second) << j.first << " is a link too";
+  for (const auto& j : u->joints_)
+    EXPECT_TRUE(names.insert(j.first).second) << j.first << " is a link too";
   double mass = 0.0;
   for (const auto& j : u->joints_) {
     const auto child = u->getLink(j.second->child_link_name);
     ASSERT_TRUE(child);
     if (j.second->type != urdf::Joint::FIXED) {
-      EXPECT_TRUE(child->inertial && child->inertial->mass > 0.0) << child->name << " moves but has no inertial";
+      EXPECT_TRUE(child->inertial && child->inertial->mass > 0.0)
+          << child->name << " moves but has no inertial";
     }
   }
   for (const auto& l : u->links_)
@@ -197,7 +209,8 @@ TEST(Urdf, GeneratedForAnySettingIsCompleteAndMatchesTheModel) {
   f3r_model* m = nullptr;
   ASSERT_EQ(f3r_model_create(&s, &m, &err), F3R_OK);
   EXPECT_NEAR(mass, m->platform_mass + 3 * (m->link_mass + m->cylinder_mass), 1e-12);
-  const flex3rpr::FrameNames frames = flex3rpr::MakeFrameNames("robot2/", "world", "robot2/base", 5);
+  const flex3rpr::FrameNames frames =
+      flex3rpr::MakeFrameNames("robot2/", "world", "robot2/base", 5);
   EXPECT_EQ(flex3rpr::CheckUrdf(ss.str(), *m, &frames), "");
   EXPECT_EQ(u->getJoint("leg_2_prismatic")->limits->upper, m->stroke_max);
   f3r_model_destroy(m);

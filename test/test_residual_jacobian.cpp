@@ -62,16 +62,24 @@ TEST_P(ResidualJacobianTest, MatchesFiniteDifferencesOfTheResidual) {
     const double h = 1e-6 * std::max(1e-2, std::fabs(y[j]));
     yy = y;
     yy[j] += h;
-    ASSERT_EQ(f3r_residual(m.get(), c.form, 0.013, yy.data(), yp.data(), nullptr, rp.data(), ws.get()), F3R_OK);
+    ASSERT_EQ(
+        f3r_residual(m.get(), c.form, 0.013, yy.data(), yp.data(), nullptr, rp.data(), ws.get()),
+        F3R_OK);
     yy[j] -= 2 * h;
-    ASSERT_EQ(f3r_residual(m.get(), c.form, 0.013, yy.data(), yp.data(), nullptr, rm.data(), ws.get()), F3R_OK);
+    ASSERT_EQ(
+        f3r_residual(m.get(), c.form, 0.013, yy.data(), yp.data(), nullptr, rm.data(), ws.get()),
+        F3R_OK);
     for (int i = 0; i < ny; ++i) col[i] = (rp[i] - rm[i]) / (2 * h);
     const double hp = 1e-7 * std::max(1.0, std::fabs(yp[j]));
     ypp = yp;
     ypp[j] += hp;
-    ASSERT_EQ(f3r_residual(m.get(), c.form, 0.013, y.data(), ypp.data(), nullptr, rp.data(), ws.get()), F3R_OK);
+    ASSERT_EQ(
+        f3r_residual(m.get(), c.form, 0.013, y.data(), ypp.data(), nullptr, rp.data(), ws.get()),
+        F3R_OK);
     ypp[j] -= 2 * hp;
-    ASSERT_EQ(f3r_residual(m.get(), c.form, 0.013, y.data(), ypp.data(), nullptr, rm.data(), ws.get()), F3R_OK);
+    ASSERT_EQ(
+        f3r_residual(m.get(), c.form, 0.013, y.data(), ypp.data(), nullptr, rm.data(), ws.get()),
+        F3R_OK);
     for (int i = 0; i < ny; ++i) col[i] += cj * (rp[i] - rm[i]) / (2 * hp);
     double scale = 1e-12;
     for (int i = 0; i < ny; ++i) scale = std::max(scale, std::fabs(col[i]));
@@ -160,11 +168,12 @@ TEST(Residual, ExplicitRightHandSideMatchesTheConstrainedSolve) {
     f3r_link_model a, b, c;
     int ra, rb, rc;
   };
-  const Links cases[] = {{F3R_LINK_RIGID, F3R_LINK_RIGID, F3R_LINK_RIGID, 0, 0, 0},
-                         {F3R_LINK_FIXED_FREE, F3R_LINK_FIXED_FREE, F3R_LINK_FIXED_FREE, 3, 3, 3},
-                         {F3R_LINK_FIXED_PINNED, F3R_LINK_FIXED_PINNED, F3R_LINK_FIXED_PINNED, 2, 2, 2},
-                         {F3R_LINK_FIXED_FREE, F3R_LINK_RIGID, F3R_LINK_FIXED_PINNED, 1, 0, 8},
-                         {F3R_LINK_FIXED_FREE, F3R_LINK_FIXED_FREE, F3R_LINK_FIXED_FREE, 8, 5, 1}};
+  const Links cases[] = {
+      {F3R_LINK_RIGID, F3R_LINK_RIGID, F3R_LINK_RIGID, 0, 0, 0},
+      {F3R_LINK_FIXED_FREE, F3R_LINK_FIXED_FREE, F3R_LINK_FIXED_FREE, 3, 3, 3},
+      {F3R_LINK_FIXED_PINNED, F3R_LINK_FIXED_PINNED, F3R_LINK_FIXED_PINNED, 2, 2, 2},
+      {F3R_LINK_FIXED_FREE, F3R_LINK_RIGID, F3R_LINK_FIXED_PINNED, 1, 0, 8},
+      {F3R_LINK_FIXED_FREE, F3R_LINK_FIXED_FREE, F3R_LINK_FIXED_FREE, 8, 5, 1}};
   for (const Links& l : cases)
     for (int exact = 0; exact < 2; ++exact) {
       f3r_scene scene = SceneWithLinks(l.a, l.ra, l.b, l.rb, l.c, l.rc);
@@ -177,31 +186,43 @@ TEST(Residual, ExplicitRightHandSideMatchesTheConstrainedSolve) {
       scene.inputs[F3R_FORCE_THETA].kind = F3R_INPUT_CONSTANT;
       scene.inputs[F3R_FORCE_THETA].offset = 1.5;
       auto m = MakeModel(scene);
-      const int nq = m->nq, nz = m->n_independent, ny = f3r_state_size(m.get(), F3R_FORMULATION_MINIMAL);
+      const int nq = m->nq, nz = m->n_independent,
+                ny = f3r_state_size(m.get(), F3R_FORMULATION_MINIMAL);
       std::vector<double> q(F3R_MAX_Q, 0.0), v(F3R_MAX_Q, 0.0), held(nq, 0.0);
       const double pose[3] = {0.015, -0.01, 0.25}, rate[3] = {-0.3, 0.2, 2.0};
       for (int k = 0; k < 3; ++k) q[F3R_Q_X + k] = pose[k], v[F3R_Q_X + k] = rate[k];
-      for (int n = F3R_Q_MODAL; n < nq; ++n) q[n] = 2e-4 * std::cos(1.7 * n), v[n] = 3e-2 * std::sin(2.3 * n);
+      for (int n = F3R_Q_MODAL; n < nq; ++n)
+        q[n] = 2e-4 * std::cos(1.7 * n), v[n] = 3e-2 * std::sin(2.3 * n);
       for (int n = 0; n < nq; ++n) held[n] = 0.7 * std::sin(0.9 * n + 0.3);
       ASSERT_EQ(f3r_model_close_loops(m.get(), q.data()), F3R_OK);
       f3r_model_close_loop_rates(m.get(), q.data(), v.data());
       WorkspacePtr ws(f3r_workspace_create(m.get()));
       std::vector<double> y(ny), yp(ny), arrow(ny), dense(ny);
-      ASSERT_EQ(f3r_consistent_state(m.get(), F3R_FORMULATION_MINIMAL, 0.02, q.data(), v.data(), held.data(),
-                                     nullptr, 0.0, y.data(), yp.data(), nullptr, ws.get()),
-                F3R_OK);
-      ASSERT_EQ(f3r_explicit_rhs_solver(m.get(), 1, 0.02, y.data(), held.data(), arrow.data(), ws.get()), F3R_OK);
-      ASSERT_EQ(f3r_explicit_rhs_solver(m.get(), 0, 0.02, y.data(), held.data(), dense.data(), ws.get()), F3R_OK);
+      ASSERT_EQ(
+          f3r_consistent_state(m.get(), F3R_FORMULATION_MINIMAL, 0.02, q.data(), v.data(),
+                               held.data(), nullptr, 0.0, y.data(), yp.data(), nullptr, ws.get()),
+          F3R_OK);
+      ASSERT_EQ(
+          f3r_explicit_rhs_solver(m.get(), 1, 0.02, y.data(), held.data(), arrow.data(), ws.get()),
+          F3R_OK);
+      ASSERT_EQ(
+          f3r_explicit_rhs_solver(m.get(), 0, 0.02, y.data(), held.data(), dense.data(), ws.get()),
+          F3R_OK);
       // independent: the whole constrained system, LU with pivoting
-      std::vector<double> Q(nq), a(nq), lambda(F3R_NCON), work(f3r_solve_accelerations_work_size(m.get()));
-      f3r_applied_forces(m.get(), 0.02, held.data(), q.data(), v.data(), nullptr, Q.data(), nullptr);
-      ASSERT_EQ(f3r_solve_accelerations(m.get(), q.data(), v.data(), Q.data(), a.data(), lambda.data(), work.data()),
+      std::vector<double> Q(nq), a(nq), lambda(F3R_NCON),
+          work(f3r_solve_accelerations_work_size(m.get()));
+      f3r_applied_forces(m.get(), 0.02, held.data(), q.data(), v.data(), nullptr, Q.data(),
+                         nullptr);
+      ASSERT_EQ(f3r_solve_accelerations(m.get(), q.data(), v.data(), Q.data(), a.data(),
+                                        lambda.data(), work.data()),
                 F3R_OK);
       double scale = 1.0;
       for (int j = 0; j < nz; ++j) scale = std::max(scale, std::fabs(a[F3R_Q_INDEPENDENT + j]));
       for (int j = 0; j < nz; ++j) {
-        EXPECT_NEAR(arrow[nz + j], a[F3R_Q_INDEPENDENT + j], 1e-10 * scale) << "arrow, case r " << l.ra << l.rb << l.rc << " exact " << exact << " z " << j;
-        EXPECT_NEAR(dense[nz + j], a[F3R_Q_INDEPENDENT + j], 1e-10 * scale) << "dense, case r " << l.ra << l.rb << l.rc << " exact " << exact << " z " << j;
+        EXPECT_NEAR(arrow[nz + j], a[F3R_Q_INDEPENDENT + j], 1e-10 * scale)
+            << "arrow, case r " << l.ra << l.rb << l.rc << " exact " << exact << " z " << j;
+        EXPECT_NEAR(dense[nz + j], a[F3R_Q_INDEPENDENT + j], 1e-10 * scale)
+            << "dense, case r " << l.ra << l.rb << l.rc << " exact " << exact << " z " << j;
         EXPECT_EQ(arrow[j], y[nz + j]);
       }
       EXPECT_NEAR(arrow[ny - 1], dense[ny - 1], 1e-12 * (1.0 + std::fabs(dense[ny - 1])));
@@ -213,7 +234,8 @@ TEST(Residual, ExplicitRightHandSideMatchesTheConstrainedSolve) {
 // since its loop closure gives each leg's direction algebraically. With gravity on (its forces
 // need the legs' directions too) and fixed-free links, whose tips enter the constraints.
 TEST(Residual, OneEvaluationComputesEachAngleOnce) {
-  f3r_scene scene = SceneWithLinks(F3R_LINK_FIXED_FREE, 3, F3R_LINK_FIXED_FREE, 3, F3R_LINK_FIXED_FREE, 3);
+  f3r_scene scene =
+      SceneWithLinks(F3R_LINK_FIXED_FREE, 3, F3R_LINK_FIXED_FREE, 3, F3R_LINK_FIXED_FREE, 3);
   scene.gravity[0] = 3.0;
   scene.gravity[1] = -4.0;
   scene.platform_pose0[2] = 0.2;
@@ -229,18 +251,22 @@ TEST(Residual, OneEvaluationComputesEachAngleOnce) {
               F3R_OK);
     const long per_evaluation = form == F3R_FORMULATION_DAE ? 4 : 1;
     long before = f3r_workspace_sincos_pairs(ws.get());
-    ASSERT_EQ(f3r_residual(m.get(), form, 0.001, y.data(), yp.data(), nullptr, res.data(), ws.get()), F3R_OK);
-    EXPECT_EQ(f3r_workspace_sincos_pairs(ws.get()) - before, per_evaluation) << "residual, form " << form;
+    ASSERT_EQ(
+        f3r_residual(m.get(), form, 0.001, y.data(), yp.data(), nullptr, res.data(), ws.get()),
+        F3R_OK);
+    EXPECT_EQ(f3r_workspace_sincos_pairs(ws.get()) - before, per_evaluation)
+        << "residual, form " << form;
     if (form == F3R_FORMULATION_MINIMAL) {
       before = f3r_workspace_sincos_pairs(ws.get());
       ASSERT_EQ(f3r_explicit_rhs(m.get(), 0.001, y.data(), nullptr, res.data(), ws.get()), F3R_OK);
       EXPECT_EQ(f3r_workspace_sincos_pairs(ws.get()) - before, 1) << "explicit right-hand side";
     }
     before = f3r_workspace_sincos_pairs(ws.get());
-    ASSERT_EQ(f3r_residual_jacobian(m.get(), form, 0.001, 1e4, y.data(), yp.data(), nullptr, J.data(), ny,
-                                    ws.get()),
+    ASSERT_EQ(f3r_residual_jacobian(m.get(), form, 0.001, 1e4, y.data(), yp.data(), nullptr,
+                                    J.data(), ny, ws.get()),
               F3R_OK);
-    EXPECT_EQ(f3r_workspace_sincos_pairs(ws.get()) - before, per_evaluation) << "Jacobian, form " << form;
+    EXPECT_EQ(f3r_workspace_sincos_pairs(ws.get()) - before, per_evaluation)
+        << "Jacobian, form " << form;
   }
 }
 

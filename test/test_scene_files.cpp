@@ -61,10 +61,13 @@ TEST(SceneFiles, PaperScenesSayWhatMODELmdSays) {
   for (int i = 0; i < 3; ++i) {
     EXPECT_EQ(s.links[i].model, F3R_LINK_FIXED_FREE);
     EXPECT_EQ(s.links[i].modes, 3);
-    EXPECT_NEAR(f3r_input_value(&s.inputs[F3R_FORCE_RHO + i], 0.0125), 50 * std::cos(40 * M_PI * 0.0125) - 50, 1e-12);
-    EXPECT_NEAR(f3r_input_value(&s.inputs[F3R_FORCE_THETA + i], 0.0011), 5 * std::cos(400 * M_PI * 0.0011), 1e-12);
+    EXPECT_NEAR(f3r_input_value(&s.inputs[F3R_FORCE_RHO + i], 0.0125),
+                50 * std::cos(40 * M_PI * 0.0125) - 50, 1e-12);
+    EXPECT_NEAR(f3r_input_value(&s.inputs[F3R_FORCE_THETA + i], 0.0011),
+                5 * std::cos(400 * M_PI * 0.0011), 1e-12);
   }
-  EXPECT_NEAR(f3r_input_value(&s.inputs[F3R_FORCE_PLATFORM], 0.007), 100 * std::cos(40 * M_PI * 0.007), 1e-12);
+  EXPECT_NEAR(f3r_input_value(&s.inputs[F3R_FORCE_PLATFORM], 0.007),
+              100 * std::cos(40 * M_PI * 0.007), 1e-12);
   EXPECT_EQ(s.inputs[F3R_FORCE_PLATFORM + 1].kind, F3R_INPUT_NONE);
   EXPECT_DOUBLE_EQ(s.duration, 0.5);
 }
@@ -91,8 +94,10 @@ std::string LoadError(const std::string& body, std::string* path_out = nullptr) 
 
 TEST(SceneFiles, BadScenesNameFileLineFieldAndRange) {
   std::string path;
-  std::string e = LoadError("run: {duration: 0.1}\nlinks:\n  - {model: fixed_free, modes: 3}\n"
-                            "  - {model: fixed_free, modes: 25}\n  - {model: rigid}\n", &path);
+  std::string e = LoadError(
+      "run: {duration: 0.1}\nlinks:\n  - {model: fixed_free, modes: 3}\n"
+      "  - {model: fixed_free, modes: 25}\n  - {model: rigid}\n",
+      &path);
   EXPECT_EQ(e, path + ":4: links[1].modes: 25 is out of range 1..20");
   e = LoadError("links: {model: rigid, modes: 3}\n", &path);
   EXPECT_EQ(e, path + ":1: links[0].modes: 3 given for a rigid link, which has no modes");
@@ -160,7 +165,8 @@ namespace {
 TEST(SceneFiles, ACopyHoldsEverythingButTheTablesUnusedTails) {
   f3r_scene s;
   f3r_error err{};
-  ASSERT_EQ(f3r_scene_load(ScenePath("end_stop_impact.yaml").c_str(), &s, &err), F3R_OK) << err.message;
+  ASSERT_EQ(f3r_scene_load(ScenePath("end_stop_impact.yaml").c_str(), &s, &err), F3R_OK)
+      << err.message;
   int table = -1;
   for (int k = 0; k < F3R_RIGID_FORCES; ++k)
     if (s.inputs[k].kind == F3R_INPUT_TABLE) table = k;
@@ -186,7 +192,8 @@ TEST(SceneFiles, ACopyHoldsEverythingButTheTablesUnusedTails) {
     f3r_sim* sim = nullptr;
     f3r_error e{};
     std::vector<double> y;
-    if (f3r_sim_create(m.get(), &settings, &sim, &e) == F3R_OK && f3r_sim_advance(sim, scene.duration, &e) == F3R_OK) {
+    if (f3r_sim_create(m.get(), &settings, &sim, &e) == F3R_OK &&
+        f3r_sim_advance(sim, scene.duration, &e) == F3R_OK) {
       const double* state = f3r_sim_state(sim);
       y.assign(state, state + f3r_state_size(m.get(), settings.formulation));
     }
@@ -205,7 +212,8 @@ TEST(SceneFiles, InvalidSceneCorpusGivesTheExpectedErrors) {
   std::vector<std::string> names;
   while (dirent* e = readdir(d)) {
     std::string n = e->d_name;
-    if (n.size() > 5 && n.substr(n.size() - 5) == ".yaml") names.push_back(n.substr(0, n.size() - 5));
+    if (n.size() > 5 && n.substr(n.size() - 5) == ".yaml")
+      names.push_back(n.substr(0, n.size() - 5));
   }
   closedir(d);
   std::sort(names.begin(), names.end());
@@ -229,7 +237,8 @@ TEST(SceneFiles, InvalidSceneCorpusGivesTheExpectedErrors) {
 namespace {
 
 // Loads `path` with the overrides `sets`; the status, the scene and the error.
-f3r_status LoadWith(const std::string& path, std::vector<const char*> sets, f3r_scene* s, f3r_error* err) {
+f3r_status LoadWith(const std::string& path, std::vector<const char*> sets, f3r_scene* s,
+                    f3r_error* err) {
   f3r_scene_options options{};
   options.overrides = sets.data();
   options.override_count = static_cast<int>(sets.size());
@@ -285,9 +294,11 @@ TEST(SceneOverrides, AddressOneLinkOrAll) {
   EXPECT_EQ(s.links[1].modes, 5);
   EXPECT_EQ(s.links[2].modes, 2);
   EXPECT_EQ(s.links[2].model, F3R_LINK_FIXED_FREE);
-  const std::string list = WriteTemp("list.yaml", "links:\n  - {model: fixed_free, modes: 2}\n"
-                                                  "  - {model: rigid}\n  - {model: fixed_free}\n");
-  ASSERT_EQ(LoadWith(list, {"links.model=fixed_pinned", "links.modes=6"}, &s, &err), F3R_OK) << err.message;
+  const std::string list = WriteTemp("list.yaml",
+                                     "links:\n  - {model: fixed_free, modes: 2}\n"
+                                     "  - {model: rigid}\n  - {model: fixed_free}\n");
+  ASSERT_EQ(LoadWith(list, {"links.model=fixed_pinned", "links.modes=6"}, &s, &err), F3R_OK)
+      << err.message;
   for (int i = 0; i < 3; ++i) {
     EXPECT_EQ(s.links[i].model, F3R_LINK_FIXED_PINNED) << i;
     EXPECT_EQ(s.links[i].modes, 6) << i;
@@ -303,11 +314,13 @@ TEST(SceneOverrides, ErrorsNameTheOverride) {
     const char* message;
   } cases[] = {
       {"links[0].modes=40", "--set links[0].modes=40: links[0].modes: 40 is out of range 1..20"},
-      {"effects.payload.mass=-1", "--set effects.payload.mass=-1: effects.payload.mass: -1 is out of range"},
+      {"effects.payload.mass=-1",
+       "--set effects.payload.mass=-1: effects.payload.mass: -1 is out of range"},
       {"links[0].modez=3", "--set links[0].modez=3: links[0].modez: unknown key"},
       {"foo.bar=1", "--set foo.bar=1: foo: unknown section"},
       {"links[5].modes=2", "--set links[5].modes=2: links has 3 entries"},
-      {"effects.gravity=[0, 1]", "--set effects.gravity=[0, 1]: effects.gravity: has 2 values, expected 3"},
+      {"effects.gravity=[0, 1]",
+       "--set effects.gravity=[0, 1]: effects.gravity: has 2 values, expected 3"},
       {"run.duration=[1", "--set run.duration=[1: the value is not YAML"},
       {"links[0].modes=", "--set links[0].modes=: no value"},
       {"links..modes=1", "--set links..modes=1: expected FIELD=VALUE"},
@@ -317,11 +330,13 @@ TEST(SceneOverrides, ErrorsNameTheOverride) {
     f3r_scene s;
     f3r_error err{};
     EXPECT_EQ(LoadWith(path, {c.set}, &s, &err), F3R_ERR_SCENE) << c.set;
-    EXPECT_EQ(std::string(err.message).rfind(c.message, 0), 0u) << c.set << " gave: " << err.message;
+    EXPECT_EQ(std::string(err.message).rfind(c.message, 0), 0u)
+        << c.set << " gave: " << err.message;
   }
   f3r_scene s;
   f3r_error err{};
-  const std::string bad = WriteTemp("bad.yaml", "links: {model: fixed_free, modes: 2}\nrun: {duration: -1}\n");
+  const std::string bad =
+      WriteTemp("bad.yaml", "links: {model: fixed_free, modes: 2}\nrun: {duration: -1}\n");
   EXPECT_EQ(LoadWith(bad, {"links[0].modes=3"}, &s, &err), F3R_ERR_SCENE);
   EXPECT_EQ(std::string(err.message).rfind(bad + ":2: run.duration", 0), 0u) << err.message;
 }

@@ -105,13 +105,16 @@ TEST_P(SetState, IsConsistentReadsBackExactlyAndRestartsTheEnergyBalance) {
     worst = std::max(worst, o->energy_balance_error);
     worst_reference = std::max(worst_reference, r->energy_balance_error);
     EXPECT_LT(o->constraint_residual, 1e-9);
-    for (int n = 0; n < m->nq; ++n) EXPECT_NEAR(o->q[n], r->q[n], 1e-7) << n << " at " << k << " ms";
+    for (int n = 0; n < m->nq; ++n)
+      EXPECT_NEAR(o->q[n], r->q[n], 1e-7) << n << " at " << k << " ms";
   }
   // BDF's numerical damping of the fixed-pinned link's modes (rtol 1e-9) is ~1e-6 of T + V here.
   EXPECT_LT(worst, 1e-5 * energy) << "T + V = " << energy << " J";
   EXPECT_LT(worst, 2.0 * worst_reference + 1e-12 * energy);
-  std::printf("set_state, 40 ms unforced: energy balance error %.3e J of T + V %.3e J "
-              "(%.3e J from the scene's initial state)\n", worst, energy, worst_reference);
+  std::printf(
+      "set_state, 40 ms unforced: energy balance error %.3e J of T + V %.3e J "
+      "(%.3e J from the scene's initial state)\n",
+      worst, energy, worst_reference);
 }
 
 // The actuator lag states are state, not pose: set_state keeps them.
@@ -119,7 +122,9 @@ TEST_P(SetState, KeepsTheActuatorLagStates) {
   f3r_scene s;
   f3r_error err{};
   ASSERT_EQ(f3r_scene_load((std::string(F3R_SOURCE_DIR) + "/test/scenes/all_effects.yaml").c_str(),
-                           &s, &err), F3R_OK) << err.message;
+                           &s, &err),
+            F3R_OK)
+      << err.message;
   auto m = MakeModel(s);
   ASSERT_EQ(m->n_lag, 3);
   auto sim = MakeSim(m.get(), GetParam());
@@ -142,8 +147,8 @@ TEST_P(SetState, KeepsTheActuatorLagStates) {
 
 // Setting the scene's own initial state at t = 0 is what a reset does: the same run to the bit.
 TEST_P(SetState, TheScenesInitialStateGivesTheResetRun) {
-  f3r_scene s = SceneWithLinks(F3R_LINK_FIXED_FREE, 2, F3R_LINK_FIXED_PINNED, 2,
-                               F3R_LINK_FIXED_FREE, 1);
+  f3r_scene s =
+      SceneWithLinks(F3R_LINK_FIXED_FREE, 2, F3R_LINK_FIXED_PINNED, 2, F3R_LINK_FIXED_FREE, 1);
   s.platform_pose0[0] = 0.01;
   s.platform_pose0[2] = -0.1;
   s.platform_velocity0[1] = 0.2;
@@ -164,7 +169,9 @@ TEST_P(SetState, TheScenesInitialStateGivesTheResetRun) {
       rate.push_back(s.links[i].eta_rate0[j]);
     }
   ASSERT_EQ(f3r_sim_set_state(set.get(), s.platform_pose0, s.platform_velocity0, modal.data(),
-                              rate.data(), &err), F3R_OK) << err.message;
+                              rate.data(), &err),
+            F3R_OK)
+      << err.message;
   EXPECT_TRUE(SameBits(State(reset.get()), State(set.get())));
   for (double t : {0.005, 0.02}) {
     ASSERT_EQ(f3r_sim_advance(reset.get(), t, &err), F3R_OK) << err.message;
@@ -208,8 +215,8 @@ void ExpectSame(const Snapshot& a, const Snapshot& b, const std::string& what) {
 // Every refusal names its cause and changes nothing: the state, time and energy reference read
 // the same, and the run continues exactly as a twin's that was never asked.
 TEST_P(SetState, RefusalsNameTheCauseAndChangeNothing) {
-  f3r_scene s = SceneWithLinks(F3R_LINK_FIXED_FREE, 2, F3R_LINK_FIXED_FREE, 2,
-                               F3R_LINK_FIXED_FREE, 2);
+  f3r_scene s =
+      SceneWithLinks(F3R_LINK_FIXED_FREE, 2, F3R_LINK_FIXED_FREE, 2, F3R_LINK_FIXED_FREE, 2);
   s.end_stops = 1;
   s.stroke_min = 0.0;
   s.stroke_max = 0.2;
@@ -245,21 +252,42 @@ TEST_P(SetState, RefusalsNameTheCauseAndChangeNothing) {
       {"NaN pose", nan_pose, still, nullptr, nullptr, F3R_ERR_ARGUMENT, {"pose[1]", "not finite"}},
       {"Inf twist", home, inf_twist, nullptr, nullptr, F3R_ERR_ARGUMENT, {"twist[2]"}},
       {"NaN modal", home, still, nan_modal.data(), nullptr, F3R_ERR_ARGUMENT, {"modal[5]"}},
-      {"NaN modal rate", home, still, modal.data(), nan_modal.data(), F3R_ERR_ARGUMENT,
+      {"NaN modal rate",
+       home,
+       still,
+       modal.data(),
+       nan_modal.data(),
+       F3R_ERR_ARGUMENT,
        {"modal_rate[5]"}},
-      {"C_2 on A_2", onto_a2, still, nullptr, nullptr, F3R_ERR_SINGULAR,
+      {"C_2 on A_2",
+       onto_a2,
+       still,
+       nullptr,
+       nullptr,
+       F3R_ERR_SINGULAR,
        {"unreachable", "leg 2", "rho_2 + l <= 0"}},
-      {"C_2 near A_2", near_a2, still, nullptr, nullptr, F3R_ERR_SINGULAR,
+      {"C_2 near A_2",
+       near_a2,
+       still,
+       nullptr,
+       nullptr,
+       F3R_ERR_SINGULAR,
        {"unreachable", "leg 2", "collapse guard"}},
-      {"past the end stop", past_stop, still, nullptr, nullptr, F3R_ERR_ARGUMENT,
+      {"past the end stop",
+       past_stop,
+       still,
+       nullptr,
+       nullptr,
+       F3R_ERR_ARGUMENT,
        {"leg 1", "rho_1 = 0.223", "[0, 0.2]"}},
   };
   for (const Case& c : cases) {
     err = f3r_error{};
-    EXPECT_EQ(f3r_sim_set_state(sim.get(), c.pose, c.twist, c.modal, c.rate, &err), c.code) << c.name;
+    EXPECT_EQ(f3r_sim_set_state(sim.get(), c.pose, c.twist, c.modal, c.rate, &err), c.code)
+        << c.name;
     for (const char* w : c.words)
-      EXPECT_NE(std::strstr(err.message, w), nullptr) << c.name << ": '" << err.message
-                                                      << "' lacks '" << w << "'";
+      EXPECT_NE(std::strstr(err.message, w), nullptr)
+          << c.name << ": '" << err.message << "' lacks '" << w << "'";
     ExpectSame(before, Take(sim.get()), c.name);
   }
   ASSERT_EQ(f3r_sim_advance(sim.get(), 0.02, &err), F3R_OK) << err.message;
@@ -270,7 +298,8 @@ TEST_P(SetState, RefusalsNameTheCauseAndChangeNothing) {
 INSTANTIATE_TEST_SUITE_P(BothFormulations, SetState,
                          ::testing::Values(F3R_FORMULATION_DAE, F3R_FORMULATION_MINIMAL),
                          [](const ::testing::TestParamInfo<f3r_formulation>& info) {
-                           return std::string(info.param == F3R_FORMULATION_DAE ? "dae" : "minimal");
+                           return std::string(info.param == F3R_FORMULATION_DAE ? "dae"
+                                                                                : "minimal");
                          });
 
 }  // namespace

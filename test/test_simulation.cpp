@@ -14,7 +14,7 @@ namespace {
 struct Sample {
   double t;
   std::vector<double> q;
-  double energy;  // T + V - W
+  double energy;      // T + V - W
   double mechanical;  // T + V
   double constraint;
 };
@@ -52,11 +52,13 @@ RunResult RunScene(const f3r_scene& scene, double output_step, double duration) 
 f3r_scene Scene(const std::string& name) {
   f3r_scene s;
   f3r_error err{};
-  if (f3r_scene_load(ScenePath(name).c_str(), &s, &err) != F3R_OK) throw std::runtime_error(err.message);
+  if (f3r_scene_load(ScenePath(name).c_str(), &s, &err) != F3R_OK)
+    throw std::runtime_error(err.message);
   return s;
 }
 
-class FreeVibration : public ::testing::TestWithParam<std::tuple<f3r_link_model, f3r_formulation>> {};
+class FreeVibration : public ::testing::TestWithParam<std::tuple<f3r_link_model, f3r_formulation>> {
+};
 
 double FreeVibrationDrift(f3r_link_model model, f3r_formulation form, double rtol, long* steps) {
   f3r_scene s = f3r_default_scene();
@@ -92,7 +94,8 @@ TEST_P(FreeVibration, ConservesMechanicalEnergyUpToTheIntegratorsDamping) {
                                  << " at rtol 1e-8";
   RecordProperty("drift_rtol_1e-8", std::to_string(loose));
   RecordProperty("drift_rtol_1e-10", std::to_string(tight));
-  std::printf("free vibration drift over 0.2 s: %.3e at rtol 1e-8, %.3e at rtol 1e-10\n", loose, tight);
+  std::printf("free vibration drift over 0.2 s: %.3e at rtol 1e-8, %.3e at rtol 1e-10\n", loose,
+              tight);
 }
 
 INSTANTIATE_TEST_SUITE_P(
@@ -184,7 +187,8 @@ TEST(ClosedFormLimits, HeavySurroundingsGiveFixedPinnedBeamFrequencies) {
   for (int k = 3; k < 12; ++k) {
     const int j = (k - 3) / 3;
     const double alpha = m->link[0].alpha[j];
-    const double expected = alpha * alpha * std::sqrt(m->bending_stiffness / (rho_a * l * l * l * l)) / (2 * M_PI);
+    const double expected =
+        alpha * alpha * std::sqrt(m->bending_stiffness / (rho_a * l * l * l * l)) / (2 * M_PI);
     EXPECT_NEAR(hz[k], expected, 1e-3 * expected) << "mode " << k;
   }
   EXPECT_NEAR(hz[3], 869.7, 0.5) << "MODEL.md's first fixed-pinned frequency";
@@ -264,13 +268,18 @@ TEST(Simulation, OutputsAgreeWithTheStagesAtTheOutputState) {
     ASSERT_EQ(f3r_sim_advance(sim.get(), 0.0123, &err), F3R_OK) << err.message;
     const f3r_outputs* o = f3r_sim_outputs(sim.get());
     const int nq = m->nq;
-    std::vector<double> Q(nq), a(nq), lambda(F3R_NCON), work(f3r_solve_accelerations_work_size(m.get()));
+    std::vector<double> Q(nq), a(nq), lambda(F3R_NCON),
+        work(f3r_solve_accelerations_work_size(m.get()));
     f3r_applied_forces(m.get(), o->t, nullptr, o->q, o->v, nullptr, Q.data(), nullptr);
-    for (int n = 0; n < nq; ++n) EXPECT_NEAR(o->forces[n], Q[n], 1e-12 * (1.0 + std::fabs(Q[n]))) << n;
-    ASSERT_EQ(f3r_solve_accelerations(m.get(), o->q, o->v, Q.data(), a.data(), lambda.data(), work.data()), F3R_OK);
+    for (int n = 0; n < nq; ++n)
+      EXPECT_NEAR(o->forces[n], Q[n], 1e-12 * (1.0 + std::fabs(Q[n]))) << n;
+    ASSERT_EQ(f3r_solve_accelerations(m.get(), o->q, o->v, Q.data(), a.data(), lambda.data(),
+                                      work.data()),
+              F3R_OK);
     double scale = 0.0;
     for (double l : lambda) scale = std::max(scale, std::fabs(l));
-    for (int c = 0; c < F3R_NCON; ++c) EXPECT_NEAR(o->lambda[c], lambda[c], 1e-5 * scale) << "form " << form << ", lambda " << c;
+    for (int c = 0; c < F3R_NCON; ++c)
+      EXPECT_NEAR(o->lambda[c], lambda[c], 1e-5 * scale) << "form " << form << ", lambda " << c;
     EXPECT_NEAR(o->kinetic_energy, f3r_kinetic_energy(m.get(), o->q, o->v), 1e-14);
     EXPECT_NEAR(o->potential_energy, f3r_potential_energy(m.get(), o->q), 1e-14);
     for (int i = 0; i < 3; ++i) {
@@ -280,10 +289,12 @@ TEST(Simulation, OutputsAgreeWithTheStagesAtTheOutputState) {
     double g[F3R_NCON], gv[F3R_NCON], worst = 0.0, worst_v = 0.0;
     f3r_constraints(m.get(), o->q, g);
     f3r_constraint_times(m.get(), o->q, o->v, gv);
-    for (int c = 0; c < F3R_NCON; ++c) worst = std::max(worst, std::fabs(g[c])), worst_v = std::max(worst_v, std::fabs(gv[c]));
+    for (int c = 0; c < F3R_NCON; ++c)
+      worst = std::max(worst, std::fabs(g[c])), worst_v = std::max(worst_v, std::fabs(gv[c]));
     EXPECT_DOUBLE_EQ(o->constraint_residual, worst);
     EXPECT_DOUBLE_EQ(o->velocity_residual, worst_v);
-    EXPECT_NEAR(o->actuation_condition, f3r_model_actuation_condition(m.get(), o->q), 1e-9 * o->actuation_condition);
+    EXPECT_NEAR(o->actuation_condition, f3r_model_actuation_condition(m.get(), o->q),
+                1e-9 * o->actuation_condition);
   }
 }
 
@@ -291,7 +302,7 @@ TEST(Simulation, OutputsAgreeWithTheStagesAtTheOutputState) {
 // here from the scene's numbers (not through f3r_input_value).
 double AllEffectsInput(int index, double t) {
   switch (index) {
-    case F3R_FORCE_RHO + 0: return t <= 0.002 ? 0.0 : 5.0;                  // step
+    case F3R_FORCE_RHO + 0: return t <= 0.002 ? 0.0 : 5.0;                       // step
     case F3R_FORCE_RHO + 1: return 1.0 + 2.0 * std::cos(2.0 * M_PI * 30.0 * t);  // harmonic
     case F3R_FORCE_THETA + 1: {  // table (0, 0), (0.01, 0.1), (0.02, -0.05), linear
       if (t <= 0.01) return 0.1 * t / 0.01;
@@ -315,11 +326,13 @@ void PassiveForces(const f3r_model* m, const f3r_scene& s, const double* q, cons
     const double th = q[F3R_Q_THETA + i], e_x = std::cos(th), e_y = std::sin(th);
     const double g_e = gx * e_x + gy * e_y, g_n = -gx * e_y + gy * e_x;
     double mean = 0.0;  // int_0^1 w dxi
-    for (int j = 0; j < m->link[i].modes; ++j) mean += m->link[i].mean[j] * q[m->link[i].eta_index + j];
+    for (int j = 0; j < m->link[i].modes; ++j)
+      mean += m->link[i].mean[j] * q[m->link[i].eta_index + j];
     passive[i] = -s.friction_prismatic[i] * v[i] + m->link_mass * g_e;
     passive[3 + i] = -s.friction_revolute[i] * v[3 + i] +
                      (m->cylinder_mass * m->cylinder_length / 2.0 +
-                      m->link_mass * (q[i] + m->link_length / 2.0)) * g_n -
+                      m->link_mass * (q[i] + m->link_length / 2.0)) *
+                         g_n -
                      m->link_mass * mean * g_e;
   }
 }
@@ -331,8 +344,11 @@ TEST(Simulation, ActuatorEffortsAreHeldPlusScriptedAndPassiveIsTheRest) {
   for (int lagged = 0; lagged < 2; ++lagged) {
     f3r_scene s;
     f3r_error err{};
-    ASSERT_EQ(f3r_scene_load((std::string(F3R_SOURCE_DIR) + "/test/scenes/all_effects.yaml").c_str(),
-                             &s, &err), F3R_OK) << err.message;
+    ASSERT_EQ(
+        f3r_scene_load((std::string(F3R_SOURCE_DIR) + "/test/scenes/all_effects.yaml").c_str(), &s,
+                       &err),
+        F3R_OK)
+        << err.message;
     f3r_input& table = s.inputs[F3R_FORCE_THETA + 1];
     table.kind = F3R_INPUT_TABLE;
     table.table_size = 3;
@@ -372,7 +388,8 @@ TEST(Simulation, ActuatorEffortsAreHeldPlusScriptedAndPassiveIsTheRest) {
           const double* y = f3r_sim_state(sim.get());
           EXPECT_EQ(o->actuator[j], y[f3r_lag_index(m.get(), set.formulation) + j]) << j;
         }
-        EXPECT_NEAR(o->actuator[j] + o->passive[j], o->forces[j], 1e-13 * (1.0 + std::fabs(o->forces[j])))
+        EXPECT_NEAR(o->actuator[j] + o->passive[j], o->forces[j],
+                    1e-13 * (1.0 + std::fabs(o->forces[j])))
             << "joint " << j << " at " << t;
         EXPECT_NEAR(o->passive[j], passive[j], 1e-12 * (1.0 + std::fabs(passive[j])))
             << "joint " << j << " at " << t;
@@ -415,7 +432,8 @@ TEST(Simulation, EveryIntegratorAndTableFollowsTheSamePath) {
     SimPtr sim(raw);
     std::vector<double> path;
     for (int k = 1; k <= 300; ++k) {
-      if (f3r_sim_advance(sim.get(), k * 1e-4, &err) != F3R_OK) throw std::runtime_error(err.message);
+      if (f3r_sim_advance(sim.get(), k * 1e-4, &err) != F3R_OK)
+        throw std::runtime_error(err.message);
       const f3r_outputs* o = f3r_sim_outputs(sim.get());
       path.push_back(o->q[F3R_Q_X]);
       path.push_back(o->q[F3R_Q_Y]);
@@ -434,15 +452,21 @@ TEST(Simulation, EveryIntegratorAndTableFollowsTheSamePath) {
   std::vector<Case> cases = {{F3R_INTEGRATOR_ERK, nullptr, 13, 1e-8, 1e-9},
                              {F3R_INTEGRATOR_DIRK, nullptr, 7, 1e-7, 1e-7}};
   // every table a scene may name (f3r_rk_tables), with its stage count
-  const std::map<std::string, int> stages = {
-      {"ARKODE_FEHLBERG_13_7_8", 13}, {"ARKODE_DORMAND_PRINCE_7_4_5", 7}, {"ARKODE_VERNER_8_5_6", 8},
-      {"dormand_prince_8_5", 12},     {"verner_8_7", 13},                 {"verner_9_8", 16},
-      {"ARKODE_KVAERNO_7_4_5", 7},    {"ARKODE_ARK548L2SA_DIRK_8_4_5", 8}, {"ARKODE_SDIRK_5_3_4", 5}};
+  const std::map<std::string, int> stages = {{"ARKODE_FEHLBERG_13_7_8", 13},
+                                             {"ARKODE_DORMAND_PRINCE_7_4_5", 7},
+                                             {"ARKODE_VERNER_8_5_6", 8},
+                                             {"dormand_prince_8_5", 12},
+                                             {"verner_8_7", 13},
+                                             {"verner_9_8", 16},
+                                             {"ARKODE_KVAERNO_7_4_5", 7},
+                                             {"ARKODE_ARK548L2SA_DIRK_8_4_5", 8},
+                                             {"ARKODE_SDIRK_5_3_4", 5}};
   for (f3r_integrator integrator : {F3R_INTEGRATOR_ERK, F3R_INTEGRATOR_DIRK})
     for (const char* const* t = f3r_rk_tables(integrator); *t; ++t) {
       ASSERT_TRUE(stages.count(*t)) << *t;
       const bool erk = integrator == F3R_INTEGRATOR_ERK;
-      const bool sixth = !strcmp(*t, "ARKODE_VERNER_8_5_6") || !strcmp(*t, "ARKODE_DORMAND_PRINCE_7_4_5");
+      const bool sixth =
+          !strcmp(*t, "ARKODE_VERNER_8_5_6") || !strcmp(*t, "ARKODE_DORMAND_PRINCE_7_4_5");
       cases.push_back({integrator, *t, stages.at(*t), erk ? (sixth ? 1e-9 : 1e-8) : 1e-7,
                        erk ? (sixth ? 1e-8 : 1e-9) : 1e-7});
     }
@@ -452,10 +476,12 @@ TEST(Simulation, EveryIntegratorAndTableFollowsTheSamePath) {
     const std::vector<double> path = run(c.integrator, c.table, c.rtol, &stats);
     double worst = 0.0;
     for (size_t k = 0; k < ref.size(); ++k) worst = std::max(worst, std::fabs(path[k] - ref[k]));
-    EXPECT_LT(worst, c.tolerance) << (c.table ? c.table : "default") << " integrator " << c.integrator;
+    EXPECT_LT(worst, c.tolerance) << (c.table ? c.table : "default") << " integrator "
+                                  << c.integrator;
     EXPECT_GT(stats.steps, 100);
     if (c.integrator == F3R_INTEGRATOR_ERK) {
-      EXPECT_LE(stats.residual_evals, (long)c.stages * (stats.steps + 1)) << (c.table ? c.table : "default");
+      EXPECT_LE(stats.residual_evals, (long)c.stages * (stats.steps + 1))
+          << (c.table ? c.table : "default");
     }
   }
 }

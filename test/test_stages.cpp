@@ -23,7 +23,8 @@ struct LinkCase {
 
 const LinkCase kCases[] = {
     {"rigid", F3R_LINK_RIGID, F3R_LINK_RIGID, F3R_LINK_RIGID, 0, 0, 0},
-    {"fixed_pinned_r3", F3R_LINK_FIXED_PINNED, F3R_LINK_FIXED_PINNED, F3R_LINK_FIXED_PINNED, 3, 3, 3},
+    {"fixed_pinned_r3", F3R_LINK_FIXED_PINNED, F3R_LINK_FIXED_PINNED, F3R_LINK_FIXED_PINNED, 3, 3,
+     3},
     {"fixed_free_r3", F3R_LINK_FIXED_FREE, F3R_LINK_FIXED_FREE, F3R_LINK_FIXED_FREE, 3, 3, 3},
     {"mixed", F3R_LINK_RIGID, F3R_LINK_FIXED_PINNED, F3R_LINK_FIXED_FREE, 0, 2, 5},
     {"fixed_free_r8", F3R_LINK_FIXED_FREE, F3R_LINK_FIXED_FREE, F3R_LINK_FIXED_FREE, 8, 8, 8},
@@ -88,7 +89,8 @@ TEST_P(StagesTest, EquationsOfMotionMatchIndependentLagrangian) {
       EXPECT_NEAR(ours[n], theirs[n], 2e-6 * scale) << c.name << " exact=" << exact << " row " << n;
     EXPECT_NEAR(f3r_kinetic_energy(m.get(), s.q.data(), s.v.data()),
                 indep_kinetic_energy(m.get(), s.q.data(), s.v.data()), 1e-11);
-    EXPECT_NEAR(f3r_potential_energy(m.get(), s.q.data()), indep_potential_energy(m.get(), s.q.data()),
+    EXPECT_NEAR(f3r_potential_energy(m.get(), s.q.data()),
+                indep_potential_energy(m.get(), s.q.data()),
                 1e-9 * std::max(1e-12, indep_potential_energy(m.get(), s.q.data())));
   }
 }
@@ -108,8 +110,10 @@ TEST_P(StagesTest, ConstraintsAndTheirDerivativesMatchFiniteDifferences) {
   indep_constraints(mp, q.data(), gi);
   for (int r = 0; r < 6; ++r) EXPECT_NEAR(g[r], gi[r], 1e-14);
 
-  auto G = Dense(6, nq, [&](double* A, int ld) { f3r_add_constraint_jacobian(mp, q.data(), 1.0, A, ld); });
-  auto Gn = Numeric(6, q, nq, [&](const double* x, double* out) { f3r_constraints(mp, x, out); }, 1e-6);
+  auto G = Dense(6, nq,
+                 [&](double* A, int ld) { f3r_add_constraint_jacobian(mp, q.data(), 1.0, A, ld); });
+  auto Gn = Numeric(
+      6, q, nq, [&](const double* x, double* out) { f3r_constraints(mp, x, out); }, 1e-6);
   ExpectMatrixNear(G, Gn, 1e-8, "G");
 
   auto GT = Dense(nq, 6, [&](double* A, int ld) {
@@ -121,17 +125,20 @@ TEST_P(StagesTest, ConstraintsAndTheirDerivativesMatchFiniteDifferences) {
   auto dGTl = Dense(nq, nq, [&](double* A, int ld) {
     f3r_add_constraint_transpose_times_dq(mp, q.data(), lambda.data(), 1.0, A, ld);
   });
-  auto dGTl_n = Numeric(nq, q, nq, [&](const double* x, double* out) {
-    f3r_constraint_transpose_times(mp, x, lambda.data(), out);
-  }, 1e-6);
+  auto dGTl_n = Numeric(
+      nq, q, nq,
+      [&](const double* x, double* out) {
+        f3r_constraint_transpose_times(mp, x, lambda.data(), out);
+      },
+      1e-6);
   ExpectMatrixNear(dGTl, dGTl_n, 1e-8, "d(G^T lambda)/dq");
 
   auto dGv = Dense(6, nq, [&](double* A, int ld) {
     f3r_add_constraint_times_dq(mp, q.data(), v.data(), 1.0, A, ld);
   });
-  auto dGv_n = Numeric(6, q, nq, [&](const double* x, double* out) {
-    f3r_constraint_times(mp, x, v.data(), out);
-  }, 1e-6);
+  auto dGv_n = Numeric(
+      6, q, nq, [&](const double* x, double* out) { f3r_constraint_times(mp, x, v.data(), out); },
+      1e-6);
   ExpectMatrixNear(dGv, dGv_n, 1e-8, "d(G v)/dq");
 
   // gamma = dG/dt v: the derivative of G(q) v along q' = v.
@@ -139,17 +146,29 @@ TEST_P(StagesTest, ConstraintsAndTheirDerivativesMatchFiniteDifferences) {
   f3r_constraint_bias(mp, q.data(), v.data(), gamma);
   const double dt = 1e-6;
   std::vector<double> qp(q), qm(q);
-  for (int k = 0; k < nq; ++k) { qp[k] += dt * v[k]; qm[k] -= dt * v[k]; }
+  for (int k = 0; k < nq; ++k) {
+    qp[k] += dt * v[k];
+    qm[k] -= dt * v[k];
+  }
   f3r_constraint_times(mp, qp.data(), v.data(), gp);
   f3r_constraint_times(mp, qm.data(), v.data(), gm);
-  for (int r = 0; r < 6; ++r) EXPECT_NEAR(gamma[r], (gp[r] - gm[r]) / (2 * dt), 1e-7 * (1 + std::fabs(gamma[r])));
+  for (int r = 0; r < 6; ++r)
+    EXPECT_NEAR(gamma[r], (gp[r] - gm[r]) / (2 * dt), 1e-7 * (1 + std::fabs(gamma[r])));
 
   // d(gamma)/dq and d(gamma)/dv (the minimal formulation's analytic Jacobian needs both).
-  auto dgq = Dense(6, nq, [&](double* A, int ld) { f3r_add_constraint_bias_dq(mp, q.data(), v.data(), 1.0, A, ld); });
-  auto dgq_n = Numeric(6, q, nq, [&](const double* x, double* out) { f3r_constraint_bias(mp, x, v.data(), out); }, 1e-6);
+  auto dgq = Dense(6, nq, [&](double* A, int ld) {
+    f3r_add_constraint_bias_dq(mp, q.data(), v.data(), 1.0, A, ld);
+  });
+  auto dgq_n = Numeric(
+      6, q, nq, [&](const double* x, double* out) { f3r_constraint_bias(mp, x, v.data(), out); },
+      1e-6);
   ExpectMatrixNear(dgq, dgq_n, 1e-7, "d(gamma)/dq");
-  auto dgv = Dense(6, nq, [&](double* A, int ld) { f3r_add_constraint_bias_dv(mp, q.data(), v.data(), 1.0, A, ld); });
-  auto dgv_n = Numeric(6, v, nq, [&](const double* x, double* out) { f3r_constraint_bias(mp, q.data(), x, out); }, 1e-6);
+  auto dgv = Dense(6, nq, [&](double* A, int ld) {
+    f3r_add_constraint_bias_dv(mp, q.data(), v.data(), 1.0, A, ld);
+  });
+  auto dgv_n = Numeric(
+      6, v, nq, [&](const double* x, double* out) { f3r_constraint_bias(mp, q.data(), x, out); },
+      1e-6);
   ExpectMatrixNear(dgv, dgv_n, 1e-7, "d(gamma)/dv");
 }
 
@@ -174,20 +193,32 @@ TEST_P(StagesTest, InertiaAndForceDerivativesMatchFiniteDifferences) {
     }
     EXPECT_NEAR(Ma[i], s_, 1e-12 * (1 + std::fabs(s_)));
   }
-  auto dMa = Dense(nq, nq, [&](double* A, int ld) { f3r_add_mass_times_dq(mp, q.data(), a.data(), 1.0, A, ld); });
-  auto dMa_n = Numeric(nq, q, nq, [&](const double* x, double* out) { f3r_mass_times(mp, x, a.data(), out); }, 1e-6);
+  auto dMa = Dense(nq, nq, [&](double* A, int ld) {
+    f3r_add_mass_times_dq(mp, q.data(), a.data(), 1.0, A, ld);
+  });
+  auto dMa_n = Numeric(
+      nq, q, nq, [&](const double* x, double* out) { f3r_mass_times(mp, x, a.data(), out); }, 1e-6);
   ExpectMatrixNear(dMa, dMa_n, 1e-8, "d(M a)/dq");
 
-  auto dhq = Dense(nq, nq, [&](double* A, int ld) { f3r_add_velocity_forces_dq(mp, q.data(), v.data(), 1.0, A, ld); });
-  auto dhq_n = Numeric(nq, q, nq, [&](const double* x, double* out) { f3r_velocity_forces(mp, x, v.data(), out); }, 1e-6);
+  auto dhq = Dense(nq, nq, [&](double* A, int ld) {
+    f3r_add_velocity_forces_dq(mp, q.data(), v.data(), 1.0, A, ld);
+  });
+  auto dhq_n = Numeric(
+      nq, q, nq, [&](const double* x, double* out) { f3r_velocity_forces(mp, x, v.data(), out); },
+      1e-6);
   ExpectMatrixNear(dhq, dhq_n, 1e-8, "dh/dq");
 
-  auto dhv = Dense(nq, nq, [&](double* A, int ld) { f3r_add_velocity_forces_dv(mp, q.data(), v.data(), 1.0, A, ld); });
-  auto dhv_n = Numeric(nq, v, nq, [&](const double* x, double* out) { f3r_velocity_forces(mp, q.data(), x, out); }, 1e-6);
+  auto dhv = Dense(nq, nq, [&](double* A, int ld) {
+    f3r_add_velocity_forces_dv(mp, q.data(), v.data(), 1.0, A, ld);
+  });
+  auto dhv_n = Numeric(
+      nq, v, nq, [&](const double* x, double* out) { f3r_velocity_forces(mp, q.data(), x, out); },
+      1e-6);
   ExpectMatrixNear(dhv, dhv_n, 1e-8, "dh/dv");
 
   auto dk = Dense(nq, nq, [&](double* A, int ld) { f3r_add_elastic_forces_dq(mp, 1.0, A, ld); });
-  auto dk_n = Numeric(nq, q, nq, [&](const double* x, double* out) { f3r_elastic_forces(mp, x, out); }, 1e-6);
+  auto dk_n = Numeric(
+      nq, q, nq, [&](const double* x, double* out) { f3r_elastic_forces(mp, x, out); }, 1e-6);
   ExpectMatrixNear(dk, dk_n, 1e-7, "dk/dq");
 }
 
@@ -197,8 +228,8 @@ INSTANTIATE_TEST_SUITE_P(AllLinkModels, StagesTest,
 TEST(Stages, AppendixCorrectionOfModalCoriolisForce) {
   // The paper's appendix prints F_c_eta = +rho' th' int psi; the derivation gives
   // -m rho' th' int psi (MODEL.md). h = -F_c, so h_eta must be +m rho' th' b_j.
-  auto m = MakeModel(SceneWithLinks(F3R_LINK_FIXED_FREE, 3, F3R_LINK_FIXED_FREE, 3,
-                                    F3R_LINK_FIXED_FREE, 3));
+  auto m = MakeModel(
+      SceneWithLinks(F3R_LINK_FIXED_FREE, 3, F3R_LINK_FIXED_FREE, 3, F3R_LINK_FIXED_FREE, 3));
   std::vector<double> q(F3R_MAX_Q, 0.0), v(F3R_MAX_Q, 0.0), h(F3R_MAX_Q);
   q[0] = 0.12;
   q[3] = 2.0;

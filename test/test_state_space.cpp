@@ -40,8 +40,8 @@ using MapM = Eigen::Map<const MatrixXd>;
 
 // Fixed-free and fixed-pinned links, undamped, no inputs, off the home pose.
 f3r_scene FlexibleScene() {
-  f3r_scene s = SceneWithLinks(F3R_LINK_FIXED_FREE, 2, F3R_LINK_FIXED_PINNED, 2,
-                               F3R_LINK_FIXED_FREE, 3);
+  f3r_scene s =
+      SceneWithLinks(F3R_LINK_FIXED_FREE, 2, F3R_LINK_FIXED_PINNED, 2, F3R_LINK_FIXED_FREE, 3);
   s.platform_pose0[0] = 0.01;
   s.platform_pose0[1] = -0.005;
   s.platform_pose0[2] = 0.05;
@@ -85,9 +85,9 @@ TEST(StateSpace, LayoutNamesAndOperatingPoint) {
   EXPECT_STREQ(ss->state_names[2 * n - 1], "eta_3_3_rate");
   EXPECT_STREQ(ss->input_names[0], "leg_force_1");
   EXPECT_STREQ(ss->input_names[5], "cylinder_torque_3");
-  const char* outputs[12] = {"rho_1", "rho_2", "rho_3", "theta_1", "theta_2", "theta_3",
-                             "x_p", "y_p", "phi_p", "tip_deflection_1", "tip_deflection_2",
-                             "tip_deflection_3"};
+  const char* outputs[12] = {
+      "rho_1", "rho_2", "rho_3", "theta_1",          "theta_2",          "theta_3",
+      "x_p",   "y_p",   "phi_p", "tip_deflection_1", "tip_deflection_2", "tip_deflection_3"};
   for (int k = 0; k < 12; ++k) EXPECT_STREQ(ss->output_names[k], outputs[k]);
   for (int k = 0; k < 2 * n; ++k) EXPECT_EQ(ss->x0[k], k < 3 ? m->scene.platform_pose0[k] : 0.0);
   const std::vector<double> zero(n, 0.0);
@@ -119,7 +119,8 @@ TEST(StateSpace, EigenvaluesOfAAreTheModalFrequencies) {
     ASSERT_EQ(solver.info(), Eigen::Success);
     std::vector<std::complex<double>> lambda(solver.eigenvalues().data(),
                                              solver.eigenvalues().data() + nx);
-    std::sort(lambda.begin(), lambda.end(), [](auto a, auto b) { return std::abs(a) < std::abs(b); });
+    std::sort(lambda.begin(), lambda.end(),
+              [](auto a, auto b) { return std::abs(a) < std::abs(b); });
     const double omega_max = 2 * M_PI * hz[n - 1];
     // The six eigenvalues of the three rigid modes (double zeros, defective): the solver finds
     // them at sqrt(rounding x |A|) ~ 1e-3 rad/s.
@@ -139,7 +140,8 @@ TEST(StateSpace, EigenvaluesOfAAreTheModalFrequencies) {
     }
     std::printf("%s: %d flexible modes %.2f .. %.2f Hz; |Im lambda(A)| / omega - 1 <= %.2e\n",
                 home ? "home pose" : "pose (0.01, -0.005, 0.05)", n - 3, hz[3], hz[n - 1], worst);
-    RecordProperty(home ? "eigen_rel_error_home" : "eigen_rel_error_off_home", std::to_string(worst));
+    RecordProperty(home ? "eigen_rel_error_home" : "eigen_rel_error_off_home",
+                   std::to_string(worst));
   }
 }
 
@@ -187,7 +189,8 @@ TEST(StateSpace, MatchesTheNonlinearRightHandSideToFirstOrder) {
     const VectorXd fd = (up - down) / 2.0;  // affine in the force: exact up to rounding
     EXPECT_LT((fd - B.col(u).tail(n)).norm(), 1e-9 * fd.norm()) << ss->input_names[u];
   }
-  std::printf("A against central differences of the nonlinear rhs: relative error <= %.2e\n", worst);
+  std::printf("A against central differences of the nonlinear rhs: relative error <= %.2e\n",
+              worst);
 }
 
 // C against the loop closure itself: central differences (h = 1e-6) per column, and a random
@@ -209,8 +212,8 @@ TEST(StateSpace, OutputRowsAreTheLoopClosuresDerivative) {
     dz[k] = 0.0;
     for (int r = 0; r < 12; ++r) {
       const double fd = (up[r] - down[r]) / (2 * h);
-      EXPECT_NEAR(C(r, k), fd, 1e-8 * std::max(1.0, std::fabs(fd))) << ss->output_names[r] << " / "
-                                                                     << ss->state_names[k];
+      EXPECT_NEAR(C(r, k), fd, 1e-8 * std::max(1.0, std::fabs(fd)))
+          << ss->output_names[r] << " / " << ss->state_names[k];
       worst = std::max(worst, std::fabs(C(r, k) - fd));
     }
   }
@@ -231,8 +234,9 @@ TEST(StateSpace, OutputRowsAreTheLoopClosuresDerivative) {
       remainder[half] = std::max(remainder[half], std::fabs(y[r] - ss->y0[r] - lin[r]));
   }
   EXPECT_NEAR(remainder[0] / remainder[1], 4.0, 0.1);
-  std::printf("C: central differences within %.2e; perturbation remainder %.3e -> %.3e (ratio %.3f)\n",
-              worst, remainder[0], remainder[1], remainder[0] / remainder[1]);
+  std::printf(
+      "C: central differences within %.2e; perturbation remainder %.3e -> %.3e (ratio %.3f)\n",
+      worst, remainder[0], remainder[1], remainder[0] / remainder[1]);
 }
 
 // The linear step response y0 + C x(t), x(t) = int_0^t exp(A s) ds B u (Eigen's matrix
@@ -285,8 +289,10 @@ TEST(StateSpace, StepResponseAgreesWithTheSimulationToFirstOrder) {
     }
   }
   const double ratio = error[0] / error[1];
-  std::printf("step response, 20 ms: pose response %.3e m -> %.3e m, linear-vs-nonlinear error "
-              "%.3e -> %.3e (ratio %.3f)\n", response[0], response[1], error[0], error[1], ratio);
+  std::printf(
+      "step response, 20 ms: pose response %.3e m -> %.3e m, linear-vs-nonlinear error "
+      "%.3e -> %.3e (ratio %.3f)\n",
+      response[0], response[1], error[0], error[1], ratio);
   EXPECT_NEAR(response[0] / response[1], 2.0, 1e-9);
   EXPECT_LT(error[0], 0.05 * response[0]);
   EXPECT_GT(ratio, 3.6);
@@ -343,8 +349,8 @@ TEST(StateSpaceExport, MatFileIsMatlabLevel4ByteForByte) {
     const char* name;
     const double* data;
     int rows, cols;
-  } numeric[] = {{"A", ss->A, nx, nx}, {"B", ss->B, nx, nu}, {"C", ss->C, ny, nx},
-                 {"D", ss->D, ny, nu}, {"x0", ss->x0, nx, 1},  {"y0", ss->y0, ny, 1}};
+  } numeric[] = {{"A", ss->A, nx, nx}, {"B", ss->B, nx, nu},  {"C", ss->C, ny, nx},
+                 {"D", ss->D, ny, nu}, {"x0", ss->x0, nx, 1}, {"y0", ss->y0, ny, 1}};
   for (const Numeric& v : numeric) {
     header(v.name, 0, v.rows, v.cols);
     for (int k = 0; k < v.rows * v.cols; ++k) {
@@ -352,7 +358,7 @@ TEST(StateSpaceExport, MatFileIsMatlabLevel4ByteForByte) {
       ASSERT_EQ(std::memcmp(&d, &v.data[k], sizeof d), 0) << v.name << "[" << k << "]";
     }
   }
-  auto names = [&](const std::string& name, const char (*list)[F3R_SS_NAME], int count) {
+  auto names = [&](const std::string& name, const char(*list)[F3R_SS_NAME], int count) {
     size_t width = 0;
     for (int r = 0; r < count; ++r) width = std::max(width, std::strlen(list[r]));
     header(name, 1, count, int(width));
@@ -414,18 +420,22 @@ TEST(StateSpaceExport, JsonHoldsTheSameAsRows) {
     const char* key;
     const double* data;
     int rows, cols;
-  } fields[] = {{"A", ss->A, nx, nx}, {"B", ss->B, nx, 6}, {"C", ss->C, 12, nx},
+  } fields[] = {{"A", ss->A, nx, nx}, {"B", ss->B, nx, 6},   {"C", ss->C, 12, nx},
                 {"D", ss->D, 12, 6},  {"x0", ss->x0, nx, 1}, {"y0", ss->y0, 12, 1}};
   for (const Field& f : fields) {
     int rows = 0;
     const std::vector<double> v = numbers(f.key, &rows);
     ASSERT_EQ(int(v.size()), f.rows * f.cols) << f.key;
-    if (f.cols > 1) { EXPECT_EQ(rows, f.rows) << f.key; }  // a list of rows
+    if (f.cols > 1) {
+      EXPECT_EQ(rows, f.rows) << f.key;
+    }  // a list of rows
     for (int r = 0; r < f.rows; ++r)
       for (int c = 0; c < f.cols; ++c)
-        ASSERT_EQ(v[r * f.cols + c], f.data[c * f.rows + r]) << f.key << "(" << r << ", " << c << ")";
+        ASSERT_EQ(v[r * f.cols + c], f.data[c * f.rows + r])
+            << f.key << "(" << r << ", " << c << ")";
   }
-  EXPECT_NE(j.find("\"state_names\": [\"x_p\", \"y_p\", \"phi_p\", \"eta_1_1\""), std::string::npos);
+  EXPECT_NE(j.find("\"state_names\": [\"x_p\", \"y_p\", \"phi_p\", \"eta_1_1\""),
+            std::string::npos);
   EXPECT_NE(j.find("\"eta_3_3_rate\"]"), std::string::npos);
   EXPECT_NE(j.find("\"input_names\": [\"leg_force_1\", \"leg_force_2\", \"leg_force_3\", "
                    "\"cylinder_torque_1\", \"cylinder_torque_2\", \"cylinder_torque_3\"]"),
@@ -442,7 +452,8 @@ TEST(StateSpaceExport, CliWritesBothFilesOrNamesThePathItCannotWrite) {
   const std::string log = stem + ".log";
   const std::string scene = std::string(F3R_SOURCE_DIR) + "/config/scenes/mixed_links.yaml";
   const std::string cmd = std::string(F3R_CLI) + " " + scene + " --linearise " + stem +
-                          ".mat --set 'initial.platform_pose=[0.01, -0.005, 0.05]' > " + log + " 2>&1";
+                          ".mat --set 'initial.platform_pose=[0.01, -0.005, 0.05]' > " + log +
+                          " 2>&1";
   ASSERT_EQ(std::system(cmd.c_str()), 0);
   std::ifstream in(log);
   std::stringstream said;
@@ -451,9 +462,11 @@ TEST(StateSpaceExport, CliWritesBothFilesOrNamesThePathItCannotWrite) {
   EXPECT_NE(said.str().find("nx 16, nu 6, ny 12"), std::string::npos) << said.str();
   const std::vector<unsigned char> mat = ReadBytes(stem + ".mat"), json = ReadBytes(stem + ".json");
   EXPECT_GT(mat.size(), 16u * 16u * 8u);
-  EXPECT_NE(std::string(json.begin(), json.end()).find("\"x0\": [0.01, -0.005, 0.05"), std::string::npos);
+  EXPECT_NE(std::string(json.begin(), json.end()).find("\"x0\": [0.01, -0.005, 0.05"),
+            std::string::npos);
   const std::string bad = "/nonexistent_f3r_dir/model.mat";
-  const std::string cmd_bad = std::string(F3R_CLI) + " " + scene + " --linearise " + bad + " > " + log + " 2>&1";
+  const std::string cmd_bad =
+      std::string(F3R_CLI) + " " + scene + " --linearise " + bad + " > " + log + " 2>&1";
   EXPECT_NE(std::system(cmd_bad.c_str()), 0);
   std::ifstream in_bad(log);
   std::stringstream said_bad;

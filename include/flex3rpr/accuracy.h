@@ -31,29 +31,30 @@ extern "C" {
 #define F3R_ACCURACY_SOLVER_SHARE 0.25
 
 typedef struct {
-  double request;         /* m; 0 when only modes: auto asked */
-  int modes[3];           /* per link; 0 for rigid links */
+  double request; /* m; 0 when only modes: auto asked */
+  int modes[3];   /* per link; 0 for rigid links */
   int exact_kinematics;
   f3r_formulation formulation;
   f3r_integrator integrator;
-  char table[48];         /* the Butcher table for erk and dirk, "" for the default */
+  char table[48]; /* the Butcher table for erk and dirk, "" for the default */
   double rtol, atol;
-  double model_error;     /* m, estimated error of the mode counts */
-  double kinematics_effect;/* m, estimated effect of exact kinematics on the path; estimated only
+  double model_error;       /* m, estimated error of the mode counts */
+  double kinematics_effect; /* m, estimated effect of exact kinematics on the path; estimated only
                            * where the scene turns it off (0 otherwise) */
-  double kinematics_error;/* m, the part of it left in the run: the effect when it is off, else 0 */
-  double kinematics_linear;/* m, the effect's linear estimate (0 when not computed) */
-  double solver_error;    /* m, the measured relation's error at rtol */
-  double extent;          /* m, largest distance of the linear end-effector path from its start */
-  int pilot;              /* 1 when nonlinear pilot runs checked the estimate */
-  double pilot_ratio;     /* nonlinear over linear mode-count difference in the pilot window */
-  int linear_evaluations; /* linear models built and solved */
-  double estimated_error; /* m: model + kinematics + solver error; 0 when nothing was chosen */
-  int request_met;        /* 1 when estimated_error <= request; 0 names the largest part in the
+  double
+      kinematics_error; /* m, the part of it left in the run: the effect when it is off, else 0 */
+  double kinematics_linear; /* m, the effect's linear estimate (0 when not computed) */
+  double solver_error;      /* m, the measured relation's error at rtol */
+  double extent;            /* m, largest distance of the linear end-effector path from its start */
+  int pilot;                /* 1 when nonlinear pilot runs checked the estimate */
+  double pilot_ratio;       /* nonlinear over linear mode-count difference in the pilot window */
+  int linear_evaluations;   /* linear models built and solved */
+  double estimated_error;   /* m: model + kinematics + solver error; 0 when nothing was chosen */
+  int request_met;          /* 1 when estimated_error <= request; 0 names the largest part in the
                            * summary and the brief (a scene's own settings, or what no choice
                            * within F3R_MAX_MODES and the measured solvers reaches) */
-  char summary[2048];     /* the choice and why, one line per decision */
-  char brief[256];        /* the same in one line, for a status message */
+  char summary[2048];       /* the choice and why, one line per decision */
+  char brief[256];          /* the same in one line, for a status message */
 } f3r_accuracy_choice;
 
 /* Chooses for `request` (m, > 0). The scene's explicit settings are kept and reported.
@@ -78,14 +79,14 @@ f3r_status f3r_accuracy_modes(const f3r_scene* scene, unsigned chosen, double ta
 
 /* A measured point of the work-precision relation (solver_table.c, written by scripts/bench). */
 typedef struct {
-  const char* kind;           /* "flexible", "rigid" (all links rigid), "commanded" (held commands) */
+  const char* kind; /* "flexible", "rigid" (all links rigid), "commanded" (held commands) */
   f3r_formulation formulation;
   f3r_integrator integrator;
-  const char* table;          /* Butcher table, "" for the default or for IDA */
-  double rtol, atol;          /* the benchmark's sweep sets atol = 1e-2 rtol (m, m/s) */
-  double error;               /* m: the largest end-effector error over the benchmark scenes */
-  double cost;                /* median over those scenes of CPU time / that of minimal IDA at 1e-6 */
-  int scenes;                 /* how many scenes were measured */
+  const char* table; /* Butcher table, "" for the default or for IDA */
+  double rtol, atol; /* the benchmark's sweep sets atol = 1e-2 rtol (m, m/s) */
+  double error;      /* m: the largest end-effector error over the benchmark scenes */
+  double cost;       /* median over those scenes of CPU time / that of minimal IDA at 1e-6 */
+  int scenes;        /* how many scenes were measured */
 } f3r_solver_relation;
 
 extern const f3r_solver_relation f3r_solver_relations[];

@@ -17,7 +17,6 @@
 extern "C" {
 #endif
 
-
 /* alpha_j, j = 1..count, roots of the frequency equation of `end`, to ~1e-15 relative.
  * Returns 0, or -1 if count is outside 1..F3R_MAX_MODES. */
 int f3r_beam_roots(f3r_beam_end end, int count, double* alpha);

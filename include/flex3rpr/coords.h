@@ -24,9 +24,6 @@ enum {
  * the two beam ends of beam_modes.h. */
 #define F3R_MAX_MODES 20
 
-typedef enum {
-  F3R_BEAM_FIXED_PINNED = 1,
-  F3R_BEAM_FIXED_FREE = 2
-} f3r_beam_end;
+typedef enum { F3R_BEAM_FIXED_PINNED = 1, F3R_BEAM_FIXED_FREE = 2 } f3r_beam_end;
 
 #endif

@@ -17,15 +17,15 @@ extern "C" {
 #endif
 
 typedef struct {
-  int n;                  /* number of minimal coordinates */
-  double* mass;           /* n x n, column-major */
-  double* damping;        /* n x n: joint friction and modal damping through the loop closure */
-  double* stiffness;      /* n x n: beam stiffness and the geometric stiffness of static loads */
-  double* input;          /* n x F3R_RIGID_FORCES */
-  double* static_force;   /* n */
-  double* shapes;         /* n x n: mode shapes Phi, Phi^T M Phi = I, by ascending omega^2 */
-  double* omega2;         /* n: eigenvalues of K Phi = M Phi diag(omega^2), rad^2/s^2 */
-  double* modal_damping;  /* n: diagonal of Phi^T D Phi (its coupling terms are neglected) */
+  int n;                 /* number of minimal coordinates */
+  double* mass;          /* n x n, column-major */
+  double* damping;       /* n x n: joint friction and modal damping through the loop closure */
+  double* stiffness;     /* n x n: beam stiffness and the geometric stiffness of static loads */
+  double* input;         /* n x F3R_RIGID_FORCES */
+  double* static_force;  /* n */
+  double* shapes;        /* n x n: mode shapes Phi, Phi^T M Phi = I, by ascending omega^2 */
+  double* omega2;        /* n: eigenvalues of K Phi = M Phi diag(omega^2), rad^2/s^2 */
+  double* modal_damping; /* n: diagonal of Phi^T D Phi (its coupling terms are neglected) */
 } f3r_linear_model;
 
 /* Linearises the model (with its actuator lag left out and its scripted inputs at zero) and
@@ -52,8 +52,8 @@ f3r_status f3r_linear_response(const f3r_linear_model* linear, const f3r_model* 
  * t = 0). The difference is second order in the motion where the two models share their tangent
  * (exact kinematics' axial velocity -w theta_dot is), so the linear model cannot see it itself. */
 f3r_status f3r_linear_difference_response(const f3r_linear_model* linear, const f3r_model* model,
-                                          const f3r_model* other, double dt, int count, double* pose,
-                                          int* unreachable, f3r_error* err);
+                                          const f3r_model* other, double dt, int count,
+                                          double* pose, int* unreachable, f3r_error* err);
 
 /* The linear model as a first-order state-space system, for control design and for export
  * (flex3rpr_sim --linearise FILE.mat):
@@ -77,13 +77,13 @@ f3r_status f3r_linear_difference_response(const f3r_linear_model* linear, const 
 #define F3R_SS_NAME 24 /* room for any name below, NUL included */
 
 typedef struct {
-  int nx, nu, ny;  /* 2 n, F3R_SS_INPUTS, F3R_SS_OUTPUTS */
-  double* A;       /* nx x nx (1/s, 1/s^2) */
-  double* B;       /* nx x nu (rates per N or N m) */
-  double* C;       /* ny x nx */
-  double* D;       /* ny x nu: zero */
-  double* x0;      /* nx: the operating point (z0, 0) in absolute coordinates, so z = z0 + x[0..n) */
-  double y0[F3R_SS_OUTPUTS]; /* the outputs at the operating point */
+  int nx, nu, ny; /* 2 n, F3R_SS_INPUTS, F3R_SS_OUTPUTS */
+  double* A;      /* nx x nx (1/s, 1/s^2) */
+  double* B;      /* nx x nu (rates per N or N m) */
+  double* C;      /* ny x nx */
+  double* D;      /* ny x nu: zero */
+  double* x0;     /* nx: the operating point (z0, 0) in absolute coordinates, so z = z0 + x[0..n) */
+  double y0[F3R_SS_OUTPUTS];        /* the outputs at the operating point */
   char (*state_names)[F3R_SS_NAME]; /* nx: "x_p", "y_p", "phi_p", "eta_1_1" .. "eta_3_<r_3>", then
                                      * the same with "_rate" */
   char input_names[F3R_SS_INPUTS][F3R_SS_NAME];   /* "leg_force_1".., "cylinder_torque_1".. */

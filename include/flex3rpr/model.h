@@ -19,14 +19,14 @@ extern "C" {
 
 typedef struct {
   f3r_link_model model;
-  int modes;    /* r_i (chosen by the model when the scene says auto) */
-  int eta_index;/* index of this link's first modal coordinate in q */
-  double alpha[F3R_MAX_MODES];        /* roots of the frequency equation */
-  double mean[F3R_MAX_MODES];         /* int_0^1 psi_j dxi */
-  double first_moment[F3R_MAX_MODES]; /* int_0^1 xi psi_j dxi */
-  double tip[F3R_MAX_MODES];          /* psi_j(1): 0 for fixed-pinned */
-  double stiffness[F3R_MAX_MODES];    /* EI/l^3 int psi_j''^2 (N/m), diagonal modal stiffness */
-  double omega_clamped[F3R_MAX_MODES];/* alpha_j^2 sqrt(EI/(m l^3)) (rad/s) */
+  int modes;                           /* r_i (chosen by the model when the scene says auto) */
+  int eta_index;                       /* index of this link's first modal coordinate in q */
+  double alpha[F3R_MAX_MODES];         /* roots of the frequency equation */
+  double mean[F3R_MAX_MODES];          /* int_0^1 psi_j dxi */
+  double first_moment[F3R_MAX_MODES];  /* int_0^1 xi psi_j dxi */
+  double tip[F3R_MAX_MODES];           /* psi_j(1): 0 for fixed-pinned */
+  double stiffness[F3R_MAX_MODES];     /* EI/l^3 int psi_j''^2 (N/m), diagonal modal stiffness */
+  double omega_clamped[F3R_MAX_MODES]; /* alpha_j^2 sqrt(EI/(m l^3)) (rad/s) */
 } f3r_link_params;
 
 struct f3r_model;
@@ -49,24 +49,24 @@ typedef struct {
 #define F3R_MAX_EFFECTS 8
 
 typedef struct f3r_model {
-  f3r_scene scene;       /* the scene the model was built from (validated) */
+  f3r_scene scene; /* the scene the model was built from (validated) */
 
   /* geometry (../shared/MODEL.md) */
-  double base_joint[3][2];   /* A_i (m) */
-  double platform_angle[3];  /* phi_i of C_i on the platform: -pi/6, pi/2, 7pi/6 */
-  double platform_radius;    /* r_PC (m) */
+  double base_joint[3][2];         /* A_i (m) */
+  double platform_angle[3];        /* phi_i of C_i on the platform: -pi/6, pi/2, 7pi/6 */
+  double platform_radius;          /* r_PC (m) */
   double platform_direction[3][2]; /* (cos, sin) phi_i: C_i's direction at phi_p = 0 */
 
   /* inertia and stiffness */
-  double link_length;        /* l (m) */
-  double link_mass;          /* m (kg) */
-  double bending_stiffness;  /* EI (N m^2) */
-  double cylinder_inertia;   /* I_c about A_i (kg m^2) */
-  double cylinder_mass;      /* m_c (kg) */
-  double cylinder_length;    /* L (m) */
-  double platform_mass;      /* m_p plus the payload's mass (kg) */
-  double platform_inertia;   /* I_p plus the payload's inertia (kg m^2) */
-  double gravity[3];         /* m/s^2, world frame; only X and Y do work */
+  double link_length;       /* l (m) */
+  double link_mass;         /* m (kg) */
+  double bending_stiffness; /* EI (N m^2) */
+  double cylinder_inertia;  /* I_c about A_i (kg m^2) */
+  double cylinder_mass;     /* m_c (kg) */
+  double cylinder_length;   /* L (m) */
+  double platform_mass;     /* m_p plus the payload's mass (kg) */
+  double platform_inertia;  /* I_p plus the payload's inertia (kg m^2) */
+  double gravity[3];        /* m/s^2, world frame; only X and Y do work */
 
   /* the enabled force effects, in order (effects.c); disabled ones are absent */
   int n_effects;
@@ -79,21 +79,21 @@ typedef struct f3r_model {
   int n_breakpoints;
   double breakpoints[F3R_RIGID_FORCES * F3R_MAX_TABLE];
 
-  int n_lag;                 /* 3 with actuator lag (applied leg forces are states), else 0 */
-  double lag_time_constant;  /* s */
+  int n_lag;                /* 3 with actuator lag (applied leg forces are states), else 0 */
+  double lag_time_constant; /* s */
 
   /* coefficients of the effects (effects.c), copied from the scene so that the loop never reads it */
-  double joint_friction[6];          /* viscous, per coordinate: rho_i (N s/m), theta_i (N m s) */
-  double modal_damping[F3R_MAX_Q];   /* per modal coordinate n >= 9: 2 zeta omega_j m (N s/m) */
+  double joint_friction[6];        /* viscous, per coordinate: rho_i (N s/m), theta_i (N m s) */
+  double modal_damping[F3R_MAX_Q]; /* per modal coordinate n >= 9: 2 zeta omega_j m (N s/m) */
 
   /* end stops of the pistons (events.c): active only when end_stops is 1 */
   int end_stops;
   double stroke_min, stroke_max; /* limits of rho_i (m) */
   double restitution;            /* Newton's coefficient c: rho_i' -> -c rho_i' at a stop */
 
-  int nq;                    /* number of generalized coordinates */
-  int n_independent;         /* 3 + sum r_i: platform pose and modal coordinates */
-  double theta_branch[3];    /* leg directions at the scene's initial pose: branch of atan2 */
+  int nq;                 /* number of generalized coordinates */
+  int n_independent;      /* 3 + sum r_i: platform pose and modal coordinates */
+  double theta_branch[3]; /* leg directions at the scene's initial pose: branch of atan2 */
 } f3r_model;
 
 /* Builds a model from a scene (validating it first). Every flexible link's mode count must be a

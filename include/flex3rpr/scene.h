@@ -21,7 +21,7 @@ typedef enum {
 } f3r_link_model;
 
 typedef enum {
-  F3R_FORMULATION_DAE = 0,    /* redundant coordinates + multipliers, GGL index-2 */
+  F3R_FORMULATION_DAE = 0,     /* redundant coordinates + multipliers, GGL index-2 */
   F3R_FORMULATION_MINIMAL = 1, /* platform pose + modal coordinates, implicit ODE */
   F3R_FORMULATION_INDEX3 = 2   /* redundant coordinates + multipliers, plain index 3: for external
                                 * solvers (MEBDFI, RADAU5); a simulation rejects it */
@@ -65,24 +65,24 @@ typedef enum {
 
 typedef struct {
   f3r_input_kind kind;
-  double offset;    /* N or N m: constant, harmonic and chirp offset */
-  double amplitude; /* N or N m: harmonic and chirp amplitude */
-  double omega;     /* rad/s: harmonic */
-  double phase;     /* rad: harmonic */
-  double t0, t1;    /* s: step time (t0); ramp and chirp start and end */
+  double offset;        /* N or N m: constant, harmonic and chirp offset */
+  double amplitude;     /* N or N m: harmonic and chirp amplitude */
+  double omega;         /* rad/s: harmonic */
+  double phase;         /* rad: harmonic */
+  double t0, t1;        /* s: step time (t0); ramp and chirp start and end */
   double before, after; /* step and ramp values before t0 and after (t1) */
-  double f0, f1;    /* Hz: chirp start and end frequency */
-  int table_size;   /* 2..F3R_MAX_TABLE */
-  int table_hold;   /* 1: piecewise constant, value[k] on (time[k], time[k+1]] (a controller's
+  double f0, f1;        /* Hz: chirp start and end frequency */
+  int table_size;       /* 2..F3R_MAX_TABLE */
+  int table_hold;       /* 1: piecewise constant, value[k] on (time[k], time[k+1]] (a controller's
                      * held command); 0: piecewise linear */
   double table_time[F3R_MAX_TABLE], table_value[F3R_MAX_TABLE];
 } f3r_input;
 
 /* Index of a rigid generalized force in f3r_scene.inputs and in force vectors. */
 enum {
-  F3R_FORCE_RHO = F3R_Q_RHO,          /* 0..2: force along leg i on its piston (N) */
-  F3R_FORCE_THETA = F3R_Q_THETA,      /* 3..5: torque on cylinder i about A_i (N m) */
-  F3R_FORCE_PLATFORM = F3R_Q_X,       /* 6, 7, 8: platform F_x (N), F_y (N), torque (N m) */
+  F3R_FORCE_RHO = F3R_Q_RHO,     /* 0..2: force along leg i on its piston (N) */
+  F3R_FORCE_THETA = F3R_Q_THETA, /* 3..5: torque on cylinder i about A_i (N m) */
+  F3R_FORCE_PLATFORM = F3R_Q_X,  /* 6, 7, 8: platform F_x (N), F_y (N), torque (N m) */
   F3R_RIGID_FORCES = F3R_Q_MODAL
 };
 
@@ -91,7 +91,7 @@ enum {
 /* Bits of f3r_scene.explicit_settings: what the scene file (or the caller) fixed itself, which
  * the accuracy knob (accuracy.h) keeps. */
 enum {
-  F3R_EXPLICIT_MODES = 1,                 /* << i: links[i].modes was given as a number */
+  F3R_EXPLICIT_MODES = 1, /* << i: links[i].modes was given as a number */
   F3R_EXPLICIT_FORMULATION = 1 << 3,
   F3R_EXPLICIT_INTEGRATOR = 1 << 4,
   F3R_EXPLICIT_RTOL = 1 << 5,
@@ -102,12 +102,12 @@ enum {
 
 typedef struct {
   f3r_link_model model;
-  int modes;                         /* 1..F3R_MAX_MODES for a flexible link, 0 for rigid,
+  int modes;                       /* 1..F3R_MAX_MODES for a flexible link, 0 for rigid,
                                         F3R_MODES_AUTO to let the model choose */
-  double auto_tolerance;             /* modes: auto: static truncation target, default 1e-3 */
-  double damping_ratio;              /* modal damping ratio of every mode, default 0 */
-  double eta0[F3R_MAX_MODES];        /* initial modal deflections (m) */
-  double eta_rate0[F3R_MAX_MODES];   /* initial modal rates (m/s) */
+  double auto_tolerance;           /* modes: auto: static truncation target, default 1e-3 */
+  double damping_ratio;            /* modal damping ratio of every mode, default 0 */
+  double eta0[F3R_MAX_MODES];      /* initial modal deflections (m) */
+  double eta_rate0[F3R_MAX_MODES]; /* initial modal rates (m/s) */
 } f3r_link_scene;
 
 typedef struct {
@@ -126,17 +126,17 @@ typedef struct {
   double cylinder_density;        /* kg/m^3, 2270 */
 
   f3r_link_scene links[3];
-  int exact_kinematics; /* 1: keep the axial velocity -w theta_dot of a beam point (default 0) */
-  double gravity[3];            /* m/s^2, world frame, default (0, 0, -9.81): no work in the plane */
-  double payload_mass;          /* kg at P, default 0 */
-  double payload_inertia;       /* kg m^2 about P, default 0 */
-  double friction_prismatic[3]; /* viscous, N s/m on rho_i, default 0 */
-  double friction_revolute[3];  /* viscous, N m s on theta_i, default 0 */
-  double actuator_lag;          /* s: first-order lag of the applied leg forces; 0 is off */
-  int end_stops;                /* 1: the stroke is hard: impacts at stroke_min and stroke_max */
-  double stroke_min, stroke_max;/* m, default 0 and 0.2: the range of rho_i (geometry.stroke_min,
+  int exact_kinematics;   /* 1: keep the axial velocity -w theta_dot of a beam point (default 0) */
+  double gravity[3];      /* m/s^2, world frame, default (0, 0, -9.81): no work in the plane */
+  double payload_mass;    /* kg at P, default 0 */
+  double payload_inertia; /* kg m^2 about P, default 0 */
+  double friction_prismatic[3];  /* viscous, N s/m on rho_i, default 0 */
+  double friction_revolute[3];   /* viscous, N m s on theta_i, default 0 */
+  double actuator_lag;           /* s: first-order lag of the applied leg forces; 0 is off */
+  int end_stops;                 /* 1: the stroke is hard: impacts at stroke_min and stroke_max */
+  double stroke_min, stroke_max; /* m, default 0 and 0.2: the range of rho_i (geometry.stroke_min,
                                  * _max or effects.end_stops.min, max), the URDF's limits */
-  double restitution;           /* coefficient of restitution of the stops, default 0.5 */
+  double restitution;            /* coefficient of restitution of the stops, default 0.5 */
 
   /* initial state: platform pose (X_p, Y_p, phi_p) and its rate; deflections are in links[] */
   double platform_pose0[3];
@@ -190,7 +190,8 @@ f3r_status f3r_scene_load(const char* path, f3r_scene* scene, f3r_error* err);
 /* The same with an accuracy request from outside the file (a CLI flag, a node parameter): it
  * replaces accuracy.end_effector when > 0, before validation, so flexible links may leave their
  * modes to the knob. */
-f3r_status f3r_scene_load_accuracy(const char* path, double accuracy, f3r_scene* scene, f3r_error* err);
+f3r_status f3r_scene_load_accuracy(const char* path, double accuracy, f3r_scene* scene,
+                                   f3r_error* err);
 
 /* What comes from outside the file: an accuracy request (> 0: replaces accuracy.end_effector) and
  * overrides "FIELD=VALUE", applied in order to the parsed document before it is read, so they pass

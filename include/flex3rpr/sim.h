@@ -16,14 +16,14 @@ typedef struct f3r_sim f3r_sim;
 typedef struct {
   f3r_formulation formulation;
   f3r_integrator integrator;
-  double rtol, atol;      /* atol applies to positions (m, rad) and rates; see sim.c for others */
-  double max_step;        /* s; 0: no limit */
-  int max_order;          /* IDA: highest BDF order, 1..5 */
-  int analytic_jacobian;  /* 1: f3r_residual_jacobian; 0: IDA's difference quotients */
-  int stop_at_outputs;    /* 1: never step past the requested output time (for live input) */
-  char rk_table[48];      /* erk, dirk: the Butcher table by name (f3r_rk_table_known); "":
+  double rtol, atol;       /* atol applies to positions (m, rad) and rates; see sim.c for others */
+  double max_step;         /* s; 0: no limit */
+  int max_order;           /* IDA: highest BDF order, 1..5 */
+  int analytic_jacobian;   /* 1: f3r_residual_jacobian; 0: IDA's difference quotients */
+  int stop_at_outputs;     /* 1: never step past the requested output time (for live input) */
+  char rk_table[48];       /* erk, dirk: the Butcher table by name (f3r_rk_table_known); "":
                            * the integrator's default (Fehlberg 7(8); Kvaerno 7(4,5)) */
-  int dense_linear_solver;/* IDA: 1 forces SUNDIALS' dense LU; 0 (default) uses the Schur
+  int dense_linear_solver; /* IDA: 1 forces SUNDIALS' dense LU; 0 (default) uses the Schur
                            * complement on the kinematic rows when the Jacobian is analytic */
 } f3r_solver_settings;
 
@@ -33,21 +33,21 @@ f3r_solver_settings f3r_solver_settings_from_scene(const f3r_scene* scene);
 typedef struct {
   long steps, residual_evals, jacobian_evals;
   long error_test_failures, nonlinear_failures;
-  long restarts;          /* integrator re-initialisations (force changes, resets) */
-  long recoverable_errors;/* residual calls that asked IDA to cut the step */
-  double last_step;       /* s */
+  long restarts;           /* integrator re-initialisations (force changes, resets) */
+  long recoverable_errors; /* residual calls that asked IDA to cut the step */
+  double last_step;        /* s */
   int last_order;
 } f3r_sim_stats;
 
 typedef struct {
-  double t;                /* s */
-  int leg;                 /* 0..2 */
-  int at_max;              /* 1 at stroke_max, 0 at stroke_min */
-  double rho;              /* m, where it happened */
-  double rate_before, rate_after; /* rho_i' (m/s) */
-  double impulse;          /* N s along rho_i */
+  double t;                             /* s */
+  int leg;                              /* 0..2 */
+  int at_max;                           /* 1 at stroke_max, 0 at stroke_min */
+  double rho;                           /* m, where it happened */
+  double rate_before, rate_after;       /* rho_i' (m/s) */
+  double impulse;                       /* N s along rho_i */
   double kinetic_before, kinetic_after; /* T (J) */
-  double q[F3R_MAX_Q];     /* configuration at the impact */
+  double q[F3R_MAX_Q];                  /* configuration at the impact */
 } f3r_impact_record;
 
 typedef struct {
@@ -72,9 +72,9 @@ typedef struct {
   long impacts;                  /* end-stop impacts so far */
   double impact_loss;            /* J of kinetic energy the impacts took */
   f3r_impact_record last_impact;
-  double constraint_residual;    /* max |g_k(q)|, m */
-  double velocity_residual;      /* max |(G v)_k|, m/s */
-  double actuation_condition;    /* condition number of the map from the three leg forces to the
+  double constraint_residual; /* max |g_k(q)|, m */
+  double velocity_residual;   /* max |(G v)_k|, m/s */
+  double actuation_condition; /* condition number of the map from the three leg forces to the
                                   * platform wrench (moment scaled by r_PC), capped at 1e16: it is
                                   * infinite at a type-II singularity such as the home pose */
   f3r_sim_stats stats;

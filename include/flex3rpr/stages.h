@@ -34,10 +34,10 @@ void f3r_add_mass_times_dq(const f3r_model* m, const double* q, const double* a,
 
 /* --- velocity-dependent forces h(q, v) --------------------------------------------------------- */
 void f3r_velocity_forces(const f3r_model* m, const double* q, const double* v, double* h);
-void f3r_add_velocity_forces_dq(const f3r_model* m, const double* q, const double* v,
-                                double scale, double* A, int ld);
-void f3r_add_velocity_forces_dv(const f3r_model* m, const double* q, const double* v,
-                                double scale, double* A, int ld);
+void f3r_add_velocity_forces_dq(const f3r_model* m, const double* q, const double* v, double scale,
+                                double* A, int ld);
+void f3r_add_velocity_forces_dv(const f3r_model* m, const double* q, const double* v, double scale,
+                                double* A, int ld);
 
 /* --- elastic forces k(q) = dV/dq --------------------------------------------------------------- */
 void f3r_elastic_forces(const f3r_model* m, const double* q, double* k);
@@ -57,26 +57,26 @@ void f3r_add_generalized_forces_dv(const f3r_model* m, const double* q, const do
                                    double scale, double* A, int ld);
 
 /* --- constraints -------------------------------------------------------------------------------- */
-void f3r_constraints(const f3r_model* m, const double* q, double* g);          /* g (6) */
+void f3r_constraints(const f3r_model* m, const double* q, double* g); /* g (6) */
 void f3r_add_constraint_jacobian(const f3r_model* m, const double* q, double scale, double* A,
-                                 int ld);                                       /* G (6 x nq) */
+                                 int ld); /* G (6 x nq) */
 void f3r_add_constraint_jacobian_transpose(const f3r_model* m, const double* q, double scale,
-                                           double* A, int ld);                  /* G^T (nq x 6) */
+                                           double* A, int ld); /* G^T (nq x 6) */
 void f3r_constraint_times(const f3r_model* m, const double* q, const double* v, double* out);
 void f3r_constraint_transpose_times(const f3r_model* m, const double* q, const double* lambda,
                                     double* out);
 /* d(G(q)^T lambda)/dq (nq x nq) and d(G(q) v)/dq (6 x nq). */
 void f3r_add_constraint_transpose_times_dq(const f3r_model* m, const double* q,
                                            const double* lambda, double scale, double* A, int ld);
-void f3r_add_constraint_times_dq(const f3r_model* m, const double* q, const double* v,
-                                 double scale, double* A, int ld);
+void f3r_add_constraint_times_dq(const f3r_model* m, const double* q, const double* v, double scale,
+                                 double* A, int ld);
 /* gamma = (dG/dt) v, so that G a + gamma = 0 along a motion. */
 void f3r_constraint_bias(const f3r_model* m, const double* q, const double* v, double* gamma);
 /* scale * d(gamma)/dq and scale * d(gamma)/dv (6 x nq) added into A. */
-void f3r_add_constraint_bias_dq(const f3r_model* m, const double* q, const double* v,
-                                double scale, double* A, int ld);
-void f3r_add_constraint_bias_dv(const f3r_model* m, const double* q, const double* v,
-                                double scale, double* A, int ld);
+void f3r_add_constraint_bias_dq(const f3r_model* m, const double* q, const double* v, double scale,
+                                double* A, int ld);
+void f3r_add_constraint_bias_dv(const f3r_model* m, const double* q, const double* v, double scale,
+                                double* A, int ld);
 
 /* --- energy ------------------------------------------------------------------------------------- */
 double f3r_kinetic_energy(const f3r_model* m, const double* q, const double* v);
@@ -88,8 +88,7 @@ double f3r_potential_energy(const f3r_model* m, const double* q);
  * of rho_legs, so the loops stay closed (G dv = 0) and rho_i' -> -c rho_i'. v_out = v + dv,
  * impulse[count] the impulses (N s). work holds f3r_impact_work_size doubles. */
 f3r_status f3r_impact(const f3r_model* m, const double* q, const double* v, const int* legs,
-                      int count, double restitution, double* v_out, double* impulse,
-                      double* work);
+                      int count, double restitution, double* v_out, double* impulse, double* work);
 size_t f3r_impact_work_size(const f3r_model* m);
 
 /* --- accelerations ------------------------------------------------------------------------------ */

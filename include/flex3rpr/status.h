@@ -9,12 +9,12 @@ extern "C" {
 
 typedef enum {
   F3R_OK = 0,
-  F3R_ERR_ARGUMENT = 1,    /* a bad argument from the caller (NULL, wrong size, NaN) */
-  F3R_ERR_SCENE = 2,       /* a scene value outside its allowed range, or a bad scene file */
-  F3R_ERR_MEMORY = 3,      /* allocation failed (only at creation, never while stepping) */
-  F3R_ERR_SOLVER = 4,      /* SUNDIALS reported a failure it could not recover from */
-  F3R_ERR_SINGULAR = 5,    /* a configuration where the model degenerates (rho_i + l -> 0) */
-  F3R_ERR_NONFINITE = 6    /* a NaN or Inf reached the state; the last good state is kept */
+  F3R_ERR_ARGUMENT = 1, /* a bad argument from the caller (NULL, wrong size, NaN) */
+  F3R_ERR_SCENE = 2,    /* a scene value outside its allowed range, or a bad scene file */
+  F3R_ERR_MEMORY = 3,   /* allocation failed (only at creation, never while stepping) */
+  F3R_ERR_SOLVER = 4,   /* SUNDIALS reported a failure it could not recover from */
+  F3R_ERR_SINGULAR = 5, /* a configuration where the model degenerates (rho_i + l -> 0) */
+  F3R_ERR_NONFINITE = 6 /* a NaN or Inf reached the state; the last good state is kept */
 } f3r_status;
 
 typedef struct {

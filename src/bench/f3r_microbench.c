@@ -60,7 +60,9 @@ static void time_linear_solver(SUNLinearSolver ls, SUNMatrix J, const double* J0
 
 static void linear_solver_table(long reps) {
   const int modes[] = {1, 3, 8, 20};
-  printf("\n| modes per link (minimal) | state size | dense LU setup / solve (ns) | Schur setup / solve (ns) |\n");
+  printf(
+      "\n| modes per link (minimal) | state size | dense LU setup / solve (ns) | Schur setup / "
+      "solve (ns) |\n");
   printf("|---|---:|---:|---:|\n");
   SUNContext ctx = NULL;
   if (SUNContext_Create(NULL, &ctx) != 0) return;
@@ -92,7 +94,8 @@ static void linear_solver_table(long reps) {
     double ns[4];
     time_linear_solver(dense, J, J0, ny, b, x, reps, &ns[0], &ns[1]);
     time_linear_solver(schur, J, J0, ny, b, x, reps, &ns[2], &ns[3]);
-    printf("| r = %d | %d | %.0f / %.0f | %.0f / %.0f |\n", modes[k], ny, ns[0], ns[1], ns[2], ns[3]);
+    printf("| r = %d | %d | %.0f / %.0f | %.0f / %.0f |\n", modes[k], ny, ns[0], ns[1], ns[2],
+           ns[3]);
     SUNLinSolFree(dense);
     SUNLinSolFree(schur);
     N_VDestroy(b);
@@ -155,8 +158,14 @@ static double time_explicit_rhs(const f3r_model* m, const double* y, double* res
 static void bench_row(const f3r_model* m, const f3r_scene* s, int form, int modes, long reps) {
   const int ny = f3r_state_size(m, (f3r_formulation)form);
   double q[F3R_MAX_Q] = {0}, v[F3R_MAX_Q] = {0};
-  for (int n = 6; n < 9; ++n) { q[n] = s->platform_pose0[n - 6]; v[n] = s->platform_velocity0[n - 6]; }
-  for (int n = 9; n < m->nq; ++n) { q[n] = 1e-4 * sin(n); v[n] = 1e-2 * cos(n); }
+  for (int n = 6; n < 9; ++n) {
+    q[n] = s->platform_pose0[n - 6];
+    v[n] = s->platform_velocity0[n - 6];
+  }
+  for (int n = 9; n < m->nq; ++n) {
+    q[n] = 1e-4 * sin(n);
+    v[n] = 1e-2 * cos(n);
+  }
   f3r_model_close_loops(m, q);
   f3r_model_close_loop_rates(m, q, v);
   f3r_workspace* ws = f3r_workspace_create(m);
@@ -186,9 +195,10 @@ static void bench_row(const f3r_model* m, const f3r_scene* s, int form, int mode
   }
   const double jacobian_ns = (now() - t0) / jreps * 1e9;
   char rhs[32] = "", rhs_dense[32] = "";
-  if (form == F3R_FORMULATION_MINIMAL) sink += time_explicit_rhs(m, y, res, ws, reps, rhs, rhs_dense, sizeof rhs);
-  printf("| %d | %s | %d | %.0f | %.0f | %s | %s | %s |\n", modes, form ? "minimal" : "dae",
-         ny, residual_ns, jacobian_ns, rhs, rhs_dense, pairs);
+  if (form == F3R_FORMULATION_MINIMAL)
+    sink += time_explicit_rhs(m, y, res, ws, reps, rhs, rhs_dense, sizeof rhs);
+  printf("| %d | %s | %d | %.0f | %.0f | %s | %s | %s |\n", modes, form ? "minimal" : "dae", ny,
+         residual_ns, jacobian_ns, rhs, rhs_dense, pairs);
   if (sink == 12345.678) printf(" ");
   free(y), free(yp), free(res), free(J);
   f3r_workspace_destroy(ws);
@@ -197,7 +207,9 @@ static void bench_row(const f3r_model* m, const f3r_scene* s, int form, int mode
 int main(int argc, char** argv) {
   const long reps = argc > 1 ? atol(argv[1]) : 200000;
   const int modes[] = {1, 3, 8, 20};
-  printf("| modes per link | formulation | state size | residual (ns) | Jacobian (ns) | explicit RHS (ns) | explicit RHS, arrow / dense Cholesky (ns) | sin/cos pairs per residual |\n");
+  printf(
+      "| modes per link | formulation | state size | residual (ns) | Jacobian (ns) | explicit RHS "
+      "(ns) | explicit RHS, arrow / dense Cholesky (ns) | sin/cos pairs per residual |\n");
   printf("|---:|---|---:|---:|---:|---:|---:|---:|\n");
   for (int k = 0; k < 4; ++k) {
     const f3r_scene s = bench_scene(modes[k]);

@@ -91,7 +91,7 @@ typedef struct f3r_peer {
   f3r_workspace* ws;
   int ny, nalg;
   int index_counts[3];
-  int* perm;        /* perm[k]: natural index of the handle's component k */
+  int* perm;                       /* perm[k]: natural index of the handle's component k */
   double *y, *yp, *res, *J, *ydot; /* natural-order scratch (ny; J ny x ny) */
   double* y_perturbed;
   long residual_evals, jacobian_evals, rhs_evals;
@@ -136,8 +136,8 @@ F3R_PEER_EXPORT int f3r_peer_create(const char* scene_path, int formulation, int
   f3r_status st = f3r_scene_load(scene_path, &scene, &err);
   if (st != F3R_OK) return fail(st, "%s", err.message);
   /* the model does not depend on the formulation; a scene names only those a simulation runs */
-  scene.formulation = formulation == F3R_FORMULATION_MINIMAL ? F3R_FORMULATION_MINIMAL
-                                                             : F3R_FORMULATION_DAE;
+  scene.formulation =
+      formulation == F3R_FORMULATION_MINIMAL ? F3R_FORMULATION_MINIMAL : F3R_FORMULATION_DAE;
   if (scene.integrator == F3R_INTEGRATOR_ERK) scene.integrator = F3R_INTEGRATOR_IDA;
   f3r_peer* p = calloc(1, sizeof *p);
   if (!p) return fail(F3R_ERR_MEMORY, "f3r_peer_create: out of memory");
@@ -221,9 +221,9 @@ static int consistent(f3r_peer* p, double t, const double* q, const double* v, c
   const f3r_status st = f3r_consistent_state(p->model, p->form, t_forces, q, v, NULL, lag, work,
                                              p->y, p->yp, NULL, p->ws);
   if (st != F3R_OK)
-    return fail(st, "no consistent state at t = %.9g: %s", t,
-                st == F3R_ERR_SINGULAR ? "the constrained mass matrix is singular"
-                                       : "non-finite values");
+    return fail(
+        st, "no consistent state at t = %.9g: %s", t,
+        st == F3R_ERR_SINGULAR ? "the constrained mass matrix is singular" : "non-finite values");
   from_natural(p, p->y, y);
   from_natural(p, p->yp, yp);
   return F3R_OK;
@@ -267,8 +267,7 @@ F3R_PEER_EXPORT int f3r_peer_jacobian(f3r_peer* p, double t, double cj, const do
       f3r_residual_jacobian(p->model, p->form, t, cj, p->y, p->yp, NULL, p->J, ny, p->ws);
   if (st != F3R_OK) return fail(st, "Jacobian at t = %.9g: %s", t, f3r_status_name(st));
   for (int j = 0; j < ny; ++j)
-    for (int i = 0; i < ny; ++i)
-      J[(size_t)j * ny + i] = p->J[(size_t)p->perm[j] * ny + p->perm[i]];
+    for (int i = 0; i < ny; ++i) J[(size_t)j * ny + i] = p->J[(size_t)p->perm[j] * ny + p->perm[i]];
   return F3R_OK;
 }
 
@@ -359,8 +358,8 @@ F3R_PEER_EXPORT void f3r_peer_r_index_counts(int* counts) {
 }
 
 F3R_PEER_EXPORT void f3r_peer_r_initial(double* y, double* yp, int* status) {
-  *status = r_handle ? f3r_peer_initial_state(r_handle, y, yp)
-                     : fail(F3R_ERR_ARGUMENT, "no open handle");
+  *status =
+      r_handle ? f3r_peer_initial_state(r_handle, y, yp) : fail(F3R_ERR_ARGUMENT, "no open handle");
 }
 
 F3R_PEER_EXPORT void f3r_peer_r_restart(double* t, double* y, double* yp, int* status) {

@@ -56,7 +56,8 @@ static int write_names(FILE* f, const char* name, const char (*names)[F3R_SS_NAM
 }
 
 static int failed(const char* path, const char* doing, int saved_errno, char* why, size_t size) {
-  snprintf(why, size, "cannot %s %s: %s", doing, path, saved_errno ? strerror(saved_errno) : "write error");
+  snprintf(why, size, "cannot %s %s: %s", doing, path,
+           saved_errno ? strerror(saved_errno) : "write error");
   return -1;
 }
 
@@ -73,15 +74,13 @@ static int finish(FILE* f, int ok, const char* path, char* why, size_t size) {
 int f3r_cli_write_mat(const f3r_state_space* ss, const char* path, char* why, size_t why_size) {
   FILE* f = fopen(path, "wb");
   if (!f) return failed(path, "create", errno, why, why_size);
-  const int ok = write_matrix(f, "A", ss->A, ss->nx, ss->nx) &&
-                 write_matrix(f, "B", ss->B, ss->nx, ss->nu) &&
-                 write_matrix(f, "C", ss->C, ss->ny, ss->nx) &&
-                 write_matrix(f, "D", ss->D, ss->ny, ss->nu) &&
-                 write_matrix(f, "x0", ss->x0, ss->nx, 1) &&
-                 write_matrix(f, "y0", ss->y0, ss->ny, 1) &&
-                 write_names(f, "state_names", (const char(*)[F3R_SS_NAME])ss->state_names, ss->nx) &&
-                 write_names(f, "input_names", ss->input_names, ss->nu) &&
-                 write_names(f, "output_names", ss->output_names, ss->ny);
+  const int ok =
+      write_matrix(f, "A", ss->A, ss->nx, ss->nx) && write_matrix(f, "B", ss->B, ss->nx, ss->nu) &&
+      write_matrix(f, "C", ss->C, ss->ny, ss->nx) && write_matrix(f, "D", ss->D, ss->ny, ss->nu) &&
+      write_matrix(f, "x0", ss->x0, ss->nx, 1) && write_matrix(f, "y0", ss->y0, ss->ny, 1) &&
+      write_names(f, "state_names", (const char(*)[F3R_SS_NAME])ss->state_names, ss->nx) &&
+      write_names(f, "input_names", ss->input_names, ss->nu) &&
+      write_names(f, "output_names", ss->output_names, ss->ny);
   return finish(f, ok, path, why, why_size);
 }
 

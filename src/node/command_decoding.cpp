@@ -12,13 +12,18 @@ namespace {
 std::string Check(const std::string& field, double value, double limit) {
   std::ostringstream os;
   os << std::setprecision(17);
-  if (std::isnan(value)) os << field << " is NaN";
-  else if (std::isinf(value)) os << field << " is infinite";
-  else if (std::fabs(value) > limit) os << field << " = " << value << " exceeds the limit " << limit;
+  if (std::isnan(value))
+    os << field << " is NaN";
+  else if (std::isinf(value))
+    os << field << " is infinite";
+  else if (std::fabs(value) > limit)
+    os << field << " = " << value << " exceeds the limit " << limit;
   return os.str();
 }
 
-std::string Indexed(const char* name, size_t i) { return std::string(name) + "[" + std::to_string(i) + "]"; }
+std::string Indexed(const char* name, size_t i) {
+  return std::string(name) + "[" + std::to_string(i) + "]";
+}
 
 }  // namespace
 
@@ -30,8 +35,10 @@ std::string DecodeEffortCommand(const EffortCommand& msg, const f3r_model& model
            std::to_string(n_modal);
   for (size_t i = 0; i < 3; ++i) {
     std::string why = Check(Indexed("leg_force", i), msg.leg_force[i], limits.force);
-    if (why.empty()) why = Check(Indexed("cylinder_torque", i), msg.cylinder_torque[i], limits.torque);
-    if (why.empty()) why = Check(Indexed("platform", i), msg.platform[i], i < 2 ? limits.force : limits.torque);
+    if (why.empty())
+      why = Check(Indexed("cylinder_torque", i), msg.cylinder_torque[i], limits.torque);
+    if (why.empty())
+      why = Check(Indexed("platform", i), msg.platform[i], i < 2 ? limits.force : limits.torque);
     if (!why.empty()) return why;
   }
   for (size_t k = 0; k < msg.modal.size(); ++k) {
@@ -54,11 +61,13 @@ std::string DecodeEffortGroup(const std_msgs::Float64MultiArray& msg, const f3r_
     return "data has " + std::to_string(msg.data.size()) +
            " values, expected 6 (leg_force_1..3, cylinder_torque_1..3)";
   for (size_t k = 0; k < F3R_Q_LEG_JOINTS; ++k) {
-    const std::string why = Check(Indexed("data", k), msg.data[k], k < F3R_Q_THETA ? limits.force : limits.torque);
+    const std::string why =
+        Check(Indexed("data", k), msg.data[k], k < F3R_Q_THETA ? limits.force : limits.torque);
     if (!why.empty()) return why;
   }
   forces->assign(static_cast<size_t>(model.nq), 0.0);
-  for (size_t k = 0; k < F3R_Q_LEG_JOINTS; ++k) (*forces)[F3R_Q_RHO + k] = msg.data[k];  // ros_control order is q's
+  for (size_t k = 0; k < F3R_Q_LEG_JOINTS; ++k)
+    (*forces)[F3R_Q_RHO + k] = msg.data[k];  // ros_control order is q's
   return "";
 }
 
@@ -68,7 +77,8 @@ Rotation YawRotation(double yaw) {
 }
 
 std::string DecodeWrench(const geometry_msgs::WrenchStamped& msg, const Rotation& R,
-                         const CommandLimits& limits, const f3r_model& model, std::vector<double>* forces) {
+                         const CommandLimits& limits, const f3r_model& model,
+                         std::vector<double>* forces) {
   const auto& f = msg.wrench.force;
   const auto& m = msg.wrench.torque;
   const std::pair<const char*, double> all[] = {{"force.x", f.x},  {"force.y", f.y},
@@ -86,13 +96,14 @@ std::string DecodeWrench(const geometry_msgs::WrenchStamped& msg, const Rotation
   // In the plane: exactly for a frame turned about z only (R's third row is (0, 0, 1)); to
   // rounding for a frame whose z axis tf2 gives as the base's up to rounding.
   const bool about_z = R[6] == 0.0 && R[7] == 0.0 && R[8] == 1.0;
-  const double size = std::fabs(f.x) + std::fabs(f.y) + std::fabs(f.z) + std::fabs(m.x) + std::fabs(m.y) +
-                      std::fabs(m.z);
+  const double size = std::fabs(f.x) + std::fabs(f.y) + std::fabs(f.z) + std::fabs(m.x) +
+                      std::fabs(m.y) + std::fabs(m.z);
   const double tolerance = about_z ? 0.0 : 1e-12 * size;
   const bool planar = about_z ? f.z == 0.0 && m.x == 0.0 && m.y == 0.0
                               : std::fabs(fb[2]) <= tolerance && std::fabs(mb[0]) <= tolerance &&
                                     std::fabs(mb[1]) <= tolerance;
-  if (!planar) return "out-of-plane components (force.z, torque.x, torque.y in the base frame) must be zero";
+  if (!planar)
+    return "out-of-plane components (force.z, torque.x, torque.y in the base frame) must be zero";
   // The limit holds for the force applied, in the base frame: turning can raise a component by
   // up to sqrt(2) (and overflow to Inf near DBL_MAX). Found by test/fuzz/fuzz_commands.
   std::string why = Check("force.x turned into the base frame", fb[0], limits.force);

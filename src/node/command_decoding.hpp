@@ -33,6 +33,7 @@ Rotation YawRotation(double yaw);
 // torque.z may be nonzero (the plane); each component must be finite and within the limits,
 // both as given and as turned into the base frame.
 std::string DecodeWrench(const geometry_msgs::WrenchStamped& msg, const Rotation& to_base,
-                         const CommandLimits& limits, const f3r_model& model, std::vector<double>* forces);
+                         const CommandLimits& limits, const f3r_model& model,
+                         std::vector<double>* forces);
 
 }  // namespace flex3rpr

@@ -6,8 +6,8 @@
 
 namespace flex3rpr {
 
-CommandInputs::CommandInputs(ros::NodeHandle& pnh, const f3r_model& model,
-                             const NodeParams& params, const double* phi_p)
+CommandInputs::CommandInputs(ros::NodeHandle& pnh, const f3r_model& model, const NodeParams& params,
+                             const double* phi_p)
     : model_(model), params_(params), phi_p_(phi_p) {
   for (auto& h : held_) h.assign(static_cast<size_t>(model.nq), 0.0);
   scratch_.assign(static_cast<size_t>(model.nq), 0.0);
@@ -20,7 +20,8 @@ CommandInputs::CommandInputs(ros::NodeHandle& pnh, const f3r_model& model,
   command_sub_ = pnh.subscribe<EffortCommand>(
       "command", kCommandQueue,
       [this](const EffortCommand::ConstPtr& m) {
-        Accept(kCommand, DecodeEffortCommand(*m, model_, params_.limits, &scratch_), scratch_, "~command");
+        Accept(kCommand, DecodeEffortCommand(*m, model_, params_.limits, &scratch_), scratch_,
+               "~command");
       },
       ros::VoidConstPtr(), hints);
   group_sub_ = pnh.subscribe<std_msgs::Float64MultiArray>(
@@ -66,7 +67,8 @@ std::string CommandInputs::ResolveFrame(const std::string& frame, Rotation* to_b
   }
   std::string tf_error;
   if (!tf_buffer_->canTransform(f.base, frame, ros::Time(0), &tf_error))
-    return "header.frame_id '" + frame + "' has no transform to '" + f.base + "' in tf2 (" + tf_error + ")";
+    return "header.frame_id '" + frame + "' has no transform to '" + f.base + "' in tf2 (" +
+           tf_error + ")";
   const Eigen::Matrix3d R =
       tf2::transformToEigen(tf_buffer_->lookupTransform(f.base, frame, ros::Time(0))).rotation();
   for (int r = 0; r < 3; ++r)
@@ -74,13 +76,16 @@ std::string CommandInputs::ResolveFrame(const std::string& frame, Rotation* to_b
   return "";
 }
 
-void CommandInputs::Accept(Source source, const std::string& why,
-                           const std::vector<double>& forces, const char* topic) {
+void CommandInputs::Accept(Source source, const std::string& why, const std::vector<double>& forces,
+                           const char* topic) {
   if (!why.empty()) {
     ++rejected_;
-    ROS_WARN_THROTTLE(1.0, "flex3rpr_node: rejected a command on %s: %s; the simulation runs on "
-                           "unchanged%s", topic, why.c_str(),
-                      params_.lockstep ? " (in lockstep it takes its period with the commands held)" : "");
+    ROS_WARN_THROTTLE(
+        1.0,
+        "flex3rpr_node: rejected a command on %s: %s; the simulation runs on "
+        "unchanged%s",
+        topic, why.c_str(),
+        params_.lockstep ? " (in lockstep it takes its period with the commands held)" : "");
     if (params_.lockstep) queue_.push_back({source, false, {}});
     return;
   }

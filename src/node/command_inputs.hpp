@@ -54,8 +54,8 @@ class CommandInputs {
   const NodeParams& params_;
   const double* phi_p_;
   std::array<std::vector<double>, kSources> held_;
-  std::array<bool, kSources> fresh_{};      // received since the last Total()
-  std::array<double, kSources> since_{};    // simulated time the command took effect
+  std::array<bool, kSources> fresh_{};    // received since the last Total()
+  std::array<double, kSources> since_{};  // simulated time the command took effect
   std::array<bool, kSources> active_{};
   std::vector<double> scratch_, total_;
   std::deque<Queued> queue_;  // lockstep only

@@ -14,8 +14,10 @@ namespace flex3rpr {
 class Pacer {
  public:
   static constexpr double kResyncSeconds = 0.05;  // wall s late that count as a stall
-  static constexpr double kWindowSeconds = 0.5;   // wall s over which the achieved factor is measured
-  static constexpr double kBehindFraction = 0.95; // achieved below this share of the request: behind
+  static constexpr double kWindowSeconds =
+      0.5;  // wall s over which the achieved factor is measured
+  static constexpr double kBehindFraction =
+      0.95;  // achieved below this share of the request: behind
 
   // requested: simulated seconds per wall second; 0 runs as fast as it can.
   explicit Pacer(double requested) : requested_(requested) {}

@@ -46,8 +46,8 @@ std::string NormalisePrefix(const std::string& prefix) {
   return a == b ? "" : prefix.substr(a, b - a) + "/";
 }
 
-FrameNames MakeFrameNames(const std::string& prefix, const std::string& world, const std::string& base,
-                          int beam_points) {
+FrameNames MakeFrameNames(const std::string& prefix, const std::string& world,
+                          const std::string& base, int beam_points) {
   FrameNames f;
   f.world = world;
   f.base = base;
@@ -76,10 +76,13 @@ bool Positive(const char* name, T value, std::string* error) {
 
 // A tf2 frame id (or, with prefix, a tf_prefix, whose slashes are trimmed): tf2 rejects ids
 // that start with '/', and a space or a control character would only fail later, in a lookup.
-bool FrameName(const char* name, const std::string& value, std::string* error, bool prefix = false) {
+bool FrameName(const char* name, const std::string& value, std::string* error,
+               bool prefix = false) {
   std::string why;
-  if (value.empty() && !prefix) why = "must not be empty";
-  else if (!prefix && value[0] == '/') why = "must not start with '/' (tf2 frame ids are relative)";
+  if (value.empty() && !prefix)
+    why = "must not be empty";
+  else if (!prefix && value[0] == '/')
+    why = "must not start with '/' (tf2 frame ids are relative)";
   for (unsigned char c : value)
     if (c <= ' ' || c == 0x7f) why = "must not contain spaces or control characters";
   if (why.empty()) return true;
@@ -102,16 +105,22 @@ bool ReadBasePose(const ros::NodeHandle& pnh, std::array<double, 3>* pose, std::
   XmlRpc::XmlRpcValue value;
   pnh.getParam("base_pose", value);
   const char* why = nullptr;
-  if (value.getType() != XmlRpc::XmlRpcValue::TypeArray || value.size() != 3) why = "not a list of 3 numbers";
+  if (value.getType() != XmlRpc::XmlRpcValue::TypeArray || value.size() != 3)
+    why = "not a list of 3 numbers";
   for (int k = 0; !why && k < 3; ++k) {
     XmlRpc::XmlRpcValue& v = value[k];
-    if (v.getType() == XmlRpc::XmlRpcValue::TypeDouble) (*pose)[static_cast<size_t>(k)] = static_cast<double>(v);
-    else if (v.getType() == XmlRpc::XmlRpcValue::TypeInt) (*pose)[static_cast<size_t>(k)] = static_cast<int>(v);
-    else why = "not a list of 3 numbers";
-    if (!why && !std::isfinite((*pose)[static_cast<size_t>(k)])) why = "holds a value that is not finite";
+    if (v.getType() == XmlRpc::XmlRpcValue::TypeDouble)
+      (*pose)[static_cast<size_t>(k)] = static_cast<double>(v);
+    else if (v.getType() == XmlRpc::XmlRpcValue::TypeInt)
+      (*pose)[static_cast<size_t>(k)] = static_cast<int>(v);
+    else
+      why = "not a list of 3 numbers";
+    if (!why && !std::isfinite((*pose)[static_cast<size_t>(k)]))
+      why = "holds a value that is not finite";
   }
   if (!why) return true;
-  *error = std::string("parameter ~base_pose: ") + why + " [x (m), y (m), yaw (rad)] of base in world";
+  *error =
+      std::string("parameter ~base_pose: ") + why + " [x (m), y (m), yaw (rad)] of base in world";
   return false;
 }
 
@@ -149,12 +158,14 @@ bool ReadSolverParams(const ros::NodeHandle& pnh, NodeParams* p, std::string* er
   if (pnh.hasParam("rtol")) p->scene.explicit_settings |= F3R_EXPLICIT_RTOL;
   if (pnh.hasParam("atol")) p->scene.explicit_settings |= F3R_EXPLICIT_ATOL;
   char allowed[64];
-  if (!formulation.empty() && f3r_formulation_from_name(formulation.c_str(), &p->scene.formulation) != 0) {
+  if (!formulation.empty() &&
+      f3r_formulation_from_name(formulation.c_str(), &p->scene.formulation) != 0) {
     *error = "parameter ~formulation: '" + formulation + "' is not one of " +
              f3r_formulation_names(allowed, sizeof allowed);
     return false;
   }
-  if (!integrator.empty() && f3r_integrator_from_name(integrator.c_str(), &p->scene.integrator) != 0) {
+  if (!integrator.empty() &&
+      f3r_integrator_from_name(integrator.c_str(), &p->scene.integrator) != 0) {
     *error = "parameter ~integrator: '" + integrator + "' is not one of " +
              f3r_integrator_names(allowed, sizeof allowed);
     return false;
@@ -238,7 +249,8 @@ bool ReadRunParams(const ros::NodeHandle& pnh, NodeParams* p, std::string* error
       !Positive("lockstep_warn_after", p->lockstep_warn_after, error))
     return false;
   if (p->beam_points < 2 || p->beam_points > 101) {
-    *error = "parameter ~beam_points: " + std::to_string(p->beam_points) + " is out of range 2..101";
+    *error =
+        "parameter ~beam_points: " + std::to_string(p->beam_points) + " is out of range 2..101";
     return false;
   }
   return true;
@@ -246,7 +258,8 @@ bool ReadRunParams(const ros::NodeHandle& pnh, NodeParams* p, std::string* error
 
 // The frame names read by ReadRunParams, checked, and every frame the node publishes.
 bool MakeFrames(NodeParams* p, std::string* error) {
-  if (!FrameName("tf_prefix", p->tf_prefix, error, true) || !FrameName("world_frame", p->world_frame, error) ||
+  if (!FrameName("tf_prefix", p->tf_prefix, error, true) ||
+      !FrameName("world_frame", p->world_frame, error) ||
       !FrameName("base_frame", p->base_frame, error))
     return false;
   p->tf_prefix = NormalisePrefix(p->tf_prefix);
@@ -291,8 +304,9 @@ bool ReadClock(const ros::NodeHandle& pnh, NodeParams* p, std::string* error) {
 }  // namespace
 
 bool LoadParams(const ros::NodeHandle& pnh, NodeParams* p, std::string* error) {
-  return LoadScene(pnh, p, error) && ReadSolverParams(pnh, p, error) && ResolveScene(pnh, p, error) &&
-         ReadRunParams(pnh, p, error) && MakeFrames(p, error) && ReadClock(pnh, p, error);
+  return LoadScene(pnh, p, error) && ReadSolverParams(pnh, p, error) &&
+         ResolveScene(pnh, p, error) && ReadRunParams(pnh, p, error) && MakeFrames(p, error) &&
+         ReadClock(pnh, p, error);
 }
 
 }  // namespace flex3rpr

@@ -13,9 +13,9 @@
 namespace flex3rpr {
 
 struct CommandLimits {
-  double force = 1000.0;   // N, per leg force and per platform force component
-  double torque = 100.0;   // N m, per cylinder torque and platform torque
-  double modal = 1000.0;   // N, per modal force
+  double force = 1000.0;  // N, per leg force and per platform force component
+  double torque = 100.0;  // N m, per cylinder torque and platform torque
+  double modal = 1000.0;  // N, per modal force
 };
 
 // Every frame the node publishes: ~tf_prefix + name, except the world frame, which robots share.
@@ -24,34 +24,37 @@ struct FrameNames {
   std::array<std::string, 3> cylinder, piston, tip_nominal, platform_c;
   std::array<std::vector<std::string>, 3> beam;  // stations 0..beam_points-1
 };
-FrameNames MakeFrameNames(const std::string& prefix, const std::string& world, const std::string& base,
-                          int beam_points);
+FrameNames MakeFrameNames(const std::string& prefix, const std::string& world,
+                          const std::string& base, int beam_points);
 // "robot1" and "robot1/" give "robot1/"; "" gives "".
 std::string NormalisePrefix(const std::string& prefix);
 
 struct NodeParams {
-  std::string scene_path;             // ~scene, default: the package's rest.yaml
-  f3r_scene scene;                    // loaded and overridden
-  f3r_solver_settings settings;       // ~formulation, ~integrator, ~rtol, ~atol
-  f3r_accuracy_choice accuracy{};     // ~accuracy or the scene's: what the knob chose, and why
-  double publish_rate = 1000.0;       // Hz of simulated time
-  int beam_points = 11;               // stations per link
-  double realtime_factor = 1.0;       // 1 paces to the wall clock, 0 runs as fast as possible
-  std::string tf_prefix;               // prepended to every frame but the world frame ("robot1/")
+  std::string scene_path;          // ~scene, default: the package's rest.yaml
+  f3r_scene scene;                 // loaded and overridden
+  f3r_solver_settings settings;    // ~formulation, ~integrator, ~rtol, ~atol
+  f3r_accuracy_choice accuracy{};  // ~accuracy or the scene's: what the knob chose, and why
+  double publish_rate = 1000.0;    // Hz of simulated time
+  int beam_points = 11;            // stations per link
+  double realtime_factor = 1.0;    // 1 paces to the wall clock, 0 runs as fast as possible
+  std::string tf_prefix;           // prepended to every frame but the world frame ("robot1/")
   std::string world_frame = "world";
-  std::string base_frame = "base";     // default: tf_prefix + "base"
+  std::string base_frame = "base";  // default: tf_prefix + "base"
   FrameNames frames;
-  bool sim_stamps = false;            // ~stamps (sim, wall); default: /use_sim_time
-  bool publish_clock = false;         // ~publish_clock, default: /use_sim_time
-  bool start_paused = false;          // ~paused
-  bool end_stops = false;             // ~end_stops: the scene's stroke as hard stops
-  double command_timeout = 0.0;       // s of simulated time; 0 holds commands forever
-  double duration = 0.0;              // s; > 0 stops the node at that simulated time; < 0 the scene's run.duration
-  int wait_for_subscribers = 0;       // before the first output, wait until every output topic has this many
-  double subscriber_timeout = 30.0;   // wall s to wait for them; then the node exits with an error
-  double subscriber_grace = 0.5;      // wall s the node holds after the first period when it waited
-  int queue_size = 10;                // outgoing messages held per subscriber and output topic
-  int command_queue_size = 1000;      // incoming commands held per input topic while the loop integrates
+  bool sim_stamps = false;       // ~stamps (sim, wall); default: /use_sim_time
+  bool publish_clock = false;    // ~publish_clock, default: /use_sim_time
+  bool start_paused = false;     // ~paused
+  bool end_stops = false;        // ~end_stops: the scene's stroke as hard stops
+  double command_timeout = 0.0;  // s of simulated time; 0 holds commands forever
+  double duration =
+      0.0;  // s; > 0 stops the node at that simulated time; < 0 the scene's run.duration
+  int wait_for_subscribers =
+      0;  // before the first output, wait until every output topic has this many
+  double subscriber_timeout = 30.0;  // wall s to wait for them; then the node exits with an error
+  double subscriber_grace = 0.5;     // wall s the node holds after the first period when it waited
+  int queue_size = 10;               // outgoing messages held per subscriber and output topic
+  int command_queue_size =
+      1000;  // incoming commands held per input topic while the loop integrates
   double beam_marker_exaggeration = 1.0;  // visual only: scales the deflection in ~beams
   bool lockstep = false;              // ~lockstep: each period waits for its command (sim_node.cpp)
   double lockstep_warn_after = 2.0;   // wall s without the period's command before a warning

@@ -18,12 +18,13 @@ namespace flex3rpr {
 
 struct RunControl {
   bool paused = false;
-  int pending_steps = 0;       // periods to run while paused
+  int pending_steps = 0;  // periods to run while paused
   bool reset_requested = false;
 };
 
 struct SimHandlers {
-  std::function<void(const StepWithCommand::Request&, StepWithCommand::Response*)> step_with_command;
+  std::function<void(const StepWithCommand::Request&, StepWithCommand::Response*)>
+      step_with_command;
   std::function<void(const SetState::Request&, SetState::Response*)> set_state;
   std::function<void(Linearise::Response*)> linearise;
 };

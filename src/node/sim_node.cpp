@@ -67,16 +67,17 @@ bool SimNode::Init() {
   inputs_.reset(new CommandInputs(pnh_, *model_, params_, &phi_p_));
   outputs_.reset(new StateOutputs(nh_, pnh_, *model_, params_));
   services_.reset(new Services(pnh_, &control_, Handlers()));
-  ROS_INFO("flex3rpr_node: scene %s, nq %d, %s, rtol %g, publishing at %g Hz of simulated time, "
-           "real-time factor %g, %s stamps%s, frames under %s",
-           params_.scene_path.c_str(), model_->nq,
-           f3r_formulation_name(params_.settings.formulation),
-           params_.settings.rtol, params_.publish_rate, params_.realtime_factor,
-           params_.sim_stamps ? "simulated" : "wall-clock", params_.publish_clock ? " with /clock" : "",
-           params_.frames.base.c_str());
+  ROS_INFO(
+      "flex3rpr_node: scene %s, nq %d, %s, rtol %g, publishing at %g Hz of simulated time, "
+      "real-time factor %g, %s stamps%s, frames under %s",
+      params_.scene_path.c_str(), model_->nq, f3r_formulation_name(params_.settings.formulation),
+      params_.settings.rtol, params_.publish_rate, params_.realtime_factor,
+      params_.sim_stamps ? "simulated" : "wall-clock", params_.publish_clock ? " with /clock" : "",
+      params_.frames.base.c_str());
   if (params_.lockstep)
-    ROS_INFO("flex3rpr_node: lockstep: each publish period waits for its command, the next message on "
-             "~command, ~effort_group/command or ~platform_wrench");
+    ROS_INFO(
+        "flex3rpr_node: lockstep: each publish period waits for its command, the next message on "
+        "~command, ~effort_group/command or ~platform_wrench");
   if (params_.accuracy.summary[0]) ROS_INFO("flex3rpr_node: %s", params_.accuracy.summary);
   if (params_.accuracy.request > 0.0 && !params_.accuracy.request_met)
     ROS_WARN("flex3rpr_node: the accuracy request %g m is not met: estimated %.3g m (%s)",
@@ -92,11 +93,12 @@ void SimNode::ReportPace() {
   info_.lag = p.lag();
   info_.resyncs = p.resyncs();
   if (info_.behind)
-    ROS_WARN_THROTTLE(5.0,
-                      "flex3rpr_node: behind the wall clock: achieved real-time factor %.3g of the requested %g "
-                      "(below %g of it; a looser solver.rtol, fewer modes or a lower ~realtime_factor would "
-                      "keep up)",
-                      p.achieved(), p.requested(), Pacer::kBehindFraction);
+    ROS_WARN_THROTTLE(
+        5.0,
+        "flex3rpr_node: behind the wall clock: achieved real-time factor %.3g of the requested %g "
+        "(below %g of it; a looser solver.rtol, fewer modes or a lower ~realtime_factor would "
+        "keep up)",
+        p.achieved(), p.requested(), Pacer::kBehindFraction);
 }
 
 void SimNode::CheckStroke(const f3r_outputs& out) {
@@ -108,9 +110,11 @@ void SimNode::CheckStroke(const f3r_outputs& out) {
     const bool outside = rho < lo - slack || rho > hi + slack;
     bool& flag = info_.outside_stroke[static_cast<size_t>(i)];
     if (outside && !flag)
-      ROS_WARN("flex3rpr_node: leg %d left its stroke %g..%g m (the URDF's limits): rho_%d = %.6g m at t = "
-               "%.6g s; reported once until it returns (end_stops:=true makes the stroke hard)",
-               i + 1, lo, hi, i + 1, rho, out.t);
+      ROS_WARN(
+          "flex3rpr_node: leg %d left its stroke %g..%g m (the URDF's limits): rho_%d = %.6g m at "
+          "t = "
+          "%.6g s; reported once until it returns (end_stops:=true makes the stroke hard)",
+          i + 1, lo, hi, i + 1, rho, out.t);
     flag = outside;
   }
 }
@@ -148,10 +152,12 @@ bool SimNode::Step(double period) {
   ++periods_;
   if (f3r_sim_advance(sim_.get(), periods_ * period, &err) != F3R_OK) {
     info_.last_error = err.message;
-    ROS_ERROR("flex3rpr_node: integration stopped at t = %.6g s: %s; paused at the last good state "
-              "(~reset starts over, ~resume tries again)",
-              f3r_sim_time(sim_.get()), err.message);
-    periods_ = static_cast<long>(std::floor(f3r_sim_time(sim_.get()) / period + 1e-9));  // stay on the grid
+    ROS_ERROR(
+        "flex3rpr_node: integration stopped at t = %.6g s: %s; paused at the last good state "
+        "(~reset starts over, ~resume tries again)",
+        f3r_sim_time(sim_.get()), err.message);
+    periods_ = static_cast<long>(
+        std::floor(f3r_sim_time(sim_.get()) / period + 1e-9));  // stay on the grid
     return false;
   }
   return true;
@@ -182,11 +188,12 @@ void SimNode::AwaitCommand(double wall_now) {
   const double waited = wall_now - waiting_since_;
   if (waited < params_.lockstep_warn_after) return;
   info_.waiting_for_command = waited;
-  ROS_WARN_THROTTLE(5.0,
-                    "flex3rpr_node: lockstep: no command for the period at t = %.6g s for %.1f s; waiting (a "
-                    "controller answers every joint_states message with one message on ~command, "
-                    "~effort_group/command or ~platform_wrench)",
-                    f3r_sim_time(sim_.get()), waited);
+  ROS_WARN_THROTTLE(
+      5.0,
+      "flex3rpr_node: lockstep: no command for the period at t = %.6g s for %.1f s; waiting (a "
+      "controller answers every joint_states message with one message on ~command, "
+      "~effort_group/command or ~platform_wrench)",
+      f3r_sim_time(sim_.get()), waited);
 }
 
 // e.g. a recorder: nothing may be published before it listens. False after ~subscriber_timeout.
@@ -195,9 +202,11 @@ bool SimNode::WaitForSubscribers() {
   const ros::WallTime until = ros::WallTime::now() + ros::WallDuration(params_.subscriber_timeout);
   while (ros::ok() && !outputs_->SubscribersConnected(params_.wait_for_subscribers)) {
     if (ros::WallTime::now() > until) {
-      ROS_ERROR("flex3rpr_node: ~wait_for_subscribers: an output topic lacks subscribers (%d, or those the "
-                "master lists) after %g s",
-                params_.wait_for_subscribers, params_.subscriber_timeout);
+      ROS_ERROR(
+          "flex3rpr_node: ~wait_for_subscribers: an output topic lacks subscribers (%d, or those "
+          "the "
+          "master lists) after %g s",
+          params_.wait_for_subscribers, params_.subscriber_timeout);
       return false;
     }
     ros::spinOnce();
@@ -213,7 +222,8 @@ void SimNode::Restart(RunLoop* loop) {
   f3r_error err{};
   control_.reset_requested = false;
   inputs_->Clear();
-  if (f3r_sim_reset(sim_.get(), &err) != F3R_OK) ROS_ERROR("flex3rpr_node: reset failed: %s", err.message);
+  if (f3r_sim_reset(sim_.get(), &err) != F3R_OK)
+    ROS_ERROR("flex3rpr_node: reset failed: %s", err.message);
   periods_ = 0;
   loop->was_running = false;
   info_.last_error.clear();
@@ -228,7 +238,8 @@ void SimNode::PublishDiagnosticsWhenDue(double now, RunLoop* loop) {
   info_.rejected_commands = inputs_->rejected();
   outputs_->PublishDiagnostics(*f3r_sim_outputs(sim_.get()), info_);
   // A period that waits for its command publishes nothing else: say so on ~status too.
-  if (info_.waiting_for_command > 0.0) outputs_->PublishStatusOnly(*f3r_sim_outputs(sim_.get()), info_);
+  if (info_.waiting_for_command > 0.0)
+    outputs_->PublishStatusOnly(*f3r_sim_outputs(sim_.get()), info_);
   loop->last_diagnostics = now;
 }
 
@@ -284,10 +295,11 @@ bool SimNode::RunPeriod(double period, double now, RunLoop* loop, int* exit_code
   if (params_.duration > 0.0 && out.t >= params_.duration - 0.5 * period) {
     // The second factor leaves out the start (a controller's or recorder's connection, the
     // first period's wait): what a closed loop sustains.
-    ROS_INFO("flex3rpr_node: reached the duration %g s (real-time factor %.3g; %.3g from the end of "
-             "the first period)",
-             out.t, out.t / info_.wall_time,
-             (out.t - loop->first_period_t) / std::max(after - loop->first_period_wall, 1e-9));
+    ROS_INFO(
+        "flex3rpr_node: reached the duration %g s (real-time factor %.3g; %.3g from the end of "
+        "the first period)",
+        out.t, out.t / info_.wall_time,
+        (out.t - loop->first_period_t) / std::max(after - loop->first_period_wall, 1e-9));
     return false;
   }
   if (!control_.paused) {  // pace to the wall clock
@@ -312,7 +324,8 @@ int SimNode::Run() {
   info_.paused = control_.paused;
   info_.requested_realtime_factor = params_.realtime_factor;
   PublishAt(*f3r_sim_outputs(sim_.get()));
-  if (control_.paused) ROS_INFO("flex3rpr_node: paused at the start (~paused); ~resume or ~step runs it");
+  if (control_.paused)
+    ROS_INFO("flex3rpr_node: paused at the start (~paused); ~resume or ~step runs it");
   int exit_code = 0;
   while (ros::ok()) {
     ros::spinOnce();

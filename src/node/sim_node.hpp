@@ -31,7 +31,7 @@ class SimNode {
 
  private:
   static constexpr double kPausedPublishSeconds = 0.5;  // wall s between outputs while paused
-  static constexpr double kDiagnosticsSeconds = 1.0;     // wall s between /diagnostics
+  static constexpr double kDiagnosticsSeconds = 1.0;    // wall s between /diagnostics
 
   // What Run keeps from one pass of its loop to the next.
   struct RunLoop {
@@ -39,7 +39,7 @@ class SimNode {
     double start = 0.0;          // wall s when the loop began
     double held = 0.0;           // wall s spent in the grace holds, not the simulation's
     double first_period_wall = -1.0, first_period_t = 0.0;
-    bool was_running = false;    // the pacer is anchored when a run starts
+    bool was_running = false;  // the pacer is anchored when a run starts
     double last_paused_output = -1e9, last_diagnostics = -1e9;
     // Wall s without the grace holds: what the pacer and the intervals measure.
     double Wall() const { return ros::WallTime::now().toSec() - held; }

@@ -10,15 +10,17 @@ namespace flex3rpr {
 
 SimHandlers SimNode::Handlers() {
   SimHandlers h;
-  h.step_with_command = [this](const StepWithCommand::Request& req, StepWithCommand::Response* res) {
-    StepWithCommandCall(req, res);
+  h.step_with_command = [this](const StepWithCommand::Request& req,
+                               StepWithCommand::Response* res) { StepWithCommandCall(req, res); };
+  h.set_state = [this](const SetState::Request& req, SetState::Response* res) {
+    SetStateCall(req, res);
   };
-  h.set_state = [this](const SetState::Request& req, SetState::Response* res) { SetStateCall(req, res); };
   h.linearise = [this](Linearise::Response* res) { LineariseCall(res); };
   return h;
 }
 
-void SimNode::StepWithCommandCall(const StepWithCommand::Request& req, StepWithCommand::Response* res) {
+void SimNode::StepWithCommandCall(const StepWithCommand::Request& req,
+                                  StepWithCommand::Response* res) {
   res->success = false;
   // Deterministic only when nothing else advances the simulation meanwhile.
   if (!control_.paused && !params_.lockstep) {
@@ -26,8 +28,9 @@ void SimNode::StepWithCommandCall(const StepWithCommand::Request& req, StepWithC
     return;
   }
   if (params_.lockstep && inputs_->waiting() > 0) {
-    res->message = "a command from a topic is waiting for the present period; mixing topics and "
-                   "~step_with_command in lockstep would make the order depend on timing";
+    res->message =
+        "a command from a topic is waiting for the present period; mixing topics and "
+        "~step_with_command in lockstep would make the order depend on timing";
     return;
   }
   if (req.periods < 1) {
@@ -43,7 +46,8 @@ void SimNode::StepWithCommandCall(const StepWithCommand::Request& req, StepWithC
   for (uint32_t k = 0; k < req.periods; ++k) {
     if (!AdvancePeriod(period)) {
       res->message = "the integration stopped after " + std::to_string(k) + " of " +
-                     std::to_string(req.periods) + " periods: " + info_.last_error + "; paused there";
+                     std::to_string(req.periods) + " periods: " + info_.last_error +
+                     "; paused there";
       break;
     }
   }
@@ -66,7 +70,8 @@ void SimNode::SetStateCall(const SetState::Request& req, SetState::Response* res
   for (const auto* field : {&req.modal, &req.modal_rate}) {
     if (!field->empty() && field->size() != nmodal) {
       res->message = std::string(field == &req.modal ? "modal" : "modal_rate") + ": " +
-                     std::to_string(field->size()) + " values, the model has " + std::to_string(nmodal) +
+                     std::to_string(field->size()) + " values, the model has " +
+                     std::to_string(nmodal) +
                      " modal coordinates (or leave it empty); nothing changed";
       return;
     }
@@ -117,7 +122,8 @@ void SimNode::LineariseCall(Linearise::Response* res) {
   }
   for (int i = 0; i < 3; ++i) {
     scene->links[i].modes = model_->link[i].modes;
-    for (int j = 0; j < F3R_MAX_MODES; ++j) scene->links[i].eta0[j] = scene->links[i].eta_rate0[j] = 0.0;
+    for (int j = 0; j < F3R_MAX_MODES; ++j)
+      scene->links[i].eta0[j] = scene->links[i].eta_rate0[j] = 0.0;
   }
   f3r_error err{};
   f3r_model* raw = nullptr;

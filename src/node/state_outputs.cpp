@@ -138,14 +138,16 @@ void StateOutputs::PrepareTransforms() {
   }
   tf_.transforms.push_back(Frame(frames_.base, frames_.platform));
   for (int i = 0; i < 3; ++i)
-    for (int k = 1; k < params_.beam_points; ++k) tf_.transforms.push_back(Frame(frames_.base, frames_.beam[i][k]));
+    for (int k = 1; k < params_.beam_points; ++k)
+      tf_.transforms.push_back(Frame(frames_.base, frames_.beam[i][k]));
 }
 
 void StateOutputs::FillTransforms(const f3r_outputs& out, const ros::Time& stamp) {
   const double* q = out.q;
   size_t n = 0;
   for (int i = 0; i < 3; ++i) {
-    SetPlanar(&tf_.transforms[n++], model_.base_joint[i][0], model_.base_joint[i][1], q[F3R_Q_THETA + i]);
+    SetPlanar(&tf_.transforms[n++], model_.base_joint[i][0], model_.base_joint[i][1],
+              q[F3R_Q_THETA + i]);
     SetPlanar(&tf_.transforms[n++], q[F3R_Q_RHO + i], 0.0, 0.0);
   }
   SetPlanar(&tf_.transforms[n++], q[F3R_Q_X], q[F3R_Q_Y], q[F3R_Q_PHI]);
@@ -240,19 +242,21 @@ void StateOutputs::PublishDiagnostics(const f3r_outputs& out, const RunInfo& inf
   diagnostic_msgs::DiagnosticStatus& d = diagnostics_.status[0];
   std::string outside;
   for (int i = 0; i < 3; ++i)
-    if (info.outside_stroke[static_cast<size_t>(i)]) outside += (outside.empty() ? "" : ", ") + Leg(i, "");
+    if (info.outside_stroke[static_cast<size_t>(i)])
+      outside += (outside.empty() ? "" : ", ") + Leg(i, "");
   if (!info.last_error.empty()) {
     d.level = diagnostic_msgs::DiagnosticStatus::ERROR;
     d.message = "integration stopped: " + info.last_error;
   } else if (info.waiting_for_command > 0.0) {
     d.level = diagnostic_msgs::DiagnosticStatus::WARN;
     char text[160];
-    std::snprintf(text, sizeof text, "lockstep: no command for the period at t = %.6g s for %.1f s", out.t,
-                  info.waiting_for_command);
+    std::snprintf(text, sizeof text, "lockstep: no command for the period at t = %.6g s for %.1f s",
+                  out.t, info.waiting_for_command);
     d.message = text;
   } else if (info.behind || !outside.empty()) {
     d.level = diagnostic_msgs::DiagnosticStatus::WARN;
-    d.message = info.behind ? "behind the requested real-time factor" : outside + " outside the stroke";
+    d.message =
+        info.behind ? "behind the requested real-time factor" : outside + " outside the stroke";
   } else {
     d.level = diagnostic_msgs::DiagnosticStatus::OK;
     d.message = info.paused ? "paused" : "running";
@@ -288,7 +292,8 @@ bool StateOutputs::SubscribersConnected(int n) const {
   std::map<std::string, int> registered;
   XmlRpc::XmlRpcValue request, response, payload;
   request[0] = ros::this_node::getName();
-  if (ros::master::execute("getSystemState", request, response, payload, false) && payload.size() > 1) {
+  if (ros::master::execute("getSystemState", request, response, payload, false) &&
+      payload.size() > 1) {
     for (int i = 0; i < payload[1].size(); ++i)
       registered[static_cast<std::string>(payload[1][i][0])] = payload[1][i][1].size();
   }
@@ -312,7 +317,8 @@ void StateOutputs::PublishStatus(const f3r_outputs& out, const RunInfo& info) {
   status_.behind = info.behind;
   status_.lag = info.lag;
   status_.resyncs = info.resyncs;
-  for (int i = 0; i < 3; ++i) status_.outside_stroke[static_cast<size_t>(i)] = info.outside_stroke[static_cast<size_t>(i)];
+  for (int i = 0; i < 3; ++i)
+    status_.outside_stroke[static_cast<size_t>(i)] = info.outside_stroke[static_cast<size_t>(i)];
   status_.paused = info.paused;
   status_.steps = static_cast<uint64_t>(out.stats.steps);
   status_.residual_evals = static_cast<uint64_t>(out.stats.residual_evals);

@@ -31,8 +31,8 @@ struct RunInfo {
   std::array<bool, 3> outside_stroke{};    // rho_i outside the scene's stroke
   bool paused = false;
   uint64_t rejected_commands = 0;
-  double waiting_for_command = 0.0;        // lockstep: wall s the present period has waited for
-                                           // its command, once past ~lockstep_warn_after; else 0
+  double waiting_for_command = 0.0;  // lockstep: wall s the present period has waited for
+                                     // its command, once past ~lockstep_warn_after; else 0
   std::string last_error;
 };
 
@@ -73,7 +73,9 @@ class StateOutputs {
   void PublishStatus(const f3r_outputs& out, const RunInfo& info);
   void PublishState(const f3r_outputs& out, const ros::Time& stamp);  // all but /tf and ~status
   // Simulated time, or the wall clock (~stamps).
-  ros::Time Stamp(double t) const { return params_.sim_stamps ? ros::Time(t) : ros::Time(ros::WallTime::now().toSec()); }
+  ros::Time Stamp(double t) const {
+    return params_.sim_stamps ? ros::Time(t) : ros::Time(ros::WallTime::now().toSec());
+  }
 
   const f3r_model& model_;
   const NodeParams& params_;

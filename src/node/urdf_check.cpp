@@ -19,7 +19,8 @@ std::string Mismatch(const std::string& joint, const char* what, double urdf, do
 
 }  // namespace
 
-std::string CheckUrdf(const std::string& xml, const f3r_model& model, const FrameNames* given, double tol) {
+std::string CheckUrdf(const std::string& xml, const f3r_model& model, const FrameNames* given,
+                      double tol) {
   urdf::ModelInterfaceSharedPtr urdf = urdf::parseURDF(xml);
   if (!urdf) return "robot_description is not a valid URDF";
   for (int i = 0; i < 3; ++i) {
@@ -29,8 +30,9 @@ std::string CheckUrdf(const std::string& xml, const f3r_model& model, const Fram
     const auto tip = urdf->getJoint("leg_" + n + "_tip_nominal_joint");
     const auto pc = urdf->getJoint("platform_c" + n + "_joint");
     if (!revolute || !prismatic || !tip || !pc)
-      return "robot_description lacks joint leg_" + n + "_revolute, leg_" + n + "_prismatic, leg_" + n +
-             "_tip_nominal_joint or platform_c" + n + "_joint (scripts/make_urdf.py writes them)";
+      return "robot_description lacks joint leg_" + n + "_revolute, leg_" + n + "_prismatic, leg_" +
+             n + "_tip_nominal_joint or platform_c" + n +
+             "_joint (scripts/make_urdf.py writes them)";
     const auto& a = revolute->parent_to_joint_origin_transform.position;
     if (std::fabs(a.x - model.base_joint[i][0]) > tol)
       return Mismatch(revolute->name, "origin x (A_i)", a.x, model.base_joint[i][0]);
@@ -39,18 +41,19 @@ std::string CheckUrdf(const std::string& xml, const f3r_model& model, const Fram
     if (!prismatic->limits)
       return "robot_description: joint " + prismatic->name + " has no limit (the scene's stroke)";
     if (std::fabs(prismatic->limits->lower - model.stroke_min) > tol)
-      return Mismatch(prismatic->name, "lower limit (geometry.stroke_min)", prismatic->limits->lower,
-                      model.stroke_min);
+      return Mismatch(prismatic->name, "lower limit (geometry.stroke_min)",
+                      prismatic->limits->lower, model.stroke_min);
     if (std::fabs(prismatic->limits->upper - model.stroke_max) > tol)
-      return Mismatch(prismatic->name, "upper limit (geometry.stroke_max)", prismatic->limits->upper,
-                      model.stroke_max);
+      return Mismatch(prismatic->name, "upper limit (geometry.stroke_max)",
+                      prismatic->limits->upper, model.stroke_max);
     const double l = tip->parent_to_joint_origin_transform.position.x;
     if (std::fabs(l - model.link_length) > tol)
       return Mismatch(tip->name, "origin x (link length l)", l, model.link_length);
     const auto& c = pc->parent_to_joint_origin_transform.position;
     const double r = std::hypot(c.x, c.y);
     if (std::fabs(r - model.platform_radius) > tol)
-      return Mismatch(pc->name, "distance from the platform centre (r_PC)", r, model.platform_radius);
+      return Mismatch(pc->name, "distance from the platform centre (r_PC)", r,
+                      model.platform_radius);
   }
   // Every frame the node publishes is a link of the URDF, so that RobotModel shows all of it:
   // the names carry ~tf_prefix, and the beam stations ~beam_points.
@@ -58,19 +61,23 @@ std::string CheckUrdf(const std::string& xml, const f3r_model& model, const Fram
   const FrameNames& frames = *given;
   std::vector<std::string> names = {frames.base, frames.platform};
   for (int i = 0; i < 3; ++i) {
-    for (const auto* f : {&frames.cylinder[i], &frames.piston[i], &frames.tip_nominal[i], &frames.platform_c[i]})
+    for (const auto* f :
+         {&frames.cylinder[i], &frames.piston[i], &frames.tip_nominal[i], &frames.platform_c[i]})
       names.push_back(*f);
     for (const auto& b : frames.beam[i]) names.push_back(b);
   }
   for (const auto& name : names)
     if (!urdf->getLink(name))
       return "robot_description lacks link " + name +
-             " (generate it for this node's ~tf_prefix and ~beam_points: scripts/make_urdf.py --prefix "
+             " (generate it for this node's ~tf_prefix and ~beam_points: scripts/make_urdf.py "
+             "--prefix "
              "--beam-points, as sim.launch does)";
   const std::string points = std::to_string(frames.beam[0].size());
-  const std::string extra = frames.beam[0][0].substr(0, frames.beam[0][0].size() - 1) + points;  // station N
+  const std::string extra =
+      frames.beam[0][0].substr(0, frames.beam[0][0].size() - 1) + points;  // station N
   if (urdf->getLink(extra))
-    return "robot_description has more beam stations than ~beam_points = " + points + " (link " + extra + ")";
+    return "robot_description has more beam stations than ~beam_points = " + points + " (link " +
+           extra + ")";
   return "";
 }
 

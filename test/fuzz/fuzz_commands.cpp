@@ -51,19 +51,29 @@ double AnyValue(FuzzedDataProvider& p, double limit) {
       return v;
     }
     case 1: {
-      const double special[] = {0.0, -0.0, kNaN, -kNaN, kInf, -kInf, limit, -limit,
-                                std::nextafter(limit, kInf), -std::nextafter(limit, kInf),
-                                std::nextafter(limit, 0.0), DBL_MAX, -DBL_MAX, DBL_MIN,
-                                std::numeric_limits<double>::denorm_min(), 1.0, -1.0,
+      const double special[] = {0.0,
+                                -0.0,
+                                kNaN,
+                                -kNaN,
+                                kInf,
+                                -kInf,
+                                limit,
+                                -limit,
+                                std::nextafter(limit, kInf),
+                                -std::nextafter(limit, kInf),
+                                std::nextafter(limit, 0.0),
+                                DBL_MAX,
+                                -DBL_MAX,
+                                DBL_MIN,
+                                std::numeric_limits<double>::denorm_min(),
+                                1.0,
+                                -1.0,
                                 std::numeric_limits<double>::signaling_NaN()};
       return special[p.ConsumeIntegralInRange<size_t>(0, sizeof special / sizeof special[0] - 1)];
     }
-    case 2:
-      return p.ConsumeFloatingPointInRange<double>(-limit, limit);
-    case 3:
-      return p.ConsumeFloatingPoint<double>();
-    default:
-      return static_cast<double>(p.ConsumeIntegralInRange<int>(-3, 3));
+    case 2: return p.ConsumeFloatingPointInRange<double>(-limit, limit);
+    case 3: return p.ConsumeFloatingPoint<double>();
+    default: return static_cast<double>(p.ConsumeIntegralInRange<int>(-3, 3));
   }
 }
 
@@ -72,8 +82,8 @@ double AnyLimit(FuzzedDataProvider& p, double fallback) {
   switch (p.ConsumeIntegralInRange<int>(0, 3)) {
     case 0: return fallback;
     case 1: {
-      const double special[] = {DBL_MAX, DBL_MIN, std::numeric_limits<double>::denorm_min(), 1.0,
-                                1e300, 0.5};
+      const double special[] = {DBL_MAX, DBL_MIN, std::numeric_limits<double>::denorm_min(),
+                                1.0,     1e300,   0.5};
       return special[p.ConsumeIntegralInRange<size_t>(0, sizeof special / sizeof special[0] - 1)];
     }
     default: {
@@ -95,11 +105,11 @@ std::string AnyFrame(FuzzedDataProvider& p) {
 bool Allowed(double v, double limit) { return std::isfinite(v) && std::fabs(v) <= limit; }
 
 double LimitAt(size_t index, const CommandLimits& l) {
-  if (index < 3) return l.force;           // rho_i
-  if (index < 6) return l.torque;          // theta_i
-  if (index < 8) return l.force;           // platform F_x, F_y
-  if (index == 8) return l.torque;         // platform torque
-  return l.modal;                          // modal forces
+  if (index < 3) return l.force;    // rho_i
+  if (index < 6) return l.torque;   // theta_i
+  if (index < 8) return l.force;    // platform F_x, F_y
+  if (index == 8) return l.torque;  // platform torque
+  return l.modal;                   // modal forces
 }
 
 bool SameBits(const std::vector<double>& a, const std::vector<double>& b) {
@@ -218,13 +228,13 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
       fx = c * w.force.x - s * w.force.y;
       fy = s * w.force.x + c * w.force.y;
     }
-    expect_ok = Allowed(fx, limits.force) &&
-                Allowed(fy, limits.force) && Allowed(w.force.x, limits.force) &&
-                Allowed(w.force.y, limits.force) && Allowed(w.force.z, limits.force) &&
-                Allowed(w.torque.x, limits.torque) && Allowed(w.torque.y, limits.torque) &&
-                Allowed(w.torque.z, limits.torque) && w.force.z == 0.0 && w.torque.x == 0.0 &&
-                w.torque.y == 0.0;
-    why = flex3rpr::DecodeWrench(msg, flex3rpr::YawRotation(in_world ? 0.0 : phi_p), limits, *model, &forces);
+    expect_ok = Allowed(fx, limits.force) && Allowed(fy, limits.force) &&
+                Allowed(w.force.x, limits.force) && Allowed(w.force.y, limits.force) &&
+                Allowed(w.force.z, limits.force) && Allowed(w.torque.x, limits.torque) &&
+                Allowed(w.torque.y, limits.torque) && Allowed(w.torque.z, limits.torque) &&
+                w.force.z == 0.0 && w.torque.x == 0.0 && w.torque.y == 0.0;
+    why = flex3rpr::DecodeWrench(msg, flex3rpr::YawRotation(in_world ? 0.0 : phi_p), limits, *model,
+                                 &forces);
     if (why.empty() && forces.size() == static_cast<size_t>(model->nq)) {
       if (in_world) {
         expected.assign(static_cast<size_t>(model->nq), 0.0);
@@ -243,8 +253,8 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   static const bool verbose = std::getenv("FUZZ_COMMANDS_VERBOSE") != nullptr;
   if (verbose) {  // FUZZ_COMMANDS_VERBOSE=1 build/fuzz/fuzz_commands FILE...: what each input is
     static const char* names[] = {"~command", "~effort_group/command", "~platform_wrench"};
-    std::fprintf(stderr, "%s, nq %d, limits %g %g %g: %s\n", names[which], model->nq,
-                 limits.force, limits.torque, limits.modal, why.empty() ? "accepted" : why.c_str());
+    std::fprintf(stderr, "%s, nq %d, limits %g %g %g: %s\n", names[which], model->nq, limits.force,
+                 limits.torque, limits.modal, why.empty() ? "accepted" : why.c_str());
     if (why.empty()) {
       std::fprintf(stderr, "  forces");
       for (double f : forces) std::fprintf(stderr, " %.17g", f);
@@ -263,7 +273,8 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
         Fail("a platform-frame force changed magnitude");
       if (forces[8] != turned_torque) Fail("the platform torque was changed");
       for (size_t n = 0; n < forces.size(); ++n)
-        if ((n < 6 || n > 8) && forces[n] != 0.0) Fail("a force outside the platform's is not zero");
+        if ((n < 6 || n > 8) && forces[n] != 0.0)
+          Fail("a force outside the platform's is not zero");
     }
   } else {
     if (expect_ok) Fail("a command the rules allow was rejected", why);

@@ -51,12 +51,14 @@ int LLVMFuzzerTestOneInput(const unsigned char* data, size_t size) {
   memset(&err, 0, sizeof err);
   const f3r_status st = f3r_scene_load(memfd_path, &scene, &err);
   if (st != F3R_OK) {
-    if (err.code != st || err.message[0] == '\0') fail("an error without its code or message", &err);
+    if (err.code != st || err.message[0] == '\0')
+      fail("an error without its code or message", &err);
     if (memchr(err.message, '\0', sizeof err.message) == NULL) fail("unterminated message", NULL);
     return 0;
   }
   f3r_error again;
-  if (f3r_scene_validate(&scene, &again) != F3R_OK) fail("a loaded scene does not validate", &again);
+  if (f3r_scene_validate(&scene, &again) != F3R_OK)
+    fail("a loaded scene does not validate", &again);
 
   f3r_model* model = NULL;
   if (f3r_model_create(&scene, &model, &err) == F3R_OK) {

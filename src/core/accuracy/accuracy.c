@@ -70,7 +70,8 @@ static double solver_error_of(const f3r_scene* s, const char* kind) {
   double error = NAN, at = 0.0;
   for (int k = 0; k < f3r_solver_relation_count; ++k) {
     const f3r_solver_relation* r = &f3r_solver_relations[k];
-    if (strcmp(r->kind, kind) || r->formulation != s->formulation || r->integrator != s->integrator ||
+    if (strcmp(r->kind, kind) || r->formulation != s->formulation ||
+        r->integrator != s->integrator ||
         strcmp(r->table, s->explicit_settings & F3R_EXPLICIT_TABLE ? s->table : "") ||
         r->rtol > s->rtol * (1.0 + 1e-9))
       continue;
@@ -86,7 +87,8 @@ static const char* integrator_name(f3r_integrator i) {
   return i == F3R_INTEGRATOR_ERK ? "erk" : i == F3R_INTEGRATOR_DIRK ? "dirk" : "ida";
 }
 
-static void append(char* text, size_t size, const char* fmt, ...) __attribute__((format(printf, 3, 4)));
+static void append(char* text, size_t size, const char* fmt, ...)
+    __attribute__((format(printf, 3, 4)));
 static void append(char* text, size_t size, const char* fmt, ...) {
   const size_t used = strlen(text);
   if (used + 1 >= size) return;
@@ -104,13 +106,18 @@ static void unmet_reason(const f3r_scene* scene, const f3r_accuracy_choice* c, u
     int fixed = 0, at_most = 0;
     for (int i = 0; i < 3; ++i) {
       if (!f3r_is_flexible(scene, i)) continue;
-      if (!(chosen >> i & 1)) fixed = 1;
-      else if (c->modes[i] >= F3R_MAX_MODES) at_most = 1;
+      if (!(chosen >> i & 1))
+        fixed = 1;
+      else if (c->modes[i] >= F3R_MAX_MODES)
+        at_most = 1;
     }
     snprintf(why, size, "the largest part is the model's (%.3g m): %s", c->model_error,
-             fixed ? "the scene sets mode counts" : at_most ? "the mode counts are at their most" : "as the pilot scales it");
+             fixed     ? "the scene sets mode counts"
+             : at_most ? "the mode counts are at their most"
+                       : "as the pilot scales it");
   } else if (c->kinematics_error >= solver) {
-    snprintf(why, size, "the largest part is exact kinematics' effect (%.3g m): the scene turns it off",
+    snprintf(why, size,
+             "the largest part is exact kinematics' effect (%.3g m): the scene turns it off",
              c->kinematics_error);
   } else {
     const unsigned set = scene->explicit_settings;
@@ -119,11 +126,16 @@ static void unmet_reason(const f3r_scene* scene, const f3r_accuracy_choice* c, u
     if (set & F3R_EXPLICIT_INTEGRATOR) append(fixed, sizeof fixed, " integrator");
     if (set & F3R_EXPLICIT_RTOL) append(fixed, sizeof fixed, " rtol");
     if (set & F3R_EXPLICIT_TABLE) append(fixed, sizeof fixed, " table");
-    if (!solver_open) snprintf(why, size, "the largest part is the solver's (%.3g m): the scene sets the solver", solver);
+    if (!solver_open)
+      snprintf(why, size, "the largest part is the solver's (%.3g m): the scene sets the solver",
+               solver);
     else if (fixed[0])
-      snprintf(why, size, "the largest part is the solver's (%.3g m): the scene sets its%s", solver, fixed);
+      snprintf(why, size, "the largest part is the solver's (%.3g m): the scene sets its%s", solver,
+               fixed);
     else
-      snprintf(why, size, "the largest part is the solver's (%.3g m): no measured solver reaches the budget on this run",
+      snprintf(why, size,
+               "the largest part is the solver's (%.3g m): no measured solver reaches the budget "
+               "on this run",
                solver);
   }
 }
@@ -135,9 +147,9 @@ typedef struct {
   const f3r_scene* scene; /* the caller's */
   const f3r_scene* s;     /* the working copy */
   double request;
-  double model_target;    /* m: the model's share of the request */
-  const char* kind;       /* the solver relations' kind: rigid, flexible or commanded */
-  unsigned chosen;        /* the links whose mode counts the knob chooses */
+  double model_target; /* m: the model's share of the request */
+  const char* kind;    /* the solver relations' kind: rigid, flexible or commanded */
+  unsigned chosen;     /* the links whose mode counts the knob chooses */
   int any_flexible;
   int kinematics_open, kinematics_off, solver_open;
   f3r_mode_search ms;
@@ -157,7 +169,8 @@ typedef struct {
   double budget, limit, measured;
   int checked;
   const f3r_solver_relation* relation;
-  const f3r_solver_relation* skipped_check; /* the cheapest one, whose check cost more than it saves */
+  const f3r_solver_relation*
+      skipped_check; /* the cheapest one, whose check cost more than it saves */
 } solver_pick;
 
 /* What the scene leaves open (links' mode counts, exact kinematics, the solver) and which
@@ -174,7 +187,9 @@ static void open_choice(const f3r_scene* scene, double request, int commanded, f
       s->links[i].modes = 1; /* a placeholder until chosen */
     }
   }
-  run->kind = commanded && run->any_flexible ? "commanded" : run->any_flexible ? "flexible" : "rigid";
+  run->kind = commanded && run->any_flexible ? "commanded"
+              : run->any_flexible            ? "flexible"
+                                             : "rigid";
   run->model_target = F3R_ACCURACY_MODEL_SHARE * request;
   /* Exact kinematics costs no measurable CPU time: runs with it on take 0.86 to 1.05 times the
    * steps of the same runs without it and, within the machine's noise, the same time (median 0.98
@@ -184,9 +199,11 @@ static void open_choice(const f3r_scene* scene, double request, int commanded, f
    * wherever the scene leaves it open: its part of the error goes to 0 at no cost, where an
    * estimate (a linear response, or a pilot run of a tenth of the duration) could only have
    * turned it off to save nothing. Where the scene turns it off, its effect is estimated. */
-  run->kinematics_open = run->any_flexible && !(scene->explicit_settings & F3R_EXPLICIT_EXACT_KINEMATICS);
+  run->kinematics_open =
+      run->any_flexible && !(scene->explicit_settings & F3R_EXPLICIT_EXACT_KINEMATICS);
   run->kinematics_off = run->any_flexible && !run->kinematics_open && !scene->exact_kinematics;
-  const unsigned solver_fixed = F3R_EXPLICIT_FORMULATION | F3R_EXPLICIT_INTEGRATOR | F3R_EXPLICIT_RTOL;
+  const unsigned solver_fixed =
+      F3R_EXPLICIT_FORMULATION | F3R_EXPLICIT_INTEGRATOR | F3R_EXPLICIT_RTOL;
   run->solver_open = (scene->explicit_settings & solver_fixed) != solver_fixed;
 }
 
@@ -207,7 +224,8 @@ static f3r_status search_modes(choice_run* run, f3r_accuracy_choice* c, f3r_erro
      * within 0.3 s): the knob takes the most faithful model, with no estimate of its error. */
     for (int i = 0; i < 3; ++i) c->modes[i] = (ms->chosen >> i & 1) ? F3R_MAX_MODES : ms->fixed[i];
   } else if (st == F3R_OK) {
-    st = f3r_mode_search_run(run->s, &run->ms, run->model_target, c->modes, &run->linear_error, err);
+    st =
+        f3r_mode_search_run(run->s, &run->ms, run->model_target, c->modes, &run->linear_error, err);
   }
   c->extent = ms->extent;
   c->model_error = run->linear_error;
@@ -229,13 +247,15 @@ static f3r_status run_mode_pilot(choice_run* run, f3r_accuracy_choice* c, f3r_er
    * least counts, where the differences stand far above the pilot's noise, say it best), and
    * the search runs again with the target shrunk by it. */
   double nonlinear = 0.0, linear = 0.0;
-  if (st == F3R_OK && run->pair) st = f3r_pilot_pair(run->s, &run->ms, &run->pilot, &nonlinear, &linear, err);
+  if (st == F3R_OK && run->pair)
+    st = f3r_pilot_pair(run->s, &run->ms, &run->pilot, &nonlinear, &linear, err);
   const double ratio = linear > 0.0 ? nonlinear / linear : 1.0;
   if (st == F3R_OK && ratio > 1.0) {
     c->pilot_ratio = ratio;
     c->model_error = ratio * run->linear_error;
     if (c->model_error > run->model_target) {
-      st = f3r_mode_search_run(run->s, &run->ms, run->model_target / ratio, c->modes, &run->linear_error, err);
+      st = f3r_mode_search_run(run->s, &run->ms, run->model_target / ratio, c->modes,
+                               &run->linear_error, err);
       c->model_error = ratio * run->linear_error;
     }
   }
@@ -264,7 +284,8 @@ static f3r_status check_modes(choice_run* run, f3r_accuracy_choice* c, f3r_error
     int least[3];
     f3r_mode_search_least(&run->ms, least);
     st = f3r_linear_kinematics(run->s, &run->ms, least, &c->kinematics_linear, err);
-    if (KINEMATICS_SKIP_FACTOR * c->kinematics_linear <= F3R_ACCURACY_KINEMATICS_SHARE * run->request) {
+    if (KINEMATICS_SKIP_FACTOR * c->kinematics_linear <=
+        F3R_ACCURACY_KINEMATICS_SHARE * run->request) {
       run->kinematics = 0;
       c->kinematics_effect = c->kinematics_error = c->kinematics_linear;
     }
@@ -279,31 +300,42 @@ static void summarise_modes(const choice_run* run, f3r_accuracy_choice* c) {
   char* text = c->summary;
   const size_t size = sizeof c->summary;
   const f3r_mode_search* ms = &run->ms;
-  append(text, size, "accuracy %g m on the end-effector path (shares: model %g, kinematics %g, solver %g)\n",
-         run->request, F3R_ACCURACY_MODEL_SHARE, F3R_ACCURACY_KINEMATICS_SHARE, F3R_ACCURACY_SOLVER_SHARE);
+  append(text, size,
+         "accuracy %g m on the end-effector path (shares: model %g, kinematics %g, solver %g)\n",
+         run->request, F3R_ACCURACY_MODEL_SHARE, F3R_ACCURACY_KINEMATICS_SHARE,
+         F3R_ACCURACY_SOLVER_SHARE);
   for (int i = 0; i < 3; ++i) {
-    if (!f3r_is_flexible(run->scene, i)) append(text, size, "links[%d]: rigid\n", i);
-    else if (!(run->chosen >> i & 1)) append(text, size, "links[%d]: %d modes, as the scene sets\n", i, c->modes[i]);
-    else append(text, size, "links[%d]: %d modes\n", i, c->modes[i]);
+    if (!f3r_is_flexible(run->scene, i))
+      append(text, size, "links[%d]: rigid\n", i);
+    else if (!(run->chosen >> i & 1))
+      append(text, size, "links[%d]: %d modes, as the scene sets\n", i, c->modes[i]);
+    else
+      append(text, size, "links[%d]: %d modes\n", i, c->modes[i]);
   }
   if (run->chosen && run->impacts)
-    append(text, size, "modes: end stops: impacts are outside the linear estimate, and the path need not "
-                       "converge in the mode count; the most faithful model (%d modes)\n", F3R_MAX_MODES);
+    append(text, size,
+           "modes: end stops: impacts are outside the linear estimate, and the path need not "
+           "converge in the mode count; the most faithful model (%d modes)\n",
+           F3R_MAX_MODES);
   else if (run->chosen && ms->at_rest)
-    append(text, size, "modes: nothing excites the scene (no inputs, initial rates or deflections)\n");
+    append(text, size,
+           "modes: nothing excites the scene (no inputs, initial rates or deflections)\n");
   else if (run->chosen)
     append(text, size,
            "modes: the %s-order linearised path is within %.3g m of the same with %d modes (path "
            "extent %.3g m, %d linear models)\n",
-           ms->order == 2 ? "second" : "first", run->linear_error, ms->ref_r, c->extent, c->linear_evaluations);
+           ms->order == 2 ? "second" : "first", run->linear_error, ms->ref_r, c->extent,
+           c->linear_evaluations);
   if (c->pilot && run->pair)
     append(text, size,
-           "pilot: the path leaves the initial pose (%.3g m); nonlinear runs at the least mode counts over "
+           "pilot: the path leaves the initial pose (%.3g m); nonlinear runs at the least mode "
+           "counts over "
            "the first %.0f%% of it, carried to the whole, scale the linear estimate by %.3g\n",
            c->extent, 100.0 * F3R_PILOT_SHARE, c->pilot_ratio);
   else if (run->pair_skipped)
     append(text, size,
-           "pilot: the path leaves the initial pose (%.3g m), but its linear estimate is below 1/%g of the "
+           "pilot: the path leaves the initial pose (%.3g m), but its linear estimate is below "
+           "1/%g of the "
            "model's share, beyond any nonlinear ratio measured; not checked\n",
            c->extent, PAIR_SKIP_FACTOR);
 }
@@ -313,27 +345,37 @@ static void summarise_modes(const choice_run* run, f3r_accuracy_choice* c) {
 static void summarise_kinematics(const choice_run* run, f3r_accuracy_choice* c) {
   char* text = c->summary;
   const size_t size = sizeof c->summary;
-  if (!run->any_flexible) append(text, size, "exact kinematics: no flexible link\n");
+  if (!run->any_flexible)
+    append(text, size, "exact kinematics: no flexible link\n");
   else if (run->kinematics_open && run->impacts)
     append(text, size, "exact kinematics: on (the most faithful model)\n");
   else if (run->kinematics_open)
-    append(text, size, "exact kinematics: on: it costs no measurable CPU time (the same steps and time as "
-                       "without it on the shipped scenes), so its part of the error is removed, not estimated\n");
+    append(
+        text, size,
+        "exact kinematics: on: it costs no measurable CPU time (the same steps and time as "
+        "without it on the shipped scenes), so its part of the error is removed, not estimated\n");
   else if (!run->kinematics_off)
     append(text, size, "exact kinematics: on, as the scene sets\n");
   else if (run->kinematics_linear_only)
     append(text, size,
-           "exact kinematics: off, as the scene sets; its linear estimate %.3g m, below 1/%g of its share "
+           "exact kinematics: off, as the scene sets; its linear estimate %.3g m, below 1/%g of "
+           "its share "
            "%.3g m (beyond any ratio a pilot measured), is counted unchecked\n",
-           c->kinematics_linear, KINEMATICS_SKIP_FACTOR, F3R_ACCURACY_KINEMATICS_SHARE * run->request);
+           c->kinematics_linear, KINEMATICS_SKIP_FACTOR,
+           F3R_ACCURACY_KINEMATICS_SHARE * run->request);
   else if (!run->kinematics)
-    append(text, size, "exact kinematics: off, as the scene sets; its effect is second order in the deflections "
-                       "and the path stays near the initial pose: not estimated\n");
+    append(
+        text, size,
+        "exact kinematics: off, as the scene sets; its effect is second order in the deflections "
+        "and the path stays near the initial pose: not estimated\n");
   else {
     char linear[64] = "";
-    if (c->kinematics_linear > 0.0) snprintf(linear, sizeof linear, ", its linear estimate %.3g m", c->kinematics_linear);
-    append(text, size, "exact kinematics: off, as the scene sets; a pilot estimates its effect at %.3g m%s, "
-                       "counted in the estimate\n", c->kinematics_effect, linear);
+    if (c->kinematics_linear > 0.0)
+      snprintf(linear, sizeof linear, ", its linear estimate %.3g m", c->kinematics_linear);
+    append(text, size,
+           "exact kinematics: off, as the scene sets; a pilot estimates its effect at %.3g m%s, "
+           "counted in the estimate\n",
+           c->kinematics_effect, linear);
   }
 }
 
@@ -360,19 +402,26 @@ static f3r_status pick_relation(choice_run* run, const f3r_accuracy_choice* c, s
   p->limit = run->impacts ? budget / IMPACT_AMPLIFICATION : budget;
   int most = 0;
   for (int i = 0; i < 3; ++i) most = c->modes[i] > most ? c->modes[i] : most;
-  const double explicit_scale = most > BENCHMARK_MODES ? (double)(most * most) / (BENCHMARK_MODES * BENCHMARK_MODES) : 1.0;
+  const double explicit_scale =
+      most > BENCHMARK_MODES ? (double)(most * most) / (BENCHMARK_MODES * BENCHMARK_MODES) : 1.0;
   for (int attempt = 0; attempt < 4; ++attempt) {
     const f3r_solver_relation* next = pick_solver(scene, run->kind, p->limit, explicit_scale);
     if (!next || next == p->relation) break;
     const f3r_solver_relation* r = p->relation = next;
     /* once a relation fell short here, its successors are checked too */
-    if (run->impacts || !(run->long_run || p->checked || (run->ms.far && r->error > SOLVER_CHECK_SHARE * budget))) break;
+    if (run->impacts ||
+        !(run->long_run || p->checked || (run->ms.far && r->error > SOLVER_CHECK_SHARE * budget)))
+      break;
     if (!run->long_run && !p->checked) {
       /* A check runs a pilot window at the relation, after the tight pilot's when none ran yet;
        * the cheapest relation that needs no check may cost less than that over the run. */
-      const double check = F3R_PILOT_SHARE * (relation_cost(r, explicit_scale) +
-                           (run->pilot_started ? 0.0 : f3r_pilot_cost(run->kind, 0.1 * run->model_target, run->long_run)));
-      const f3r_solver_relation* safe = pick_solver(scene, run->kind, SOLVER_CHECK_SHARE * budget, explicit_scale);
+      const double check = F3R_PILOT_SHARE *
+                           (relation_cost(r, explicit_scale) +
+                            (run->pilot_started ? 0.0
+                                                : f3r_pilot_cost(run->kind, 0.1 * run->model_target,
+                                                                 run->long_run)));
+      const f3r_solver_relation* safe =
+          pick_solver(scene, run->kind, SOLVER_CHECK_SHARE * budget, explicit_scale);
       if (safe && relation_cost(safe, explicit_scale) <= relation_cost(r, explicit_scale) + check) {
         p->skipped_check = r;
         p->relation = safe;
@@ -381,15 +430,17 @@ static f3r_status pick_relation(choice_run* run, const f3r_accuracy_choice* c, s
       }
     }
     if (!run->pilot_started) {
-      st = f3r_pilot_start(run->s, &run->ms, c->modes, c->exact_kinematics, run->kind, 0.1 * run->model_target,
-                           run->long_run, &run->pilot, err);
+      st = f3r_pilot_start(run->s, &run->ms, c->modes, c->exact_kinematics, run->kind,
+                           0.1 * run->model_target, run->long_run, &run->pilot, err);
       run->pilot_started = 1;
       if (st != F3R_OK) break;
     }
     const f3r_solver_settings settings = relation_settings(run, r);
     /* At the pilot's least modes where it ran already: the relation, measured at each benchmark
      * scene's own modes, checked on this scene's motion at a fraction of the cost. */
-    if ((st = f3r_pilot_solver(run->s, &run->ms, &run->pilot, &settings, &p->measured, err)) != F3R_OK) break;
+    if ((st = f3r_pilot_solver(run->s, &run->ms, &run->pilot, &settings, &p->measured, err)) !=
+        F3R_OK)
+      break;
     p->checked = 1;
     if (p->measured <= budget) break;
     /* The relation is short by measured / error here; a decade at a most per attempt, as the
@@ -400,19 +451,23 @@ static f3r_status pick_relation(choice_run* run, const f3r_accuracy_choice* c, s
 }
 
 /* The summary's lines on the relation taken: where it was measured, and how it was checked. */
-static void summarise_relation(const choice_run* run, f3r_accuracy_choice* c, const solver_pick* p) {
+static void summarise_relation(const choice_run* run, f3r_accuracy_choice* c,
+                               const solver_pick* p) {
   char* text = c->summary;
   const size_t size = sizeof c->summary;
   const f3r_solver_relation* r = p->relation;
   append(text, size,
-         "solver: %s, %s%s%s, rtol %g, atol %g: the cheapest measured within %.3g m (at most %.3g m on "
+         "solver: %s, %s%s%s, rtol %g, atol %g: the cheapest measured within %.3g m (at most %.3g "
+         "m on "
          "the %d %s benchmark scenes; cost %.2g of minimal IDA at 1e-6; measured on %s)\n",
-         r->formulation == F3R_FORMULATION_DAE ? "dae" : "minimal",
-         integrator_name(r->integrator), r->table[0] ? " " : "", r->table, r->rtol, c->atol, p->limit,
-         r->error, r->scenes, r->kind, r->cost, f3r_solver_relations_source);
+         r->formulation == F3R_FORMULATION_DAE ? "dae" : "minimal", integrator_name(r->integrator),
+         r->table[0] ? " " : "", r->table, r->rtol, c->atol, p->limit, r->error, r->scenes, r->kind,
+         r->cost, f3r_solver_relations_source);
   if (run->impacts)
-    append(text, size, "solver: impacts amplify the solver's error (up to %g times on end_stop_impact); "
-                       "the budget %.3g m is divided by that\n", IMPACT_AMPLIFICATION, p->budget);
+    append(text, size,
+           "solver: impacts amplify the solver's error (up to %g times on end_stop_impact); "
+           "the budget %.3g m is divided by that\n",
+           IMPACT_AMPLIFICATION, p->budget);
   else if (p->checked && run->long_run)
     append(text, size,
            "solver: the run is longer than the benchmark's scenes (%g s); a pilot over its first "
@@ -421,9 +476,10 @@ static void summarise_relation(const choice_run* run, f3r_accuracy_choice* c, co
   else if (p->checked)
     append(text, size, "solver: the pilot measures %.3g m for it over the run\n", p->measured);
   else if (p->skipped_check)
-    append(text, size, "solver: rtol %g, the cheapest within the budget, would need a pilot's check that "
-                       "costs more than this one does over it; this one's measured error is below %g of "
-                       "the budget: not checked\n",
+    append(text, size,
+           "solver: rtol %g, the cheapest within the budget, would need a pilot's check that "
+           "costs more than this one does over it; this one's measured error is below %g of "
+           "the budget: not checked\n",
            p->skipped_check->rtol, SOLVER_CHECK_SHARE);
   else if (run->ms.far)
     append(text, size, "solver: its measured error is below %g of the budget; not checked\n",
@@ -444,7 +500,8 @@ static f3r_status choose_solver(choice_run* run, f3r_accuracy_choice* c, f3r_err
   snprintf(c->table, sizeof c->table, "%s", scene->table);
   if (!run->solver_open) {
     c->solver_error = solver_error_of(scene, run->kind);
-    append(c->summary, sizeof c->summary, "solver: %s, %s, rtol %g, as the scene sets (measured error %.3g m)\n",
+    append(c->summary, sizeof c->summary,
+           "solver: %s, %s, rtol %g, as the scene sets (measured error %.3g m)\n",
            scene->formulation == F3R_FORMULATION_DAE ? "dae" : "minimal",
            integrator_name(scene->integrator), scene->rtol, c->solver_error);
     return F3R_OK;
@@ -454,7 +511,8 @@ static f3r_status choose_solver(choice_run* run, f3r_accuracy_choice* c, f3r_err
   const f3r_solver_relation* r = p.relation;
   if (!r) {
     c->solver_error = solver_error_of(scene, run->kind);
-    append(c->summary, sizeof c->summary, "solver: no measured solver fits %.3g m; keeping %s, rtol %g\n", p.limit,
+    append(c->summary, sizeof c->summary,
+           "solver: no measured solver fits %.3g m; keeping %s, rtol %g\n", p.limit,
            integrator_name(scene->integrator), scene->rtol);
     return F3R_OK;
   }
@@ -472,27 +530,36 @@ static f3r_status choose_solver(choice_run* run, f3r_accuracy_choice* c, f3r_err
  * the one-line brief. */
 static void summarise_estimate(const choice_run* run, f3r_accuracy_choice* c) {
   const double request = run->request;
-  const double total = c->model_error + c->kinematics_error + (isfinite(c->solver_error) ? c->solver_error : 0.0);
+  const double total =
+      c->model_error + c->kinematics_error + (isfinite(c->solver_error) ? c->solver_error : 0.0);
   c->estimated_error = total;
   c->request_met = total <= request;
-  append(c->summary, sizeof c->summary, "estimated error %.3g m (model %.3g, kinematics %.3g, solver %.3g)%s", total,
-         c->model_error, c->kinematics_error, c->solver_error,
-         run->impacts ? "; the impacts' effect on the model is not estimated: check the result against a run "
-                        "with other modes" : "");
+  append(
+      c->summary, sizeof c->summary,
+      "estimated error %.3g m (model %.3g, kinematics %.3g, solver %.3g)%s", total, c->model_error,
+      c->kinematics_error, c->solver_error,
+      run->impacts
+          ? "; the impacts' effect on the model is not estimated: check the result against a run "
+            "with other modes"
+          : "");
   if (!c->request_met) {
     char why[160];
     unmet_reason(run->scene, c, run->chosen, run->solver_open, why, sizeof why);
-    append(c->summary, sizeof c->summary, "\nnot met: the estimate is %.3g times the request; %s", total / request, why);
+    append(c->summary, sizeof c->summary, "\nnot met: the estimate is %.3g times the request; %s",
+           total / request, why);
   }
   char how[64] = "linear estimate";
-  if (run->impacts) snprintf(how, sizeof how, "the most faithful: impacts");
-  else if (c->pilot) snprintf(how, sizeof how, "linear estimate x %.3g from the pilot", c->pilot_ratio);
+  if (run->impacts)
+    snprintf(how, sizeof how, "the most faithful: impacts");
+  else if (c->pilot)
+    snprintf(how, sizeof how, "linear estimate x %.3g from the pilot", c->pilot_ratio);
   snprintf(c->brief, sizeof c->brief,
            "accuracy %g m: modes %d/%d/%d (%s), exact kinematics %s, %s %s%s%s rtol %g; "
            "estimated %.3g m%s",
            request, c->modes[0], c->modes[1], c->modes[2], how, c->exact_kinematics ? "on" : "off",
-           c->formulation == F3R_FORMULATION_DAE ? "dae" : "minimal", integrator_name(c->integrator),
-           c->table[0] ? " " : "", c->table, c->rtol, total, run->impacts ? " without the impacts" : "");
+           c->formulation == F3R_FORMULATION_DAE ? "dae" : "minimal",
+           integrator_name(c->integrator), c->table[0] ? " " : "", c->table, c->rtol, total,
+           run->impacts ? " without the impacts" : "");
   if (!c->request_met)
     append(c->brief, sizeof c->brief, "; NOT MET (%.3g x the request)", total / request);
 }
@@ -503,7 +570,8 @@ f3r_status f3r_accuracy_choose(const f3r_scene* scene, double request, int comma
                                f3r_accuracy_choice* c, f3r_error* err) {
   memset(c, 0, sizeof *c);
   if (!(request > 0.0) || !isfinite(request))
-    return f3r_error_set(err, F3R_ERR_ARGUMENT, "accuracy: the request must be a positive length (m)");
+    return f3r_error_set(err, F3R_ERR_ARGUMENT,
+                         "accuracy: the request must be a positive length (m)");
   c->request = request;
   f3r_scene s;
   choice_run run;

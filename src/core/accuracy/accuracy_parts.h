@@ -10,7 +10,9 @@
 #define F3R_PILOT_SHARE 0.1 /* of the duration: the window a pilot runs over */
 #define F3R_PATH_MEMO 12    /* linear paths the mode search keeps */
 
-static inline int f3r_is_flexible(const f3r_scene* s, int i) { return s->links[i].model != F3R_LINK_RIGID; }
+static inline int f3r_is_flexible(const f3r_scene* s, int i) {
+  return s->links[i].model != F3R_LINK_RIGID;
+}
 
 /* The scene with fixed mode counts, no accuracy request: a model the caller must destroy. */
 f3r_status f3r_model_with_modes(const f3r_scene* base, const int modes[3], int exact_kinematics,
@@ -31,16 +33,16 @@ typedef struct {
   int count;
   unsigned chosen;
   int low[3];
-  int fixed[3];     /* the modes of the links not chosen */
+  int fixed[3]; /* the modes of the links not chosen */
   int order;
-  int ref_r;        /* the uniform count the reference in ref has on the chosen links, 0: none */
-  double* ref;      /* 3 count */
-  double* path;     /* 3 count, scratch */
-  double extent;    /* m: largest distance of the linearised end effector from its start */
-  double rotation;  /* rad: largest linearised platform rotation from its start */
-  int far;          /* the first- or second-order path leaves the initial pose far */
+  int ref_r;       /* the uniform count the reference in ref has on the chosen links, 0: none */
+  double* ref;     /* 3 count */
+  double* path;    /* 3 count, scratch */
+  double extent;   /* m: largest distance of the linearised end effector from its start */
+  double rotation; /* rad: largest linearised platform rotation from its start */
+  int far;         /* the first- or second-order path leaves the initial pose far */
   int at_rest;
-  int evaluations;  /* linear models built and solved (a path found in the memo is not one) */
+  int evaluations; /* linear models built and solved (a path found in the memo is not one) */
   /* The paths computed so far, by mode counts and order, at the current sampling: the search runs
    * again after the pilot, and the pilot's pair needs paths the search has made. */
   struct {
@@ -52,11 +54,12 @@ typedef struct {
 } f3r_mode_search;
 
 /* Sampling, links and the order of the estimate for a scene; f3r_mode_search_free after. */
-f3r_status f3r_mode_search_init(const f3r_scene* s, unsigned chosen, f3r_mode_search* ms, f3r_error* err);
+f3r_status f3r_mode_search_init(const f3r_scene* s, unsigned chosen, f3r_mode_search* ms,
+                                f3r_error* err);
 /* The linear path (order 1 or 2) at modes, at the search's sampling, from the memo or computed
  * into it: pose gets 3 count values. */
-f3r_status f3r_mode_search_path(const f3r_scene* s, f3r_mode_search* ms, const int modes[3], int order,
-                                double* pose, f3r_error* err);
+f3r_status f3r_mode_search_path(const f3r_scene* s, f3r_mode_search* ms, const int modes[3],
+                                int order, double* pose, f3r_error* err);
 /* The fewest modes whose linear path stays within target of its reference (estimate: that
  * distance). */
 f3r_status f3r_mode_search_run(const f3r_scene* s, f3r_mode_search* ms, double target, int modes[3],
@@ -75,14 +78,14 @@ f3r_status f3r_linear_kinematics(const f3r_scene* s, const f3r_mode_search* ms, 
  * mode counts (where the mode-count differences stand far above the pilot's own solver error),
  * with a tolerance whose measured error is a tenth of the model's share. */
 typedef struct {
-  int count;         /* samples in the window */
-  double grow;       /* duration / window */
-  double noise;      /* m: the pilot's own solver error */
+  int count;    /* samples in the window */
+  double grow;  /* duration / window */
+  double noise; /* m: the pilot's own solver error */
   f3r_solver_settings tight;
   int modes[3];
   int exact_kinematics; /* the runs' own setting, the choice's (f3r_pilot_kinematics turns it on) */
-  double* a;         /* the path at modes, tight */
-  double* b;         /* scratch */
+  double* a;            /* the path at modes, tight */
+  double* b;            /* scratch */
 } f3r_pilot;
 
 /* The measured cost (a solver relation's) of the tight pilot's solver for kind, resolution and

@@ -19,7 +19,8 @@ static f3r_status pilot_path(const f3r_scene* base, const int modes[3], int exac
   /* The pose straight from the state (the minimal formulation's z starts with it, the dae's q
    * holds it at F3R_Q_X): the full outputs' forward pass and multipliers would cost a pilot a
    * tenth of its time. */
-  const int pose_at = solver->formulation == F3R_FORMULATION_MINIMAL ? F3R_Q_X - F3R_Q_INDEPENDENT : F3R_Q_X;
+  const int pose_at =
+      solver->formulation == F3R_FORMULATION_MINIMAL ? F3R_Q_X - F3R_Q_INDEPENDENT : F3R_Q_X;
   for (int k = 0; st == F3R_OK && k < count; ++k) {
     if (k) st = f3r_sim_advance(sim, k * dt, err);
     const double* y = f3r_sim_state(sim);
@@ -45,8 +46,8 @@ static const f3r_solver_relation* pilot_relation(const char* kind, double error,
   for (int k = 0; k < f3r_solver_relation_count; ++k) {
     const f3r_solver_relation* r = &f3r_solver_relations[k];
     if (!strcmp(r->kind, kind) && r->formulation == F3R_FORMULATION_MINIMAL &&
-        r->integrator == F3R_INTEGRATOR_IDA && r->error <= error && (!best || r->rtol > best->rtol) &&
-        (!capped || r->rtol <= 1e-6 * (1.0 + 1e-9)))
+        r->integrator == F3R_INTEGRATOR_IDA && r->error <= error &&
+        (!best || r->rtol > best->rtol) && (!capped || r->rtol <= 1e-6 * (1.0 + 1e-9)))
       best = r;
   }
   return best;
@@ -54,7 +55,8 @@ static const f3r_solver_relation* pilot_relation(const char* kind, double error,
 
 double f3r_pilot_cost(const char* kind, double resolution, int capped) {
   const f3r_solver_relation* r = pilot_relation(kind, resolution, capped);
-  return r ? r->cost : 1.0; /* the baseline, minimal IDA at 1e-6, is what the costs are measured from */
+  return r ? r->cost
+           : 1.0; /* the baseline, minimal IDA at 1e-6, is what the costs are measured from */
 }
 
 void f3r_pilot_free(f3r_pilot* p) {
@@ -75,7 +77,8 @@ f3r_status f3r_pilot_start(const f3r_scene* s, const f3r_mode_search* ms, const 
                            f3r_pilot* p, f3r_error* err) {
   memset(p, 0, sizeof *p);
   const double window = fmax(F3R_PILOT_SHARE * s->duration, ms->dt);
-  p->count = ms->count < (int)ceil(window / ms->dt) + 1 ? ms->count : (int)ceil(window / ms->dt) + 1;
+  p->count =
+      ms->count < (int)ceil(window / ms->dt) + 1 ? ms->count : (int)ceil(window / ms->dt) + 1;
   p->grow = s->duration / ((p->count - 1) * ms->dt);
   p->tight = f3r_solver_settings_from_scene(s);
   p->tight.formulation = F3R_FORMULATION_MINIMAL;
@@ -96,7 +99,7 @@ f3r_status f3r_pilot_start(const f3r_scene* s, const f3r_mode_search* ms, const 
 /* The nonlinear difference of r and r + 1 modes, carried to the whole run (0 within the pilot's
  * noise), and the linear difference of the same pair over the whole run. */
 f3r_status f3r_pilot_pair(const f3r_scene* s, f3r_mode_search* ms, f3r_pilot* p, double* nonlinear,
-                             double* linear, f3r_error* err) {
+                          double* linear, f3r_error* err) {
   *nonlinear = *linear = 0.0;
   int more[3];
   for (int i = 0; i < 3; ++i)
@@ -104,12 +107,15 @@ f3r_status f3r_pilot_pair(const f3r_scene* s, f3r_mode_search* ms, f3r_pilot* p,
   double* la = malloc((size_t)ms->count * 3 * sizeof(double));
   double* lb = malloc((size_t)ms->count * 3 * sizeof(double));
   f3r_status st = la && lb ? F3R_OK : f3r_error_set(err, F3R_ERR_MEMORY, "accuracy: out of memory");
-  if (st == F3R_OK && (st = pilot_path(s, more, p->exact_kinematics, &p->tight, ms->dt, p->count, p->b, err)) == F3R_OK &&
+  if (st == F3R_OK &&
+      (st = pilot_path(s, more, p->exact_kinematics, &p->tight, ms->dt, p->count, p->b, err)) ==
+          F3R_OK &&
       (st = f3r_mode_search_path(s, ms, p->modes, 1, la, err)) == F3R_OK &&
       (st = f3r_mode_search_path(s, ms, more, 1, lb, err)) == F3R_OK) {
     *linear = f3r_max_distance(la, lb, ms->count);
     /* Below three times the pilot's own solver error the difference says nothing. */
-    if (f3r_max_distance(p->a, p->b, p->count) > 3.0 * p->noise) *nonlinear = extrapolate(p, p->a, p->b);
+    if (f3r_max_distance(p->a, p->b, p->count) > 3.0 * p->noise)
+      *nonlinear = extrapolate(p, p->a, p->b);
   }
   free(la), free(lb);
   return st;
@@ -120,7 +126,7 @@ f3r_status f3r_pilot_pair(const f3r_scene* s, f3r_mode_search* ms, f3r_pilot* p,
  * difference holds little of it, and an effect below the noise can still exceed the kinematics'
  * share. */
 f3r_status f3r_pilot_kinematics(const f3r_scene* s, const f3r_mode_search* ms, f3r_pilot* p,
-                                   double* effect, f3r_error* err) {
+                                double* effect, f3r_error* err) {
   *effect = 0.0;
   const f3r_status st = pilot_path(s, p->modes, 1, &p->tight, ms->dt, p->count, p->b, err);
   if (st == F3R_OK) *effect = extrapolate(p, p->a, p->b);
@@ -132,7 +138,9 @@ f3r_status f3r_pilot_kinematics(const f3r_scene* s, const f3r_mode_search* ms, f
 f3r_status f3r_pilot_solver(const f3r_scene* s, const f3r_mode_search* ms, f3r_pilot* p,
                             const f3r_solver_settings* solver, double* error, f3r_error* err) {
   *error = 0.0;
-  const f3r_status st = pilot_path(s, p->modes, p->exact_kinematics, solver, ms->dt, p->count, p->b, err);
-  if (st == F3R_OK && f3r_max_distance(p->a, p->b, p->count) > 3.0 * p->noise) *error = extrapolate(p, p->a, p->b);
+  const f3r_status st =
+      pilot_path(s, p->modes, p->exact_kinematics, solver, ms->dt, p->count, p->b, err);
+  if (st == F3R_OK && f3r_max_distance(p->a, p->b, p->count) > 3.0 * p->noise)
+    *error = extrapolate(p, p->a, p->b);
   return st;
 }

@@ -25,7 +25,7 @@ static int lowest_modes(const f3r_scene* s, int i) { /* the initial state's high
  * copy leaves the input tables' room untouched (f3r_scene_copy), so the knob's dozens of models a
  * choice cost no 150 kB scene each. */
 f3r_status f3r_model_with_modes(const f3r_scene* base, const int modes[3], int exact_kinematics,
-                             f3r_model** model, f3r_error* err) {
+                                f3r_model** model, f3r_error* err) {
   f3r_scene s;
   f3r_scene_copy(&s, base);
   s.accuracy = 0.0;
@@ -58,7 +58,8 @@ f3r_status f3r_linear_kinematics(const f3r_scene* s, const f3r_mode_search* ms, 
   if (st == F3R_OK) st = f3r_model_with_modes(s, modes, 0, &model, err);
   if (st == F3R_OK) st = f3r_model_with_modes(s, modes, 1, &exact, err);
   if (st == F3R_OK) st = f3r_linearise(model, &lin, err);
-  if (st == F3R_OK) st = f3r_linear_difference_response(lin, model, exact, ms->dt, ms->count, pose, NULL, err);
+  if (st == F3R_OK)
+    st = f3r_linear_difference_response(lin, model, exact, ms->dt, ms->count, pose, NULL, err);
   for (int k = 0; st == F3R_OK && k < ms->count; ++k)
     *effect = fmax(*effect, hypot(pose[3 * k], pose[3 * k + 1]));
   f3r_linear_destroy(lin);
@@ -81,7 +82,8 @@ double f3r_max_distance(const double* a, const double* b, int count) {
 static int at_rest(const f3r_scene* s) {
   for (int k = 0; k < F3R_RIGID_FORCES; ++k) {
     const f3r_input* in = &s->inputs[k];
-    if (in->kind != F3R_INPUT_NONE && !(in->kind == F3R_INPUT_CONSTANT && in->offset == 0.0)) return 0;
+    if (in->kind != F3R_INPUT_NONE && !(in->kind == F3R_INPUT_CONSTANT && in->offset == 0.0))
+      return 0;
   }
   if (s->gravity[0] != 0.0 || s->gravity[1] != 0.0) return 0;
   for (int k = 0; k < 3; ++k)
@@ -102,8 +104,6 @@ static int any_flexible(const f3r_scene* s) {
  * that a slowly converging fixed-free link is compared with modes well beyond it; 20 from r = 6. */
 static int reference_modes(int r) { return 3 * r + 3 < F3R_MAX_MODES ? 3 * r + 3 : F3R_MAX_MODES; }
 
-
-
 static void memo_clear(f3r_mode_search* ms) {
   for (int k = 0; k < ms->memo_used; ++k) {
     free(ms->memo[k].pose);
@@ -121,13 +121,14 @@ void f3r_mode_search_free(f3r_mode_search* ms) {
 }
 
 static void uniform(const f3r_mode_search* ms, int r, int modes[3]) {
-  for (int i = 0; i < 3; ++i) modes[i] = (ms->chosen >> i & 1) ? (r > ms->low[i] ? r : ms->low[i]) : ms->fixed[i];
+  for (int i = 0; i < 3; ++i)
+    modes[i] = (ms->chosen >> i & 1) ? (r > ms->low[i] ? r : ms->low[i]) : ms->fixed[i];
 }
 
 void f3r_mode_search_least(const f3r_mode_search* ms, int modes[3]) { uniform(ms, 1, modes); }
 
-f3r_status f3r_mode_search_path(const f3r_scene* s, f3r_mode_search* ms, const int modes[3], int order,
-                                double* pose, f3r_error* err) {
+f3r_status f3r_mode_search_path(const f3r_scene* s, f3r_mode_search* ms, const int modes[3],
+                                int order, double* pose, f3r_error* err) {
   const size_t bytes = (size_t)ms->count * 3 * sizeof(double);
   for (int k = 0; k < ms->memo_used; ++k)
     if (ms->memo[k].order == order && !memcmp(ms->memo[k].modes, modes, sizeof ms->memo[k].modes)) {
@@ -180,7 +181,8 @@ static void measure_extent(const f3r_scene* s, f3r_mode_search* ms) {
  * MAX_SAMPLES samples. */
 static void sample_for_inputs(const f3r_scene* s, f3r_mode_search* ms) {
   double fastest = 0.0;
-  for (int k = 0; k < F3R_RIGID_FORCES; ++k) fastest = fmax(fastest, f3r_input_max_frequency(&s->inputs[k]));
+  for (int k = 0; k < F3R_RIGID_FORCES; ++k)
+    fastest = fmax(fastest, f3r_input_max_frequency(&s->inputs[k]));
   double h = s->output_step;
   if (fastest > 0.0) h = fmin(h, 1.0 / (20.0 * fastest));
   if (s->duration / h > MAX_SAMPLES - 1) h = s->duration / (MAX_SAMPLES - 1);
@@ -251,7 +253,8 @@ static f3r_status use_second_order(const f3r_scene* s, f3r_mode_search* ms, f3r_
   return F3R_OK;
 }
 
-f3r_status f3r_mode_search_init(const f3r_scene* s, unsigned chosen, f3r_mode_search* ms, f3r_error* err) {
+f3r_status f3r_mode_search_init(const f3r_scene* s, unsigned chosen, f3r_mode_search* ms,
+                                f3r_error* err) {
   memset(ms, 0, sizeof *ms);
   sample_for_inputs(s, ms);
   for (int i = 0; i < 3; ++i) {
@@ -361,7 +364,9 @@ f3r_status f3r_accuracy_modes(const f3r_scene* scene, unsigned chosen, double ta
   f3r_mode_search ms;
   double est = 0.0;
   f3r_status st = f3r_mode_search_init(scene, chosen, &ms, err);
-  if (st == F3R_OK) st = f3r_mode_search_run(scene, &ms, target > 0.0 ? target : -target * ms.extent, modes, &est, err);
+  if (st == F3R_OK)
+    st = f3r_mode_search_run(scene, &ms, target > 0.0 ? target : -target * ms.extent, modes, &est,
+                             err);
   if (st == F3R_OK) {
     if (estimate) *estimate = est;
     if (extent) *extent = ms.extent;

@@ -38,7 +38,8 @@ static f3r_status modes(f3r_linear_model* lin, f3r_error* err) {
   }
   memcpy(L, lin->mass, (size_t)n * n * sizeof(double));
   if (f3r_cholesky_factor(L, n)) {
-    st = f3r_error_set(err, F3R_ERR_SINGULAR, "linearisation: the reduced mass matrix is not positive definite");
+    st = f3r_error_set(err, F3R_ERR_SINGULAR,
+                       "linearisation: the reduced mass matrix is not positive definite");
     goto done;
   }
   memcpy(C, lin->stiffness, (size_t)n * n * sizeof(double));
@@ -81,7 +82,8 @@ static f3r_status modes(f3r_linear_model* lin, f3r_error* err) {
     double d = 0.0;
     for (int b = 0; b < n; ++b)
       for (int a = 0; a < n; ++a)
-        d += F3R_AT(lin->shapes, n, a, j) * F3R_AT(lin->damping, n, a, b) * F3R_AT(lin->shapes, n, b, j);
+        d += F3R_AT(lin->shapes, n, a, j) * F3R_AT(lin->damping, n, a, b) *
+             F3R_AT(lin->shapes, n, b, j);
     lin->modal_damping[j] = d;
   }
 done:
@@ -94,8 +96,10 @@ done:
  * model's 230 kB, are left out: with no input and no breakpoint nothing reads them, and a
  * linear model makes two such copies. */
 static void held_forces_model(const f3r_model* model, f3r_model* m) {
-  const size_t inputs = offsetof(f3r_model, scene.inputs), inputs_end = inputs + sizeof model->scene.inputs;
-  const size_t points = offsetof(f3r_model, breakpoints), points_end = points + sizeof model->breakpoints;
+  const size_t inputs = offsetof(f3r_model, scene.inputs),
+               inputs_end = inputs + sizeof model->scene.inputs;
+  const size_t points = offsetof(f3r_model, breakpoints),
+               points_end = points + sizeof model->breakpoints;
   memcpy(m, model, inputs);
   memcpy((char*)m + inputs_end, (const char*)model + inputs_end, points - inputs_end);
   memcpy((char*)m + points_end, (const char*)model + points_end, sizeof *m - points_end);
@@ -140,8 +144,10 @@ f3r_status f3r_linearise(const f3r_model* model, f3r_linear_model** out, f3r_err
   for (int k = 0; k < 3; ++k) y[k] = m.scene.platform_pose0[k];
   /* Rows n..2n of the residual are the reduced equations B^T (M a + h + k - Q): dF/dz at cj = 0
    * is K, dF/du is D, and the cj = 1 Jacobian less the cj = 0 one on the u columns is M. */
-  if ((st = f3r_residual_jacobian(&m, F3R_FORMULATION_MINIMAL, 0.0, 0.0, y, yp, NULL, J0, ny, ws)) ||
-      (st = f3r_residual_jacobian(&m, F3R_FORMULATION_MINIMAL, 0.0, 1.0, y, yp, NULL, J1, ny, ws)) ||
+  if ((st =
+           f3r_residual_jacobian(&m, F3R_FORMULATION_MINIMAL, 0.0, 0.0, y, yp, NULL, J0, ny, ws)) ||
+      (st =
+           f3r_residual_jacobian(&m, F3R_FORMULATION_MINIMAL, 0.0, 1.0, y, yp, NULL, J1, ny, ws)) ||
       (st = f3r_residual(&m, F3R_FORMULATION_MINIMAL, 0.0, y, yp, NULL, res0, ws))) {
     st = f3r_error_set(err, st, "linearisation: the initial pose cannot be linearised");
     goto done;
@@ -175,8 +181,10 @@ f3r_status f3r_linearise(const f3r_model* model, f3r_linear_model** out, f3r_err
 done:
   f3r_workspace_destroy(ws);
   free(y), free(yp), free(res), free(res0), free(J0), free(J1);
-  if (st == F3R_OK) *out = lin;
-  else f3r_linear_destroy(lin);
+  if (st == F3R_OK)
+    *out = lin;
+  else
+    f3r_linear_destroy(lin);
   return st;
 }
 
@@ -306,9 +314,9 @@ static void superpose(const f3r_linear_model* lin, double dt, int count, const d
  * what other adds along the path. A sample the loop closure cannot reach gets e = 0 and is
  * counted in *unreachable. */
 static f3r_status second_order_remainder(const f3r_linear_model* lin, const f3r_model* model,
-                            const f3r_model* other, int count,
-                            const double* u, const double* z, const double* zd, const double* zdd,
-                            double* e, int* unreachable, f3r_error* err) {
+                                         const f3r_model* other, int count, const double* u,
+                                         const double* z, const double* zd, const double* zdd,
+                                         double* e, int* unreachable, f3r_error* err) {
   const int n = lin->n;
   f3r_model m;
   held_forces_model(model, &m);
@@ -338,7 +346,8 @@ static f3r_status second_order_remainder(const f3r_linear_model* lin, const f3r_
     }
     memcpy(held, u + (size_t)k * F3R_RIGID_FORCES, F3R_RIGID_FORCES * sizeof(double));
     if (f3r_residual(&m, F3R_FORMULATION_MINIMAL, 0.0, y, yp, held, res, ws) != F3R_OK ||
-        (o && f3r_residual(o, F3R_FORMULATION_MINIMAL, 0.0, y, yp, held, res_other, ws) != F3R_OK)) {
+        (o &&
+         f3r_residual(o, F3R_FORMULATION_MINIMAL, 0.0, y, yp, held, res_other, ws) != F3R_OK)) {
       memset(ek, 0, (size_t)n * sizeof(double));
       ++*unreachable;
       continue;
@@ -363,9 +372,9 @@ static f3r_status second_order_remainder(const f3r_linear_model* lin, const f3r_
 
 /* The linear path (order 1 or 2) into pose; with `other`, the response to what other adds along
  * the first-order path instead (pose: the deviation from it). */
-static f3r_status response(const f3r_linear_model* lin, const f3r_model* model, const f3r_model* other,
-                           double dt, int count, int order, double* pose, int* unreachable,
-                           f3r_error* err) {
+static f3r_status response(const f3r_linear_model* lin, const f3r_model* model,
+                           const f3r_model* other, double dt, int count, int order, double* pose,
+                           int* unreachable, f3r_error* err) {
   const int n = lin->n;
   if (unreachable) *unreachable = 0;
   if (count < 1 || !(dt > 0.0))
@@ -431,9 +440,10 @@ f3r_status f3r_linear_response(const f3r_linear_model* lin, const f3r_model* mod
 }
 
 f3r_status f3r_linear_difference_response(const f3r_linear_model* lin, const f3r_model* model,
-                                          const f3r_model* other, double dt, int count, double* pose,
-                                          int* unreachable, f3r_error* err) {
+                                          const f3r_model* other, double dt, int count,
+                                          double* pose, int* unreachable, f3r_error* err) {
   if (!other || other->nq != model->nq)
-    return f3r_error_set(err, F3R_ERR_ARGUMENT, "linear response: the other model needs the same coordinates");
+    return f3r_error_set(err, F3R_ERR_ARGUMENT,
+                         "linear response: the other model needs the same coordinates");
   return response(lin, model, other, dt, count, 1, pose, unreachable, err);
 }

@@ -60,7 +60,8 @@ static void outputs(const f3r_model* m, const double* q0, f3r_state_space* ss) {
 }
 
 f3r_status f3r_state_space_create(const f3r_model* model, f3r_state_space** out, f3r_error* err) {
-  if (!model || !out) return f3r_error_set(err, F3R_ERR_ARGUMENT, "f3r_state_space_create: NULL argument");
+  if (!model || !out)
+    return f3r_error_set(err, F3R_ERR_ARGUMENT, "f3r_state_space_create: NULL argument");
   *out = NULL;
   f3r_linear_model* lin = NULL;
   f3r_status st = f3r_linearise(model, &lin, err);
@@ -86,7 +87,8 @@ f3r_status f3r_state_space_create(const f3r_model* model, f3r_state_space** out,
   }
   memcpy(L, lin->mass, (size_t)n * n * sizeof(double));
   if (f3r_cholesky_factor(L, n)) {
-    st = f3r_error_set(err, F3R_ERR_SINGULAR, "state space: the reduced mass matrix is not positive definite");
+    st = f3r_error_set(err, F3R_ERR_SINGULAR,
+                       "state space: the reduced mass matrix is not positive definite");
     goto done;
   }
   for (int k = 0; k < n; ++k) F3R_AT(ss->A, nx, k, n + k) = 1.0;
@@ -115,7 +117,9 @@ f3r_status f3r_state_space_create(const f3r_model* model, f3r_state_space** out,
 done:
   f3r_linear_destroy(lin);
   free(L), free(col);
-  if (st == F3R_OK) *out = ss;
-  else f3r_state_space_destroy(ss);
+  if (st == F3R_OK)
+    *out = ss;
+  else
+    f3r_state_space_destroy(ss);
   return st;
 }

@@ -10,7 +10,10 @@ int f3r_lu_factor(double* A, int n, int* piv) {
     double best = fabs(F3R_AT(A, n, k, k));
     for (int i = k + 1; i < n; ++i) {
       const double v = fabs(F3R_AT(A, n, i, k));
-      if (v > best) { best = v; p = i; }
+      if (v > best) {
+        best = v;
+        p = i;
+      }
     }
     if (!(best > 0.0) || !isfinite(best)) return 1;
     piv[k] = p;
@@ -36,7 +39,11 @@ void f3r_lu_solve(const double* A, int n, const int* piv, double* b) {
   /* The factorisation swapped whole rows, so all swaps apply to b before substitution. */
   for (int k = 0; k < n; ++k) {
     const int p = piv[k];
-    if (p != k) { const double t = b[k]; b[k] = b[p]; b[p] = t; }
+    if (p != k) {
+      const double t = b[k];
+      b[k] = b[p];
+      b[p] = t;
+    }
   }
   for (int k = 0; k < n; ++k)
     for (int i = k + 1; i < n; ++i) b[i] -= F3R_AT(A, n, i, k) * b[k];
@@ -229,8 +236,10 @@ static void jacobi(double* A, int n, double* eig, double* V) {
     double off = 0.0, diag = 0.0;
     for (int j = 0; j < n; ++j)
       for (int i = 0; i < n; ++i) {
-        if (i == j) diag += F3R_AT(A, n, i, i) * F3R_AT(A, n, i, i);
-        else off += F3R_AT(A, n, i, j) * F3R_AT(A, n, i, j);
+        if (i == j)
+          diag += F3R_AT(A, n, i, i) * F3R_AT(A, n, i, i);
+        else
+          off += F3R_AT(A, n, i, j) * F3R_AT(A, n, i, j);
       }
     if (off <= 1e-30 * diag) break;
     for (int p = 0; p < n; ++p)

@@ -15,24 +15,24 @@
 /* --- kernels on the position stage ---------------------------------------------------------- */
 
 /* Calls put(row, col, value) for every nonzero of G, so G and G^T share one definition. */
-#define F3R_FOR_EACH_G_ENTRY(m, d, PUT)                                                    \
-  for (int i = 0; i < 3; ++i) {                                                            \
-    const f3r_link_data* k = &(d)->link[i];                                                \
-    const int gx = 2 * i, gy = 2 * i + 1;                                                  \
-    PUT(gx, i, k->c);                                                                      \
-    PUT(gy, i, k->s);                                                                      \
-    PUT(gx, F3R_Q_THETA + i, k->g_theta[0]);                                                         \
-    PUT(gy, F3R_Q_THETA + i, k->g_theta[1]);                                                         \
-    PUT(gx, F3R_Q_X, -1.0);                                                                      \
-    PUT(gy, F3R_Q_Y, -1.0);                                                                      \
-    PUT(gx, F3R_Q_PHI, k->g_phi[0]);                                                               \
-    PUT(gy, F3R_Q_PHI, k->g_phi[1]);                                                               \
-    const f3r_link_params* lp = &(m)->link[i];                                             \
-    if (lp->model == F3R_LINK_FIXED_FREE)                                                  \
-      for (int j = 0; j < lp->modes; ++j) {                                                \
-        PUT(gx, lp->eta_index + j, -lp->tip[j] * k->s);                                    \
-        PUT(gy, lp->eta_index + j, lp->tip[j] * k->c);                                     \
-      }                                                                                    \
+#define F3R_FOR_EACH_G_ENTRY(m, d, PUT)                 \
+  for (int i = 0; i < 3; ++i) {                         \
+    const f3r_link_data* k = &(d)->link[i];             \
+    const int gx = 2 * i, gy = 2 * i + 1;               \
+    PUT(gx, i, k->c);                                   \
+    PUT(gy, i, k->s);                                   \
+    PUT(gx, F3R_Q_THETA + i, k->g_theta[0]);            \
+    PUT(gy, F3R_Q_THETA + i, k->g_theta[1]);            \
+    PUT(gx, F3R_Q_X, -1.0);                             \
+    PUT(gy, F3R_Q_Y, -1.0);                             \
+    PUT(gx, F3R_Q_PHI, k->g_phi[0]);                    \
+    PUT(gy, F3R_Q_PHI, k->g_phi[1]);                    \
+    const f3r_link_params* lp = &(m)->link[i];          \
+    if (lp->model == F3R_LINK_FIXED_FREE)               \
+      for (int j = 0; j < lp->modes; ++j) {             \
+        PUT(gx, lp->eta_index + j, -lp->tip[j] * k->s); \
+        PUT(gy, lp->eta_index + j, lp->tip[j] * k->c);  \
+      }                                                 \
   }
 
 void f3r_data_add_constraint_jacobian(const f3r_model* m, const f3r_data* d, double scale,
@@ -42,8 +42,8 @@ void f3r_data_add_constraint_jacobian(const f3r_model* m, const f3r_data* d, dou
 #undef PUT_G
 }
 
-void f3r_data_add_constraint_jacobian_transpose(const f3r_model* m, const f3r_data* d,
-                                                double scale, double* A, int ld) {
+void f3r_data_add_constraint_jacobian_transpose(const f3r_model* m, const f3r_data* d, double scale,
+                                                double* A, int ld) {
 #define PUT_GT(row, col, value) F3R_AT(A, ld, col, row) += scale * (value)
   F3R_FOR_EACH_G_ENTRY(m, d, PUT_GT)
 #undef PUT_GT
@@ -52,7 +52,7 @@ void f3r_data_add_constraint_jacobian_transpose(const f3r_model* m, const f3r_da
 void f3r_data_constraint_times(const f3r_model* m, const f3r_data* d, const double* x,
                                double* out) {
   for (int c = 0; c < F3R_NCON; ++c) out[c] = 0.0;
-#define PUT_GV(row, col, value) out[row] += (value) * x[col]
+#define PUT_GV(row, col, value) out[row] += (value)*x[col]
   F3R_FOR_EACH_G_ENTRY(m, d, PUT_GV)
 #undef PUT_GV
 }
@@ -60,7 +60,7 @@ void f3r_data_constraint_times(const f3r_model* m, const f3r_data* d, const doub
 void f3r_data_constraint_transpose_times(const f3r_model* m, const f3r_data* d, const double* y,
                                          double* out) {
   for (int n = 0; n < m->nq; ++n) out[n] = 0.0;
-#define PUT_GTL(row, col, value) out[col] += (value) * y[row]
+#define PUT_GTL(row, col, value) out[col] += (value)*y[row]
   F3R_FOR_EACH_G_ENTRY(m, d, PUT_GTL)
 #undef PUT_GTL
 }
@@ -134,7 +134,8 @@ void f3r_data_add_constraint_bias_dq(const f3r_model* m, const f3r_data* d, cons
     const f3r_link_params* lp = &m->link[i];
     const int gx = 2 * i, gy = 2 * i + 1;
     const double rd = k->rho_dot, td = k->theta_dot;
-    const double along = -k->len * td * td - 2.0 * k->w_dot * td, across = 2.0 * rd * td - k->w * td * td;
+    const double along = -k->len * td * td - 2.0 * k->w_dot * td,
+                 across = 2.0 * rd * td - k->w * td * td;
     F3R_AT(A, ld, gx, F3R_Q_RHO + i) += scale * (-td * td * k->c);
     F3R_AT(A, ld, gy, F3R_Q_RHO + i) += scale * (-td * td * k->s);
     F3R_AT(A, ld, gx, F3R_Q_THETA + i) += scale * (-along * k->s - across * k->c);
@@ -233,24 +234,24 @@ void f3r_add_constraint_transpose_times_dq(const f3r_model* m, const double* q,
   f3r_data_add_constraint_transpose_times_dq(m, &d, lambda, scale, A, ld);
 }
 
-void f3r_add_constraint_times_dq(const f3r_model* m, const double* q, const double* v,
-                                 double scale, double* A, int ld) {
+void f3r_add_constraint_times_dq(const f3r_model* m, const double* q, const double* v, double scale,
+                                 double* A, int ld) {
   f3r_data d = {.sincos_pairs = 0};
   f3r_fwd_position(m, q, &d);
   f3r_fwd_velocity(m, q, v, &d);
   f3r_data_add_constraint_times_dq(m, &d, v, scale, A, ld);
 }
 
-void f3r_add_constraint_bias_dq(const f3r_model* m, const double* q, const double* v,
-                                double scale, double* A, int ld) {
+void f3r_add_constraint_bias_dq(const f3r_model* m, const double* q, const double* v, double scale,
+                                double* A, int ld) {
   f3r_data d = {.sincos_pairs = 0};
   f3r_fwd_position(m, q, &d);
   f3r_fwd_velocity(m, q, v, &d);
   f3r_data_add_constraint_bias_dq(m, &d, v, scale, A, ld);
 }
 
-void f3r_add_constraint_bias_dv(const f3r_model* m, const double* q, const double* v,
-                                double scale, double* A, int ld) {
+void f3r_add_constraint_bias_dv(const f3r_model* m, const double* q, const double* v, double scale,
+                                double* A, int ld) {
   f3r_data d = {.sincos_pairs = 0};
   f3r_fwd_position(m, q, &d);
   f3r_fwd_velocity(m, q, v, &d);
@@ -281,8 +282,9 @@ f3r_status f3r_solve_accelerations(const f3r_model* m, const double* q, const do
   f3r_fwd_velocity(m, q, v, &d);
   for (size_t z = 0; z < (size_t)n * n; ++z) K[z] = 0.0;
   f3r_data_add_mass_matrix(m, &d, 1.0, K, n);
-  f3r_data_add_constraint_jacobian_transpose(m, &d, -1.0, K + (size_t)nq * n, n); /* -G^T, top right */
-  f3r_data_add_constraint_jacobian(m, &d, 1.0, K + nq, n);                        /* G, bottom left */
+  f3r_data_add_constraint_jacobian_transpose(m, &d, -1.0, K + (size_t)nq * n,
+                                             n);           /* -G^T, top right */
+  f3r_data_add_constraint_jacobian(m, &d, 1.0, K + nq, n); /* G, bottom left */
   f3r_elastic_forces(m, q, el);
   for (int r = 0; r < nq; ++r) b[r] = Q[r] - d.h[r] - el[r];
   for (int c = 0; c < F3R_NCON; ++c) b[nq + c] = -d.gamma[c];

@@ -21,43 +21,43 @@
 
 typedef struct {
   /* --- position stage: from q ------------------------------------------------------------- */
-  double c, s;                /* cos theta_i, sin theta_i */
-  double len;                 /* L = rho_i + l (m) */
-  double w;                   /* tip deflection w_i(l) = sum tip_j eta_j (m) */
-  double mean_defl;           /* sum b_j eta_j = int_0^1 w dxi (m) */
-  double eta_sq;              /* sum eta_j^2 (m^2) */
-  double cc, sc;              /* direction of C_i from P */
-  double m_rho_theta;         /* M(rho, theta) = -e m mean_defl (kg m; e = 1 for exact kinematics) */
-  double m_theta_theta;       /* M(theta, theta) = I_c + m (l^2/3 + l rho + rho^2) + e m eta_sq */
+  double c, s;          /* cos theta_i, sin theta_i */
+  double len;           /* L = rho_i + l (m) */
+  double w;             /* tip deflection w_i(l) = sum tip_j eta_j (m) */
+  double mean_defl;     /* sum b_j eta_j = int_0^1 w dxi (m) */
+  double eta_sq;        /* sum eta_j^2 (m^2) */
+  double cc, sc;        /* direction of C_i from P */
+  double m_rho_theta;   /* M(rho, theta) = -e m mean_defl (kg m; e = 1 for exact kinematics) */
+  double m_theta_theta; /* M(theta, theta) = I_c + m (l^2/3 + l rho + rho^2) + e m eta_sq */
   double m_theta_eta[F3R_MAX_MODES]; /* M(theta, eta_j) = m (l a_j + rho b_j); M(eta, eta) = m I */
-  double g_theta[2];          /* dg_i/dtheta_i = L n - w e; dg_i/drho_i = e, dg_i/deta_j = tip_j n
+  double g_theta[2]; /* dg_i/dtheta_i = L n - w e; dg_i/drho_i = e, dg_i/deta_j = tip_j n
                                * (fixed-free only), dg_i/dP = -I */
-  double g_phi[2];            /* dg_i/dphi_p = r_PC (sc, -cc) */
+  double g_phi[2];   /* dg_i/dphi_p = r_PC (sc, -cc) */
   /* --- velocity stage: from v and the position stage ---------------------------------------- */
-  double rho_dot, theta_dot;  /* m/s, rad/s */
-  double w_dot;               /* sum tip_j eta_j' */
-  double mean_defl_dot;       /* sum b_j eta_j' */
-  double eta_eta_dot;         /* sum eta_j eta_j' */
+  double rho_dot, theta_dot; /* m/s, rad/s */
+  double w_dot;              /* sum tip_j eta_j' */
+  double mean_defl_dot;      /* sum b_j eta_j' */
+  double eta_eta_dot;        /* sum eta_j eta_j' */
 } f3r_link_data;
 
 typedef struct f3r_data {
   f3r_link_data link[3];
   /* --- position stage ------------------------------------------------------------------------ */
-  double g[F3R_NCON];         /* loop-closure constraints g(q) (m); filled by f3r_fwd_position */
+  double g[F3R_NCON]; /* loop-closure constraints g(q) (m); filled by f3r_fwd_position */
   /* --- velocity stage ------------------------------------------------------------------------ */
-  double h[F3R_MAX_Q];        /* velocity-dependent forces h(q, v) = dM/dt v - dT/dq */
-  double gamma[F3R_NCON];     /* (dG/dt) v, so that G a + gamma = 0 */
+  double h[F3R_MAX_Q];    /* velocity-dependent forces h(q, v) = dM/dt v - dT/dq */
+  double gamma[F3R_NCON]; /* (dG/dt) v, so that G a + gamma = 0 */
   /* --- force stage --------------------------------------------------------------------------- */
-  double k[F3R_MAX_Q];        /* elastic forces dV/dq */
-  double Q[F3R_MAX_Q];        /* applied generalized forces: held + effects (+ actuator lag) */
-  double commanded[3];        /* leg forces commanded to the actuator lag (when n_lag = 3) */
-  double power;               /* Q . v (W) */
+  double k[F3R_MAX_Q]; /* elastic forces dV/dq */
+  double Q[F3R_MAX_Q]; /* applied generalized forces: held + effects (+ actuator lag) */
+  double commanded[3]; /* leg forces commanded to the actuator lag (when n_lag = 3) */
+  double power;        /* Q . v (W) */
   /* --- formulation stage --------------------------------------------------------------------- */
-  double a[F3R_MAX_Q];        /* accelerations */
-  double R[F3R_MAX_Q];        /* M a + h + k - Q */
-  double lambda[F3R_NCON];    /* multipliers: the constraint force on each loop (N) */
+  double a[F3R_MAX_Q];     /* accelerations */
+  double R[F3R_MAX_Q];     /* M a + h + k - Q */
+  double lambda[F3R_NCON]; /* multipliers: the constraint force on each loop (N) */
   /* --- counters ------------------------------------------------------------------------------ */
-  long sincos_pairs;          /* sin/cos pairs evaluated into this data since it was cleared */
+  long sincos_pairs; /* sin/cos pairs evaluated into this data since it was cleared */
 } f3r_data;
 
 /* --- the stages (forward.c) -------------------------------------------------------------------- */
@@ -90,14 +90,13 @@ void f3r_data_add_mass_matrix(const f3r_model* m, const f3r_data* d, double scal
                               int ld);
 void f3r_data_add_velocity_forces_dv(const f3r_model* m, const f3r_data* d, const double* q,
                                      double scale, double* A, int ld);
-void f3r_data_constraint_times(const f3r_model* m, const f3r_data* d, const double* x,
-                               double* out);
+void f3r_data_constraint_times(const f3r_model* m, const f3r_data* d, const double* x, double* out);
 void f3r_data_constraint_transpose_times(const f3r_model* m, const f3r_data* d, const double* y,
                                          double* out);
 void f3r_data_add_constraint_jacobian(const f3r_model* m, const f3r_data* d, double scale,
                                       double* A, int ld);
-void f3r_data_add_constraint_jacobian_transpose(const f3r_model* m, const f3r_data* d,
-                                                double scale, double* A, int ld);
+void f3r_data_add_constraint_jacobian_transpose(const f3r_model* m, const f3r_data* d, double scale,
+                                                double* A, int ld);
 void f3r_data_add_constraint_transpose_times_dq(const f3r_model* m, const f3r_data* d,
                                                 const double* y, double scale, double* A, int ld);
 void f3r_data_add_constraint_times_dq(const f3r_model* m, const f3r_data* d, const double* x,

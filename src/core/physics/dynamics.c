@@ -111,7 +111,8 @@ void f3r_add_mass_times_dq(const f3r_model* m, const double* q, const double* a,
       const int col = base + j;
       d_theta_d_rho += mass * lp->mean[j] * a[col];
       F3R_AT(A, ld, r, col) += scale * (-e * mass * lp->mean[j] * a[t]);
-      F3R_AT(A, ld, t, col) += scale * (-e * mass * lp->mean[j] * a[r] + 2.0 * e * mass * q[col] * a[t]);
+      F3R_AT(A, ld, t, col) +=
+          scale * (-e * mass * lp->mean[j] * a[r] + 2.0 * e * mass * q[col] * a[t]);
       F3R_AT(A, ld, col, r) += scale * mass * lp->mean[j] * a[t];
     }
     F3R_AT(A, ld, t, r) += scale * d_theta_d_rho;
@@ -126,8 +127,8 @@ void f3r_velocity_forces(const f3r_model* m, const double* q, const double* v, d
 }
 
 /* dh/dq: h depends on rho (the arm l + 2 rho) and, with exact kinematics, on eta. */
-void f3r_add_velocity_forces_dq(const f3r_model* m, const double* q, const double* v,
-                                double scale, double* A, int ld) {
+void f3r_add_velocity_forces_dq(const f3r_model* m, const double* q, const double* v, double scale,
+                                double* A, int ld) {
   const double mass = m->link_mass, e = exact_flag(m);
   for (int i = 0; i < 3; ++i) {
     const f3r_link_params* lp = &m->link[i];
@@ -145,8 +146,8 @@ void f3r_add_velocity_forces_dq(const f3r_model* m, const double* q, const doubl
   (void)q;
 }
 
-void f3r_add_velocity_forces_dv(const f3r_model* m, const double* q, const double* v,
-                                double scale, double* A, int ld) {
+void f3r_add_velocity_forces_dv(const f3r_model* m, const double* q, const double* v, double scale,
+                                double* A, int ld) {
   f3r_data d = {.sincos_pairs = 0};
   f3r_fwd_position(m, q, &d);
   f3r_fwd_velocity(m, q, v, &d);
@@ -157,7 +158,8 @@ void f3r_elastic_forces(const f3r_model* m, const double* q, double* k) {
   for (int n = 0; n < F3R_Q_MODAL; ++n) k[n] = 0.0;
   for (int i = 0; i < 3; ++i) {
     const f3r_link_params* lp = &m->link[i];
-    for (int j = 0; j < lp->modes; ++j) k[lp->eta_index + j] = lp->stiffness[j] * q[lp->eta_index + j];
+    for (int j = 0; j < lp->modes; ++j)
+      k[lp->eta_index + j] = lp->stiffness[j] * q[lp->eta_index + j];
   }
 }
 

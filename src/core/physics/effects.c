@@ -15,7 +15,9 @@
 #include "data.h"
 
 /* --- gravity --------------------------------------------------------------------------------- */
-static double cylinder_moment(const f3r_model* m) { return m->cylinder_mass * m->cylinder_length / 2.0; }
+static double cylinder_moment(const f3r_model* m) {
+  return m->cylinder_mass * m->cylinder_length / 2.0;
+}
 
 static void gravity_add(const f3r_model* m, double t, const double* q, const double* v,
                         const f3r_data* d, double* Q) {
@@ -25,7 +27,8 @@ static void gravity_add(const f3r_model* m, double t, const double* q, const dou
     const f3r_link_data* k = &d->link[i];
     const double g_e = gx * k->c + gy * k->s, g_n = -gx * k->s + gy * k->c;
     Q[i] += mass * g_e;
-    Q[F3R_Q_THETA + i] += (cylinder_moment(m) + mass * (q[i] + m->link_length / 2.0)) * g_n - mass * k->mean_defl * g_e;
+    Q[F3R_Q_THETA + i] += (cylinder_moment(m) + mass * (q[i] + m->link_length / 2.0)) * g_n -
+                          mass * k->mean_defl * g_e;
     const f3r_link_params* lp = &m->link[i];
     for (int j = 0; j < lp->modes; ++j) Q[lp->eta_index + j] += mass * lp->mean[j] * g_n;
   }
@@ -33,8 +36,8 @@ static void gravity_add(const f3r_model* m, double t, const double* q, const dou
   Q[F3R_Q_Y] += m->platform_mass * gy;
 }
 
-static void gravity_add_dq(const f3r_model* m, const double* q, const double* v,
-                           const f3r_data* d, double scale, double* A, int ld) {
+static void gravity_add_dq(const f3r_model* m, const double* q, const double* v, const f3r_data* d,
+                           double scale, double* A, int ld) {
   (void)v;
   const double gx = m->gravity[0], gy = m->gravity[1], mass = m->link_mass;
   for (int i = 0; i < 3; ++i) {
@@ -44,8 +47,9 @@ static void gravity_add_dq(const f3r_model* m, const double* q, const double* v,
     /* de/dtheta = n, dn/dtheta = -e */
     F3R_AT(A, ld, r, th) += scale * mass * g_n;
     F3R_AT(A, ld, th, r) += scale * mass * g_n;
-    F3R_AT(A, ld, th, th) += scale * (-(cylinder_moment(m) + mass * (q[i] + m->link_length / 2.0)) * g_e -
-                                      mass * k->mean_defl * g_n);
+    F3R_AT(A, ld, th, th) +=
+        scale * (-(cylinder_moment(m) + mass * (q[i] + m->link_length / 2.0)) * g_e -
+                 mass * k->mean_defl * g_n);
     const f3r_link_params* lp = &m->link[i];
     for (int j = 0; j < lp->modes; ++j) {
       const int col = lp->eta_index + j;
@@ -110,7 +114,8 @@ void f3r_model_compile_effects(f3r_model* m) {
   int any_input = 0;
   for (int n = 0; n < F3R_RIGID_FORCES; ++n) any_input |= s->inputs[n].kind != F3R_INPUT_NONE;
   if (any_input) m->effects[m->n_effects++] = &f3r_inputs_effect;
-  if (m->gravity[0] != 0.0 || m->gravity[1] != 0.0) m->effects[m->n_effects++] = &f3r_gravity_effect;
+  if (m->gravity[0] != 0.0 || m->gravity[1] != 0.0)
+    m->effects[m->n_effects++] = &f3r_gravity_effect;
   int friction = 0, damping = 0;
   for (int i = 0; i < 3; ++i) {
     friction |= s->friction_prismatic[i] != 0.0 || s->friction_revolute[i] != 0.0;

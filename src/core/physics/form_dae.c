@@ -16,8 +16,7 @@ static void forward(const f3r_model* m, f3r_formulation form, double t, const do
 }
 
 f3r_status f3r_dae_residual(const f3r_model* m, f3r_formulation form, double t, const double* y,
-                            const double* yp, const double* held, double* res,
-                            f3r_workspace* ws) {
+                            const double* yp, const double* held, double* res, f3r_workspace* ws) {
   const int nq = m->nq, ggl = form == F3R_FORMULATION_DAE;
   const double *v = y + nq, *lambda = y + 2 * nq, *mu = lambda + F3R_NCON;
   const double *qd = yp, *vd = yp + nq;

@@ -17,8 +17,7 @@ static void dependent_accelerations(const f3r_model* m, f3r_data* d);
 /* The position and velocity stages from the minimal state, then the full accelerations: the
  * loop closure fills rho, rho', theta' (not theta: nothing in the residual needs the angle
  * itself), and a_d = G_d^{-1} (-G_z a_z - gamma). */
-static f3r_status expand(const f3r_model* m, const double* y, const double* yp,
-                         f3r_workspace* ws) {
+static f3r_status expand(const f3r_model* m, const double* y, const double* yp, f3r_workspace* ws) {
   const int nz = m->n_independent;
   f3r_data* d = &ws->data;
   double *q = ws->q, *v = ws->v;
@@ -52,7 +51,8 @@ static void loop_forces(const f3r_model* m, f3r_data* d) {
 }
 
 void f3r_minimal_multipliers(const f3r_model* m, const double* yp, f3r_data* d) {
-  memcpy(d->a + F3R_Q_INDEPENDENT, yp + m->n_independent, (size_t)m->n_independent * sizeof(double));
+  memcpy(d->a + F3R_Q_INDEPENDENT, yp + m->n_independent,
+         (size_t)m->n_independent * sizeof(double));
   dependent_accelerations(m, d);
   loop_forces(m, d);
 }
@@ -214,7 +214,7 @@ static f3r_status minimal_rhs(const f3r_model* m, double t, const double* y, con
     double* K = ws->solve_work; /* nz x nz fits in the (nq + 6)^2 of the acceleration solver */
     memset(K, 0, (size_t)nz * (size_t)nz * sizeof(double));
     add_reduced_mass(m, ws, 1.0, K, nz);
-    double inv[F3R_MAX_Q];                   /* 1 / L_jj: multiplications, not divisions */
+    double inv[F3R_MAX_Q]; /* 1 / L_jj: multiplications, not divisions */
     if (f3r_cholesky_factor_inv(K, nz, inv)) return F3R_ERR_SINGULAR; /* K is positive definite */
     f3r_cholesky_solve_inv(K, nz, inv, rate, 1);
   } else if ((st = arrow_solve(m, ws, rate)) != F3R_OK) {
@@ -222,7 +222,8 @@ static f3r_status minimal_rhs(const f3r_model* m, double t, const double* y, con
   }
   for (int i = 0; i < nz; ++i) ydot[i] = y[nz + i];
   const int lag_at = 2 * nz;
-  for (int i = 0; i < m->n_lag; ++i) ydot[lag_at + i] = -ws->res_base[lag_at + i] / m->lag_time_constant;
+  for (int i = 0; i < m->n_lag; ++i)
+    ydot[lag_at + i] = -ws->res_base[lag_at + i] / m->lag_time_constant;
   ydot[ny - 1] = -ws->res_base[ny - 1]; /* F_W(W' = 0) = -Q.v */
   return F3R_OK;
 }
@@ -238,13 +239,13 @@ f3r_status f3r_minimal_rhs(const f3r_model* m, double t, const double* y, const 
   return minimal_rhs(m, t, y, held, ydot, ws, m->n_independent <= F3R_DENSE_REDUCED_MASS_MAX);
 }
 
-f3r_status f3r_minimal_rhs_dense(const f3r_model* m, double t, const double* y,
-                                 const double* held, double* ydot, f3r_workspace* ws) {
+f3r_status f3r_minimal_rhs_dense(const f3r_model* m, double t, const double* y, const double* held,
+                                 double* ydot, f3r_workspace* ws) {
   return minimal_rhs(m, t, y, held, ydot, ws, 1);
 }
 
-f3r_status f3r_minimal_rhs_arrow(const f3r_model* m, double t, const double* y,
-                                 const double* held, double* ydot, f3r_workspace* ws) {
+f3r_status f3r_minimal_rhs_arrow(const f3r_model* m, double t, const double* y, const double* held,
+                                 double* ydot, f3r_workspace* ws) {
   return minimal_rhs(m, t, y, held, ydot, ws, 0);
 }
 

@@ -14,7 +14,8 @@
 static double exact_flag(const f3r_model* m) { return m->exact_kinematics ? 1.0 : 0.0; }
 
 /* (cc, sc) of platform joint i from (cos, sin) phi_p: its direction at phi_p = 0, rotated. */
-static void joint_direction(const f3r_model* m, int i, double cp, double sp, double* cc, double* sc) {
+static void joint_direction(const f3r_model* m, int i, double cp, double sp, double* cc,
+                            double* sc) {
   const double c0 = m->platform_direction[i][0], s0 = m->platform_direction[i][1];
   *cc = c0 * cp - s0 * sp;
   *sc = s0 * cp + c0 * sp;
@@ -44,8 +45,8 @@ static void mass_blocks(const f3r_model* m, int i, double rho, f3r_link_data* k)
   const f3r_link_params* lp = &m->link[i];
   const double l = m->link_length, mass = m->link_mass, e = exact_flag(m);
   k->m_rho_theta = -e * mass * k->mean_defl;
-  k->m_theta_theta = m->cylinder_inertia + mass * (l * l / 3.0 + l * rho + rho * rho) +
-                     e * mass * k->eta_sq;
+  k->m_theta_theta =
+      m->cylinder_inertia + mass * (l * l / 3.0 + l * rho + rho * rho) + e * mass * k->eta_sq;
   for (int j = 0; j < lp->modes; ++j)
     k->m_theta_eta[j] = mass * (l * lp->first_moment[j] + rho * lp->mean[j]);
 }
@@ -146,12 +147,12 @@ static void link_velocity(const f3r_model* m, int i, const double* q, const doub
   const double rd = k->rho_dot, td = k->theta_dot, arm = m->link_length + 2.0 * q[i];
   d->h[i] = -0.5 * mass * arm * td * td - (1.0 + e) * mass * td * k->mean_defl_dot;
   d->h[F3R_Q_THETA + i] = mass * arm * rd * td + (1.0 - e) * mass * rd * k->mean_defl_dot +
-                2.0 * e * mass * td * k->eta_eta_dot;
+                          2.0 * e * mass * td * k->eta_eta_dot;
   for (int j = 0; j < lp->modes; ++j)
     d->h[lp->eta_index + j] =
         (1.0 + e) * mass * rd * td * lp->mean[j] - e * mass * td * td * q[lp->eta_index + j];
   const double along = -k->len * td * td - 2.0 * k->w_dot * td; /* e component */
-  const double across = 2.0 * rd * td - k->w * td * td;        /* n component */
+  const double across = 2.0 * rd * td - k->w * td * td;         /* n component */
   const double rp = m->platform_radius * v[F3R_Q_PHI] * v[F3R_Q_PHI];
   d->gamma[2 * i] = along * k->c - across * k->s + rp * k->cc;
   d->gamma[2 * i + 1] = along * k->s + across * k->c + rp * k->sc;
@@ -175,7 +176,8 @@ void f3r_fwd_velocity_closed(const f3r_model* m, const double* q, double* v, f3r
     f3r_link_data* k = &d->link[i];
     double w_dot = 0.0;
     for (int j = 0; j < lp->modes; ++j) w_dot += lp->tip[j] * v[lp->eta_index + j];
-    const double cx = v[F3R_Q_X] - r * k->sc * v[F3R_Q_PHI], cy = v[F3R_Q_Y] + r * k->cc * v[F3R_Q_PHI];
+    const double cx = v[F3R_Q_X] - r * k->sc * v[F3R_Q_PHI],
+                 cy = v[F3R_Q_Y] + r * k->cc * v[F3R_Q_PHI];
     const double theta_dot = (-k->s * cx + k->c * cy - w_dot) / k->len;
     v[i] = k->c * cx + k->s * cy + k->w * theta_dot;
     v[F3R_Q_THETA + i] = theta_dot;

@@ -8,8 +8,7 @@ size_t f3r_impact_work_size(const f3r_model* m) {
 }
 
 f3r_status f3r_impact(const f3r_model* m, const double* q, const double* v, const int* legs,
-                      int count, double restitution, double* v_out, double* impulse,
-                      double* work) {
+                      int count, double restitution, double* v_out, double* impulse, double* work) {
   const int nq = m->nq, n = nq + F3R_NCON + count;
   double* K = work;
   double* b = K + (size_t)n * n;

@@ -53,9 +53,10 @@ static void fill_bodies(f3r_model* m) {
   m->cylinder_inertia = cylinder_mass * (Lc * Lc / 3.0 + (ro * ro + ri * ri) / 4.0);
   m->cylinder_mass = cylinder_mass;
   m->cylinder_length = Lc;
-  m->platform_inertia = scene->platform_inertia > 0.0
-                            ? scene->platform_inertia
-                            : scene->platform_mass * scene->platform_side * scene->platform_side / 12.0;
+  m->platform_inertia =
+      scene->platform_inertia > 0.0
+          ? scene->platform_inertia
+          : scene->platform_mass * scene->platform_side * scene->platform_side / 12.0;
   /* A payload at P adds to the platform: a model constant, nothing in the residual. */
   m->platform_mass = scene->platform_mass + scene->payload_mass;
   m->platform_inertia += scene->payload_inertia;
@@ -78,7 +79,8 @@ static f3r_status check_modes_resolved(const f3r_scene* scene, f3r_error* err) {
     if (L->model != F3R_LINK_RIGID && (L->modes == F3R_MODES_AUTO || L->modes == 0))
       return f3r_error_set(err, F3R_ERR_SCENE,
                            "links[%d].modes: left open (auto, or none under an accuracy request): "
-                           "resolve it with f3r_accuracy_resolve before building the model", i);
+                           "resolve it with f3r_accuracy_resolve before building the model",
+                           i);
   }
   return F3R_OK;
 }
@@ -124,15 +126,18 @@ static f3r_status close_initial_pose(f3r_model* m, f3r_error* err) {
     m->theta_branch[i] = atan2(cy - m->base_joint[i][1], cx - m->base_joint[i][0]);
   }
   for (int i = 0; i < 3; ++i)
-    for (int j = 0; j < m->link[i].modes; ++j) q[m->link[i].eta_index + j] = scene->links[i].eta0[j];
+    for (int j = 0; j < m->link[i].modes; ++j)
+      q[m->link[i].eta_index + j] = scene->links[i].eta0[j];
   if (f3r_model_close_loops(m, q) != F3R_OK)
-    return f3r_error_set(err, F3R_ERR_SCENE, "initial.platform_pose: (%g, %g, %g) cannot be reached by the legs",
-                         scene->platform_pose0[0], scene->platform_pose0[1], scene->platform_pose0[2]);
+    return f3r_error_set(
+        err, F3R_ERR_SCENE, "initial.platform_pose: (%g, %g, %g) cannot be reached by the legs",
+        scene->platform_pose0[0], scene->platform_pose0[1], scene->platform_pose0[2]);
   return F3R_OK;
 }
 
 f3r_status f3r_model_create(const f3r_scene* source, f3r_model** out, f3r_error* err) {
-  if (!source || !out) return f3r_error_set(err, F3R_ERR_ARGUMENT, "f3r_model_create: NULL argument");
+  if (!source || !out)
+    return f3r_error_set(err, F3R_ERR_ARGUMENT, "f3r_model_create: NULL argument");
   *out = NULL;
   f3r_model* m = malloc(sizeof *m);
   if (!m) return f3r_error_set(err, F3R_ERR_MEMORY, "f3r_model_create: out of memory");
@@ -140,7 +145,8 @@ f3r_status f3r_model_create(const f3r_scene* source, f3r_model** out, f3r_error*
    * n_breakpoints): the same as calloc and a copy for everything read, without writing the
    * tables' and the breakpoints' unused 220 kB. */
   f3r_scene_copy(&m->scene, source);
-  const size_t points = offsetof(f3r_model, breakpoints), points_end = points + sizeof m->breakpoints;
+  const size_t points = offsetof(f3r_model, breakpoints),
+               points_end = points + sizeof m->breakpoints;
   memset((char*)m + sizeof m->scene, 0, points - sizeof m->scene);
   memset((char*)m + points_end, 0, sizeof *m - points_end);
   /* the model's own copy is what it is built from, and what the messages quote: free m after */
@@ -271,7 +277,8 @@ double f3r_data_actuation_condition(const f3r_model* m, const f3r_data* d, const
   }
   double JtJ[3][3], ev[3];
   for (int i = 0; i < 3; ++i)
-    for (int j = 0; j < 3; ++j) JtJ[i][j] = J[0][i] * J[0][j] + J[1][i] * J[1][j] + J[2][i] * J[2][j];
+    for (int j = 0; j < 3; ++j)
+      JtJ[i][j] = J[0][i] * J[0][j] + J[1][i] * J[1][j] + J[2][i] * J[2][j];
   symmetric_eigenvalues3((const double(*)[3])JtJ, ev); /* ISO C before C2X: no implicit const */
   /* sigma_min from the determinant, which stays accurate where the smallest eigenvalue of J^T J
    * drowns in rounding: sigma_1 sigma_2 sigma_3 = |det J|. */

@@ -18,8 +18,7 @@ f3r_workspace* f3r_workspace_create(const f3r_model* m) {
   ws->dQ = calloc(2 * (size_t)m->nq * (size_t)m->nq, sizeof(double));
   const size_t nq = (size_t)m->nq, nz = (size_t)ws->nz;
   ws->jac_work = calloc(2 * nq * nq + 18 * nq + 4 * nq * nz + 12 * nz, sizeof(double));
-  if (!ws->solve_work || !ws->y_perturbed || !ws->res_base || !ws->dQ ||
-      !ws->jac_work) {
+  if (!ws->solve_work || !ws->y_perturbed || !ws->res_base || !ws->dQ || !ws->jac_work) {
     f3r_workspace_destroy(ws);
     return NULL;
   }
@@ -84,13 +83,12 @@ f3r_status f3r_residual(const f3r_model* m, f3r_formulation form, double t, cons
 }
 
 f3r_status f3r_residual_jacobian(const f3r_model* m, f3r_formulation form, double t, double cj,
-                                 const double* y, const double* yp, const double* held,
-                                 double* J, int ld, f3r_workspace* ws) {
+                                 const double* y, const double* yp, const double* held, double* J,
+                                 int ld, f3r_workspace* ws) {
   const int ny = f3r_state_size(m, form);
   for (int j = 0; j < ny; ++j) memset(J + (size_t)j * (size_t)ld, 0, (size_t)ny * sizeof(double));
-  return form == F3R_FORMULATION_MINIMAL
-             ? f3r_minimal_jacobian(m, t, cj, y, yp, held, J, ld, ws)
-             : f3r_dae_jacobian(m, form, t, cj, y, yp, held, J, ld, ws);
+  return form == F3R_FORMULATION_MINIMAL ? f3r_minimal_jacobian(m, t, cj, y, yp, held, J, ld, ws)
+                                         : f3r_dae_jacobian(m, form, t, cj, y, yp, held, J, ld, ws);
 }
 
 f3r_status f3r_explicit_rhs(const f3r_model* m, double t, const double* y, const double* held,
@@ -108,8 +106,8 @@ f3r_status f3r_explicit_rhs_solver(const f3r_model* m, int arrow, double t, cons
   return check_finite(ydot, f3r_state_size(m, F3R_FORMULATION_MINIMAL));
 }
 
-f3r_status f3r_state_to_full(const f3r_model* m, f3r_formulation form, const double* y,
-                             double* q, double* v) {
+f3r_status f3r_state_to_full(const f3r_model* m, f3r_formulation form, const double* y, double* q,
+                             double* v) {
   const int nq = m->nq, nz = m->n_independent;
   if (form != F3R_FORMULATION_MINIMAL) {
     memcpy(q, y, (size_t)nq * sizeof(double));
@@ -124,10 +122,9 @@ f3r_status f3r_state_to_full(const f3r_model* m, f3r_formulation form, const dou
   return F3R_OK;
 }
 
-f3r_status f3r_consistent_state(const f3r_model* m, f3r_formulation form, double t,
-                                const double* q, const double* v, const double* held,
-                                const double* lag, double work, double* y, double* yp,
-                                double* lambda_out, f3r_workspace* ws) {
+f3r_status f3r_consistent_state(const f3r_model* m, f3r_formulation form, double t, const double* q,
+                                const double* v, const double* held, const double* lag, double work,
+                                double* y, double* yp, double* lambda_out, f3r_workspace* ws) {
   const int nq = m->nq, nz = m->n_independent, ny = f3r_state_size(m, form);
   f3r_data* d = &ws->data;
   f3r_fwd_position(m, q, d);

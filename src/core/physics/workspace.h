@@ -7,27 +7,26 @@
 
 struct f3r_workspace {
   int nq, nz, ny;
-  f3r_data data;      /* the last evaluation's forward pass */
+  f3r_data data; /* the last evaluation's forward pass */
   /* its full coordinates, the minimal formulation's expansion; theta_i are not filled there
    * (the stages need only the legs' directions, in data): f3r_state_to_full gives them */
   double q[F3R_MAX_Q], v[F3R_MAX_Q];
   double tmp[F3R_MAX_Q];
-  double* solve_work; /* f3r_solve_accelerations_work_size */
-  double* y_perturbed;/* ny: the zero rate of the explicit right-hand side */
-  double* res_base;   /* ny */
+  double* solve_work;  /* f3r_solve_accelerations_work_size */
+  double* y_perturbed; /* ny: the zero rate of the explicit right-hand side */
+  double* res_base;    /* ny */
   /* the minimal formulation's reduced mass B^T M B in its arrow blocks (form_minimal.c) */
-  double mass_pp[9];                                   /* platform, 3 x 3 */
-  double mass_pe[3][3 * F3R_MAX_MODES];                /* link i's modes with the platform, 3 x r_i */
-  double mass_ee[3][F3R_MAX_MODES * F3R_MAX_MODES];    /* link i's modes, r_i x r_i */
-  double arrow_w[3][4 * F3R_MAX_MODES];                /* the arrow solve's D_i^{-1} [K_Pe_i^T | b_i] */
-  double* jac_work;   /* the minimal Jacobian's products: 2 nq^2 + 18 nq + 4 nq nz + 12 nz */
-  double* dQ;         /* 2 nq x nq: dQ/dq and dQ/dv of the effects */
+  double mass_pp[9];                                /* platform, 3 x 3 */
+  double mass_pe[3][3 * F3R_MAX_MODES];             /* link i's modes with the platform, 3 x r_i */
+  double mass_ee[3][F3R_MAX_MODES * F3R_MAX_MODES]; /* link i's modes, r_i x r_i */
+  double arrow_w[3][4 * F3R_MAX_MODES]; /* the arrow solve's D_i^{-1} [K_Pe_i^T | b_i] */
+  double* jac_work; /* the minimal Jacobian's products: 2 nq^2 + 18 nq + 4 nq nz + 12 nz */
+  double* dQ;       /* 2 nq x nq: dQ/dq and dQ/dv of the effects */
 };
 
 /* form: F3R_FORMULATION_DAE or F3R_FORMULATION_INDEX3 (form_dae.c serves both) */
 f3r_status f3r_dae_residual(const f3r_model* m, f3r_formulation form, double t, const double* y,
-                            const double* yp, const double* held, double* res,
-                            f3r_workspace* ws);
+                            const double* yp, const double* held, double* res, f3r_workspace* ws);
 f3r_status f3r_dae_jacobian(const f3r_model* m, f3r_formulation form, double t, double cj,
                             const double* y, const double* yp, const double* held, double* J,
                             int ld, f3r_workspace* ws);
@@ -43,9 +42,9 @@ void f3r_minimal_multipliers(const f3r_model* m, const double* yp, f3r_data* d);
 
 f3r_status f3r_minimal_rhs(const f3r_model* m, double t, const double* y, const double* held,
                            double* ydot, f3r_workspace* ws);
-f3r_status f3r_minimal_rhs_dense(const f3r_model* m, double t, const double* y,
-                                 const double* held, double* ydot, f3r_workspace* ws);
-f3r_status f3r_minimal_rhs_arrow(const f3r_model* m, double t, const double* y,
-                                 const double* held, double* ydot, f3r_workspace* ws);
+f3r_status f3r_minimal_rhs_dense(const f3r_model* m, double t, const double* y, const double* held,
+                                 double* ydot, f3r_workspace* ws);
+f3r_status f3r_minimal_rhs_arrow(const f3r_model* m, double t, const double* y, const double* held,
+                                 double* ydot, f3r_workspace* ws);
 
 #endif

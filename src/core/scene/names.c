@@ -19,7 +19,8 @@ static const char* const integrator_names[] = {"ida", "erk", "dirk"};
 /* The tables are indexed by value: they must follow the enums' order. */
 _Static_assert(F3R_LINK_RIGID == 0 && F3R_LINK_FIXED_PINNED == 1 && F3R_LINK_FIXED_FREE == 2,
                "link_model_names follows f3r_link_model");
-_Static_assert(F3R_FORMULATION_DAE == 0 && F3R_FORMULATION_MINIMAL == 1 && F3R_FORMULATION_INDEX3 == 2,
+_Static_assert(F3R_FORMULATION_DAE == 0 && F3R_FORMULATION_MINIMAL == 1 &&
+                   F3R_FORMULATION_INDEX3 == 2,
                "formulation_names follows f3r_formulation");
 _Static_assert(F3R_INTEGRATOR_IDA == 0 && F3R_INTEGRATOR_ERK == 1 && F3R_INTEGRATOR_DIRK == 2,
                "integrator_names follows f3r_integrator");

@@ -42,9 +42,15 @@ f3r_scene f3r_default_scene(void) {
   return s;
 }
 
-static const char* const kInputNames[F3R_RIGID_FORCES] = {
-    "rho_1", "rho_2", "rho_3", "theta_1", "theta_2", "theta_3",
-    "platform_force_x", "platform_force_y", "platform_torque"};
+static const char* const kInputNames[F3R_RIGID_FORCES] = {"rho_1",
+                                                          "rho_2",
+                                                          "rho_3",
+                                                          "theta_1",
+                                                          "theta_2",
+                                                          "theta_3",
+                                                          "platform_force_x",
+                                                          "platform_force_y",
+                                                          "platform_torque"};
 
 const char* f3r_input_name(int index) {
   return index >= 0 && index < F3R_RIGID_FORCES ? kInputNames[index] : "unknown";
@@ -75,8 +81,10 @@ double f3r_input_value(const f3r_input* in, double t) {
       int k = 1, hi = n - 1;
       while (k < hi) {
         const int mid = k + (hi - k) / 2;
-        if (in->table_time[mid] < t) k = mid + 1;
-        else hi = mid;
+        if (in->table_time[mid] < t)
+          k = mid + 1;
+        else
+          hi = mid;
       }
       if (in->table_hold) return in->table_value[k - 1];
       const double w = (t - in->table_time[k - 1]) / (in->table_time[k] - in->table_time[k - 1]);
@@ -106,8 +114,7 @@ int f3r_input_breakpoints(const f3r_input* in, double* times, int max) {
     case F3R_INPUT_TABLE:
       for (int k = 0; k < in->table_size && n < max; ++k) times[n++] = in->table_time[k];
       break;
-    default:
-      break;
+    default: break;
   }
   return n;
 }
@@ -120,25 +127,27 @@ void f3r_scene_copy(f3r_scene* dst, const f3r_scene* src) {
     const f3r_input* from = &src->inputs[k];
     f3r_input* to = &dst->inputs[k];
     memcpy(to, from, offsetof(f3r_input, table_time));
-    const int used = from->table_size < 0 ? 0 : from->table_size > F3R_MAX_TABLE ? F3R_MAX_TABLE : from->table_size;
+    const int used = from->table_size < 0               ? 0
+                     : from->table_size > F3R_MAX_TABLE ? F3R_MAX_TABLE
+                                                        : from->table_size;
     memcpy(to->table_time, from->table_time, (size_t)used * sizeof(double));
     memcpy(to->table_value, from->table_value, (size_t)used * sizeof(double));
   }
 }
 
-#define CHECK_RANGE(field, value, lo, hi)                                                   \
-  do {                                                                                      \
-    const double v_ = (value);                                                              \
-    if (!(v_ >= (lo) && v_ <= (hi)))                                                        \
+#define CHECK_RANGE(field, value, lo, hi)                                                     \
+  do {                                                                                        \
+    const double v_ = (value);                                                                \
+    if (!(v_ >= (lo) && v_ <= (hi)))                                                          \
       return f3r_scene_error(err, field, NULL, "%g is out of range %g..%g", v_, (double)(lo), \
-                             (double)(hi));                                                  \
+                             (double)(hi));                                                   \
   } while (0)
 
-#define CHECK_POSITIVE(field, value)                                                       \
-  do {                                                                                     \
-    const double v_ = (value);                                                             \
-    if (!(v_ > 0.0 && isfinite(v_)))                                                       \
-      return f3r_scene_error(err, field, NULL, "%g must be positive and finite", v_);         \
+#define CHECK_POSITIVE(field, value)                                                  \
+  do {                                                                                \
+    const double v_ = (value);                                                        \
+    if (!(v_ > 0.0 && isfinite(v_)))                                                  \
+      return f3r_scene_error(err, field, NULL, "%g must be positive and finite", v_); \
   } while (0)
 
 /* CHECK_RANGE for a field named by a format (in `name`), formatted only when the check fails:
@@ -153,10 +162,9 @@ void f3r_scene_copy(f3r_scene* dst, const f3r_scene* src) {
     }                                           \
   } while (0)
 
-#define CHECK_FINITE(field, value)                                                          \
-  do {                                                                                      \
-    if (!isfinite(value))                                                                   \
-      return f3r_scene_error(err, field, NULL, "%g must be finite", (value));                \
+#define CHECK_FINITE(field, value)                                                                \
+  do {                                                                                            \
+    if (!isfinite(value)) return f3r_scene_error(err, field, NULL, "%g must be finite", (value)); \
   } while (0)
 
 static f3r_status validate_input_shape(const f3r_input* in, const char* name, f3r_error* err) {
@@ -208,18 +216,20 @@ static f3r_status validate_input_shape(const f3r_input* in, const char* name, f3
       }
       break;
     }
-    default:
-      break;
+    default: break;
   }
   return F3R_OK;
 }
 
-static const char* const explicit_tables[] = {
-    "ARKODE_FEHLBERG_13_7_8", "ARKODE_DORMAND_PRINCE_7_4_5", "ARKODE_VERNER_8_5_6",
-    "dormand_prince_8_5",     "verner_8_7",                  "verner_9_8",          NULL};
-static const char* const implicit_tables[] = {"ARKODE_KVAERNO_7_4_5",
-                                              "ARKODE_ARK548L2SA_DIRK_8_4_5",
-                                              "ARKODE_SDIRK_5_3_4", NULL};
+static const char* const explicit_tables[] = {"ARKODE_FEHLBERG_13_7_8",
+                                              "ARKODE_DORMAND_PRINCE_7_4_5",
+                                              "ARKODE_VERNER_8_5_6",
+                                              "dormand_prince_8_5",
+                                              "verner_8_7",
+                                              "verner_9_8",
+                                              NULL};
+static const char* const implicit_tables[] = {
+    "ARKODE_KVAERNO_7_4_5", "ARKODE_ARK548L2SA_DIRK_8_4_5", "ARKODE_SDIRK_5_3_4", NULL};
 
 const char* const* f3r_rk_tables(f3r_integrator integrator) {
   return integrator == F3R_INTEGRATOR_ERK    ? explicit_tables
@@ -239,8 +249,8 @@ static f3r_status validate_bodies(const f3r_scene* s, f3r_error* err) {
   CHECK_POSITIVE("geometry.base_side", s->base_side);
   CHECK_POSITIVE("geometry.platform_side", s->platform_side);
   if (!(s->platform_side < s->base_side))
-    return f3r_scene_error(err, "geometry.platform_side", NULL, "%g must be smaller than base_side %g",
-                           s->platform_side, s->base_side);
+    return f3r_scene_error(err, "geometry.platform_side", NULL,
+                           "%g must be smaller than base_side %g", s->platform_side, s->base_side);
   CHECK_POSITIVE("platform.mass", s->platform_mass);
   CHECK_RANGE("platform.inertia", s->platform_inertia, 0.0, 1e6);
   CHECK_POSITIVE("link.length", s->link_length);
@@ -316,12 +326,13 @@ static f3r_status validate_effects_and_pose(const f3r_scene* s, f3r_error* err) 
   CHECK_RANGE(s->end_stops ? "effects.end_stops.min" : "geometry.stroke_min", s->stroke_min,
               -s->link_length + 1e-3, 10.0);
   if (!(s->stroke_max > s->stroke_min))
-    return f3r_scene_error(err, s->end_stops ? "effects.end_stops.max" : "geometry.stroke_max", NULL,
-                           "%g must exceed the minimum %g", s->stroke_max, s->stroke_min);
+    return f3r_scene_error(err, s->end_stops ? "effects.end_stops.max" : "geometry.stroke_max",
+                           NULL, "%g must exceed the minimum %g", s->stroke_max, s->stroke_min);
   CHECK_RANGE("effects.payload.mass", s->payload_mass, 0.0, 1e3);
   CHECK_RANGE("effects.payload.inertia", s->payload_inertia, 0.0, 1e3);
   for (int k = 0; k < 3; ++k) {
-    CHECK_RANGE_AT(s->platform_pose0[k], k < 2 ? -1.0 : -1e3, k < 2 ? 1.0 : 1e3, "initial.platform_pose[%d]", k);
+    CHECK_RANGE_AT(s->platform_pose0[k], k < 2 ? -1.0 : -1e3, k < 2 ? 1.0 : 1e3,
+                   "initial.platform_pose[%d]", k);
     CHECK_RANGE_AT(s->platform_velocity0[k], -1e3, 1e3, "initial.platform_velocity[%d]", k);
   }
   return F3R_OK;
@@ -335,8 +346,8 @@ static f3r_status validate_inputs(const f3r_scene* s, f3r_error* err) {
     snprintf(name, sizeof name, "inputs.%s", kInputNames[n]);
     if ((int)in->kind < F3R_INPUT_NONE || (int)in->kind > F3R_INPUT_TABLE)
       return f3r_scene_error(err, name, NULL, "kind %d is not a known input kind", (int)in->kind);
-    const double values[] = {in->offset, in->amplitude, in->omega, in->phase, in->t0, in->t1,
-                             in->before, in->after, in->f0, in->f1};
+    const double values[] = {in->offset, in->amplitude, in->omega, in->phase, in->t0,
+                             in->t1,     in->before,    in->after, in->f0,    in->f1};
     for (size_t k = 0; k < sizeof values / sizeof values[0]; ++k) CHECK_FINITE(name, values[k]);
     f3r_status st = validate_input_shape(in, name, err);
     if (st != F3R_OK) return st;
@@ -359,7 +370,8 @@ static f3r_status validate_solver_and_run(const f3r_scene* s, f3r_error* err) {
                            "%s integrates the minimal formulation only",
                            s->integrator == F3R_INTEGRATOR_ERK ? "erk" : "dirk");
   if (s->table[0] && s->integrator == F3R_INTEGRATOR_IDA)
-    return f3r_scene_error(err, "solver.table", NULL, "a Butcher table needs integrator erk or dirk");
+    return f3r_scene_error(err, "solver.table", NULL,
+                           "a Butcher table needs integrator erk or dirk");
   if (s->table[0] && !table_known(s->integrator, s->table)) {
     char allowed[512] = "";
     for (const char* const* t = f3r_rk_tables(s->integrator); *t; ++t)

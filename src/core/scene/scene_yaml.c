@@ -46,15 +46,17 @@ static f3r_status read_link(loader* L, const yaml_node_t* map, int i) {
       if ((st = f3r_yaml_number(L, value, name, &link->damping_ratio)) != F3R_OK) return st;
     } else if (!strcmp(key, "initial_deflection") || !strcmp(key, "initial_rate")) {
       double* target = key[8] == 'd' ? link->eta0 : link->eta_rate0;
-      if (value->type != YAML_SEQUENCE_NODE) return f3r_yaml_fail(L, value, name, "expected a list");
+      if (value->type != YAML_SEQUENCE_NODE)
+        return f3r_yaml_fail(L, value, name, "expected a list");
       const int len = (int)(value->data.sequence.items.top - value->data.sequence.items.start);
       if (len > F3R_MAX_MODES)
-        return f3r_yaml_fail(L, value, name, "has %d values, at most %d allowed", len, F3R_MAX_MODES);
+        return f3r_yaml_fail(L, value, name, "has %d values, at most %d allowed", len,
+                             F3R_MAX_MODES);
       if ((st = f3r_yaml_vector(L, value, name, target, len)) != F3R_OK) return st;
     } else {
       return f3r_yaml_fail(L, value, name,
-                  "unknown key (allowed: model, modes, auto_tolerance, damping_ratio, "
-                  "initial_deflection, initial_rate)");
+                           "unknown key (allowed: model, modes, auto_tolerance, damping_ratio, "
+                           "initial_deflection, initial_rate)");
     }
   }
   return F3R_OK;
@@ -68,11 +70,13 @@ static f3r_status read_links(loader* L, const yaml_node_t* n) {
     }
     return F3R_OK;
   }
-  if (n->type != YAML_SEQUENCE_NODE) return f3r_yaml_fail(L, n, "links", "expected a list of 3 links or one mapping for all");
+  if (n->type != YAML_SEQUENCE_NODE)
+    return f3r_yaml_fail(L, n, "links", "expected a list of 3 links or one mapping for all");
   const int len = (int)(n->data.sequence.items.top - n->data.sequence.items.start);
   if (len != 3) return f3r_yaml_fail(L, n, "links", "has %d entries, expected 3", len);
   for (int i = 0; i < 3; ++i) {
-    f3r_status st = read_link(L, yaml_document_get_node(&L->doc, n->data.sequence.items.start[i]), i);
+    f3r_status st =
+        read_link(L, yaml_document_get_node(&L->doc, n->data.sequence.items.start[i]), i);
     if (st != F3R_OK) return st;
   }
   return F3R_OK;
@@ -93,21 +97,29 @@ static f3r_status read_table(loader* L, const yaml_node_t* map, const char* name
     snprintf(field, sizeof field, "%s.%s", name, key);
     if (!strcmp(key, "interpolation")) {
       const char* v = f3r_yaml_scalar(value);
-      if (v && !strcmp(v, "linear")) in->table_hold = 0;
-      else if (v && !strcmp(v, "hold")) in->table_hold = 1;
-      else return f3r_yaml_fail(L, value, field, "'%s' is not allowed (linear or hold)", v ? v : "?");
+      if (v && !strcmp(v, "linear"))
+        in->table_hold = 0;
+      else if (v && !strcmp(v, "hold"))
+        in->table_hold = 1;
+      else
+        return f3r_yaml_fail(L, value, field, "'%s' is not allowed (linear or hold)", v ? v : "?");
       continue;
     }
-    double* target = !strcmp(key, "time") ? in->table_time : !strcmp(key, "value") ? in->table_value : NULL;
-    if (!target) return f3r_yaml_fail(L, value, field, "unknown key (allowed: time, value, interpolation)");
-    if (value->type != YAML_SEQUENCE_NODE) return f3r_yaml_fail(L, value, field, "expected a list of numbers");
+    double* target = !strcmp(key, "time")    ? in->table_time
+                     : !strcmp(key, "value") ? in->table_value
+                                             : NULL;
+    if (!target)
+      return f3r_yaml_fail(L, value, field, "unknown key (allowed: time, value, interpolation)");
+    if (value->type != YAML_SEQUENCE_NODE)
+      return f3r_yaml_fail(L, value, field, "expected a list of numbers");
     const int len = (int)(value->data.sequence.items.top - value->data.sequence.items.start);
     if (len < 2 || len > F3R_MAX_TABLE)
       return f3r_yaml_fail(L, value, field, "has %d values, allowed 2..%d", len, F3R_MAX_TABLE);
     if ((st = f3r_yaml_vector(L, value, field, target, len)) != F3R_OK) return st;
     *(target == in->table_time ? &n_time : &n_value) = len;
   }
-  if (n_time < 0 || n_value < 0) return f3r_yaml_fail(L, map, name, "needs both time and value lists");
+  if (n_time < 0 || n_value < 0)
+    return f3r_yaml_fail(L, map, name, "needs both time and value lists");
   if (n_time != n_value)
     return f3r_yaml_fail(L, map, name, "time has %d values but value has %d", n_time, n_value);
   in->table_size = n_time;
@@ -121,8 +133,10 @@ static f3r_status read_input(loader* L, const yaml_node_t* map, const char* name
   f3r_yaml_remember(L, name, map);
   /* A shaped input is a one-key mapping naming its shape. */
   if (map->data.mapping.pairs.top - map->data.mapping.pairs.start == 1) {
-    const yaml_node_t* key_node = yaml_document_get_node(&L->doc, map->data.mapping.pairs.start->key);
-    const yaml_node_t* value = yaml_document_get_node(&L->doc, map->data.mapping.pairs.start->value);
+    const yaml_node_t* key_node =
+        yaml_document_get_node(&L->doc, map->data.mapping.pairs.start->key);
+    const yaml_node_t* value =
+        yaml_document_get_node(&L->doc, map->data.mapping.pairs.start->value);
     const char* key = f3r_yaml_scalar(key_node) ? f3r_yaml_scalar(key_node) : "";
     char field[128];
     snprintf(field, sizeof field, "%s.%s", name, key);
@@ -133,14 +147,15 @@ static f3r_status read_input(loader* L, const yaml_node_t* map, const char* name
     }
     if (!strcmp(key, "ramp")) {
       in->kind = F3R_INPUT_RAMP;
-      const number_field f[] = {{"start", &in->t0}, {"end", &in->t1}, {"from", &in->before}, {"to", &in->after}};
+      const number_field f[] = {
+          {"start", &in->t0}, {"end", &in->t1}, {"from", &in->before}, {"to", &in->after}};
       return read_shape(L, value, field, f, 4);
     }
     if (!strcmp(key, "chirp")) {
       in->kind = F3R_INPUT_CHIRP;
-      const number_field f[] = {{"offset", &in->offset}, {"amplitude", &in->amplitude},
+      const number_field f[] = {{"offset", &in->offset},      {"amplitude", &in->amplitude},
                                 {"start_frequency", &in->f0}, {"end_frequency", &in->f1},
-                                {"start", &in->t0}, {"end", &in->t1}};
+                                {"start", &in->t0},           {"end", &in->t1}};
       return read_shape(L, value, field, f, 6);
     }
     if (!strcmp(key, "table")) {
@@ -160,15 +175,18 @@ static f3r_status read_input(loader* L, const yaml_node_t* map, const char* name
                      : !strcmp(key, "frequency") ? &frequency
                                                  : NULL;
     if (!target)
-      return f3r_yaml_fail(L, value, field,
-                  "unknown key (allowed: offset, amplitude, frequency, omega, phase; or one of "
-                  "step, ramp, chirp, table)");
+      return f3r_yaml_fail(
+          L, value, field,
+          "unknown key (allowed: offset, amplitude, frequency, omega, phase; or one of "
+          "step, ramp, chirp, table)");
     if ((st = f3r_yaml_number(L, value, field, target)) != F3R_OK) return st;
     if (target != &in->offset) in->kind = F3R_INPUT_HARMONIC;
   }
   if (!isnan(frequency)) {
-    if (in->omega != 0.0) return f3r_yaml_fail(L, map, name, "give frequency (Hz) or omega (rad/s), not both");
-    if (frequency < 0.0) return f3r_yaml_fail(L, map, name, "frequency: %g Hz must not be negative", frequency);
+    if (in->omega != 0.0)
+      return f3r_yaml_fail(L, map, name, "give frequency (Hz) or omega (rad/s), not both");
+    if (frequency < 0.0)
+      return f3r_yaml_fail(L, map, name, "frequency: %g Hz must not be negative", frequency);
     in->omega = 2.0 * M_PI * frequency;
   }
   return F3R_OK;
@@ -185,8 +203,8 @@ static f3r_status read_inputs(loader* L, const yaml_node_t* map) {
       if (!strcmp(key, f3r_input_name(k))) index = k;
     if (index < 0)
       return f3r_yaml_fail(L, value, name,
-                  "unknown input (allowed: rho_1..3, theta_1..3, platform_force_x, "
-                  "platform_force_y, platform_torque)");
+                           "unknown input (allowed: rho_1..3, theta_1..3, platform_force_x, "
+                           "platform_force_y, platform_torque)");
     if ((st = read_input(L, value, name, &L->scene->inputs[index])) != F3R_OK) return st;
   }
   return F3R_OK;
@@ -219,7 +237,7 @@ static f3r_status read_solver(loader* L, const yaml_node_t* map) {
       const char* v = f3r_yaml_scalar(value);
       if (!v || !*v || strlen(v) >= sizeof s->table)
         return f3r_yaml_fail(L, value, name, "needs a Butcher table's name (at most %d characters)",
-                    (int)sizeof s->table - 1);
+                             (int)sizeof s->table - 1);
       snprintf(s->table, sizeof s->table, "%s", v);
       s->explicit_settings |= F3R_EXPLICIT_TABLE;
       f3r_yaml_remember(L, name, value);
@@ -229,7 +247,8 @@ static f3r_status read_solver(loader* L, const yaml_node_t* map) {
     } else if (!strcmp(key, "atol")) {
       st = f3r_yaml_number(L, value, name, &s->atol);
       s->explicit_settings |= F3R_EXPLICIT_ATOL;
-    } else if (!strcmp(key, "max_step")) { st = f3r_yaml_number(L, value, name, &s->max_step);
+    } else if (!strcmp(key, "max_step")) {
+      st = f3r_yaml_number(L, value, name, &s->max_step);
     } else if (!strcmp(key, "max_order")) {
       double order = 0.0;
       st = f3r_yaml_number(L, value, name, &order);
@@ -237,7 +256,9 @@ static f3r_status read_solver(loader* L, const yaml_node_t* map) {
         return f3r_yaml_fail(L, value, name, "%g is out of range 1..5 (an integer)", order);
       s->max_order = (int)order;
     } else {
-      return f3r_yaml_fail(L, value, name, "unknown key (allowed: formulation, integrator, table, rtol, atol, max_step, max_order)");
+      return f3r_yaml_fail(
+          L, value, name,
+          "unknown key (allowed: formulation, integrator, table, rtol, atol, max_step, max_order)");
     }
     if (st != F3R_OK) return st;
   }
@@ -251,9 +272,11 @@ static f3r_status read_joint_friction(loader* L, const yaml_node_t* map, const c
   FOR_EACH_PAIR(L, map, fkey, fvalue) {
     char field[128];
     snprintf(field, sizeof field, "%s.%s", name, fkey);
-    double* target = !strcmp(fkey, "prismatic") ? s->friction_prismatic
-                     : !strcmp(fkey, "revolute") ? s->friction_revolute : NULL;
-    if (!target) return f3r_yaml_fail(L, fvalue, field, "unknown key (allowed: prismatic, revolute)");
+    double* target = !strcmp(fkey, "prismatic")  ? s->friction_prismatic
+                     : !strcmp(fkey, "revolute") ? s->friction_revolute
+                                                 : NULL;
+    if (!target)
+      return f3r_yaml_fail(L, fvalue, field, "unknown key (allowed: prismatic, revolute)");
     if ((st = f3r_yaml_vector(L, fvalue, field, target, 3)) != F3R_OK) return st;
   }
   return F3R_OK;
@@ -275,8 +298,8 @@ static f3r_status read_effects(loader* L, const yaml_node_t* map) {
       const number_field f[] = {{"mass", &s->payload_mass}, {"inertia", &s->payload_inertia}};
       st = f3r_yaml_numbers(L, evalue, name, f, 2);
     } else if (!strcmp(ekey, "end_stops")) {
-      const number_field f[] = {{"min", &s->stroke_min}, {"max", &s->stroke_max},
-                                {"restitution", &s->restitution}};
+      const number_field f[] = {
+          {"min", &s->stroke_min}, {"max", &s->stroke_max}, {"restitution", &s->restitution}};
       s->end_stops = 1;
       st = f3r_yaml_numbers(L, evalue, name, f, 3);
     } else if (!strcmp(ekey, "actuator_lag")) {
@@ -285,9 +308,10 @@ static f3r_status read_effects(loader* L, const yaml_node_t* map) {
     } else if (!strcmp(ekey, "joint_friction")) {
       st = read_joint_friction(L, evalue, name);
     } else {
-      return f3r_yaml_fail(L, evalue, name,
-                  "unknown effect (allowed: exact_kinematics, gravity, payload, joint_friction, "
-                  "actuator_lag, end_stops)");
+      return f3r_yaml_fail(
+          L, evalue, name,
+          "unknown effect (allowed: exact_kinematics, gravity, payload, joint_friction, "
+          "actuator_lag, end_stops)");
     }
     if (st != F3R_OK) return st;
   }
@@ -301,10 +325,13 @@ static f3r_status read_initial(loader* L, const yaml_node_t* map) {
   FOR_EACH_PAIR(L, map, ikey, ivalue) {
     char name[96];
     snprintf(name, sizeof name, "initial.%s", ikey);
-    if (!strcmp(ikey, "platform_pose")) st = f3r_yaml_vector(L, ivalue, name, s->platform_pose0, 3);
+    if (!strcmp(ikey, "platform_pose"))
+      st = f3r_yaml_vector(L, ivalue, name, s->platform_pose0, 3);
     else if (!strcmp(ikey, "platform_velocity"))
       st = f3r_yaml_vector(L, ivalue, name, s->platform_velocity0, 3);
-    else return f3r_yaml_fail(L, ivalue, name, "unknown key (allowed: platform_pose, platform_velocity)");
+    else
+      return f3r_yaml_fail(L, ivalue, name,
+                           "unknown key (allowed: platform_pose, platform_velocity)");
     if (st != F3R_OK) return st;
   }
   return F3R_OK;
@@ -317,10 +344,15 @@ static f3r_status read_run(loader* L, const yaml_node_t* map) {
   FOR_EACH_PAIR(L, map, rkey, rvalue) {
     char name[96];
     snprintf(name, sizeof name, "run.%s", rkey);
-    if (!strcmp(rkey, "duration")) st = f3r_yaml_number(L, rvalue, name, &s->duration);
-    else if (!strcmp(rkey, "output_step")) st = f3r_yaml_number(L, rvalue, name, &s->output_step);
-    else if (!strcmp(rkey, "beam_points")) st = f3r_yaml_int(L, rvalue, name, &s->beam_points);
-    else return f3r_yaml_fail(L, rvalue, name, "unknown key (allowed: duration, output_step, beam_points)");
+    if (!strcmp(rkey, "duration"))
+      st = f3r_yaml_number(L, rvalue, name, &s->duration);
+    else if (!strcmp(rkey, "output_step"))
+      st = f3r_yaml_number(L, rvalue, name, &s->output_step);
+    else if (!strcmp(rkey, "beam_points"))
+      st = f3r_yaml_int(L, rvalue, name, &s->beam_points);
+    else
+      return f3r_yaml_fail(L, rvalue, name,
+                           "unknown key (allowed: duration, output_step, beam_points)");
     if (st != F3R_OK) return st;
   }
   return F3R_OK;
@@ -332,14 +364,17 @@ static f3r_status read_root(loader* L, const yaml_node_t* root) {
   if (st != F3R_OK) return st;
   FOR_EACH_PAIR(L, root, key, value) {
     if (!strcmp(key, "geometry")) {
-      const number_field f[] = {{"base_side", &s->base_side}, {"platform_side", &s->platform_side},
-                                {"stroke_min", &s->stroke_min}, {"stroke_max", &s->stroke_max}};
+      const number_field f[] = {{"base_side", &s->base_side},
+                                {"platform_side", &s->platform_side},
+                                {"stroke_min", &s->stroke_min},
+                                {"stroke_max", &s->stroke_max}};
       st = f3r_yaml_numbers(L, value, "geometry", f, 4);
     } else if (!strcmp(key, "platform")) {
       const number_field f[] = {{"mass", &s->platform_mass}, {"inertia", &s->platform_inertia}};
       st = f3r_yaml_numbers(L, value, "platform", f, 2);
     } else if (!strcmp(key, "link")) {
-      const number_field f[] = {{"length", &s->link_length}, {"diameter", &s->link_diameter},
+      const number_field f[] = {{"length", &s->link_length},
+                                {"diameter", &s->link_diameter},
                                 {"density", &s->link_density},
                                 {"youngs_modulus", &s->link_youngs_modulus}};
       st = f3r_yaml_numbers(L, value, "link", f, 4);
@@ -365,9 +400,10 @@ static f3r_status read_root(loader* L, const yaml_node_t* root) {
     } else if (!strcmp(key, "run")) {
       st = read_run(L, value);
     } else {
-      return f3r_yaml_fail(L, value, key,
-                  "unknown section (allowed: geometry, platform, link, cylinder, links, effects, "
-                  "initial, inputs, solver, accuracy, run)");
+      return f3r_yaml_fail(
+          L, value, key,
+          "unknown section (allowed: geometry, platform, link, cylinder, links, effects, "
+          "initial, inputs, solver, accuracy, run)");
     }
     if (st != F3R_OK) return st;
   }
@@ -392,7 +428,8 @@ f3r_status f3r_scene_load(const char* path, f3r_scene* scene, f3r_error* err) {
   return f3r_scene_load_accuracy(path, 0.0, scene, err);
 }
 
-f3r_status f3r_scene_load_accuracy(const char* path, double accuracy, f3r_scene* scene, f3r_error* err) {
+f3r_status f3r_scene_load_accuracy(const char* path, double accuracy, f3r_scene* scene,
+                                   f3r_error* err) {
   const f3r_scene_options options = {.accuracy = accuracy};
   return f3r_scene_load_with(path, &options, scene, err);
 }
@@ -436,10 +473,12 @@ f3r_status f3r_scene_load_with(const char* path, const f3r_scene_options* option
     free(L->first_node), free(L->last_node), free(L);
     return st;
   }
-  st = yaml_document_get_root_node(&L->doc) ? F3R_OK
-                                            : f3r_error_set(err, F3R_ERR_SCENE, "%s:1: the file holds no scene", path);
+  st = yaml_document_get_root_node(&L->doc)
+           ? F3R_OK
+           : f3r_error_set(err, F3R_ERR_SCENE, "%s:1: the file holds no scene", path);
   for (int k = 0; st == F3R_OK && k < L->override_count; ++k)
-    st = f3r_scene_apply_override(&L->doc, path, L->overrides[k], &L->first_node[k], &L->last_node[k], err);
+    st = f3r_scene_apply_override(&L->doc, path, L->overrides[k], &L->first_node[k],
+                                  &L->last_node[k], err);
   if (st == F3R_OK) st = read_root(L, yaml_document_get_root_node(&L->doc));
   if (st == F3R_OK && L->out_of_memory)
     st = f3r_error_set(err, F3R_ERR_MEMORY, "%s: out of memory", path);

@@ -21,11 +21,14 @@ static int override_of(const loader* L, const yaml_node_t* node) {
 
 /* Where a message points: "path:line" in the file, or "--set FIELD=VALUE" for an override. */
 void f3r_yaml_where(const loader* L, int line, int override, char* out, size_t size) {
-  if (override) snprintf(out, size, "--set %s", L->overrides[override - 1]);
-  else snprintf(out, size, "%s:%d", L->path, line);
+  if (override)
+    snprintf(out, size, "--set %s", L->overrides[override - 1]);
+  else
+    snprintf(out, size, "%s:%d", L->path, line);
 }
 
-f3r_status f3r_yaml_fail(loader* L, const yaml_node_t* node, const char* field, const char* fmt, ...) {
+f3r_status f3r_yaml_fail(loader* L, const yaml_node_t* node, const char* field, const char* fmt,
+                         ...) {
   char what[384], at[320];
   va_list args;
   va_start(args, fmt);
@@ -90,22 +93,28 @@ f3r_status f3r_yaml_int(loader* L, const yaml_node_t* n, const char* field, int*
   double v = 0.0;
   f3r_status st = f3r_yaml_number(L, n, field, &v);
   if (st != F3R_OK) return st;
-  if (v != floor(v) || fabs(v) > 1e6) return f3r_yaml_fail(L, n, field, "%g is not a whole number", v);
+  if (v != floor(v) || fabs(v) > 1e6)
+    return f3r_yaml_fail(L, n, field, "%g is not a whole number", v);
   *out = (int)v;
   return F3R_OK;
 }
 
 f3r_status f3r_yaml_bool(loader* L, const yaml_node_t* n, const char* field, int* out) {
   const char* s = f3r_yaml_scalar(n);
-  if (s && (!strcmp(s, "true") || !strcmp(s, "on") || !strcmp(s, "yes"))) *out = 1;
-  else if (s && (!strcmp(s, "false") || !strcmp(s, "off") || !strcmp(s, "no"))) *out = 0;
-  else return f3r_yaml_fail(L, n, field, "expected true or false");
+  if (s && (!strcmp(s, "true") || !strcmp(s, "on") || !strcmp(s, "yes")))
+    *out = 1;
+  else if (s && (!strcmp(s, "false") || !strcmp(s, "off") || !strcmp(s, "no")))
+    *out = 0;
+  else
+    return f3r_yaml_fail(L, n, field, "expected true or false");
   f3r_yaml_remember(L, field, n);
   return F3R_OK;
 }
 
-f3r_status f3r_yaml_vector(loader* L, const yaml_node_t* n, const char* field, double* out, int count) {
-  if (n->type != YAML_SEQUENCE_NODE) return f3r_yaml_fail(L, n, field, "expected a list of %d numbers", count);
+f3r_status f3r_yaml_vector(loader* L, const yaml_node_t* n, const char* field, double* out,
+                           int count) {
+  if (n->type != YAML_SEQUENCE_NODE)
+    return f3r_yaml_fail(L, n, field, "expected a list of %d numbers", count);
   const int len = (int)(n->data.sequence.items.top - n->data.sequence.items.start);
   if (len != count) return f3r_yaml_fail(L, n, field, "has %d values, expected %d", len, count);
   for (int k = 0; k < len; ++k) {
@@ -148,4 +157,3 @@ f3r_status f3r_yaml_numbers(loader* L, const yaml_node_t* map, const char* secti
   }
   return F3R_OK;
 }
-

@@ -6,8 +6,8 @@
 #define FLEX3RPR_ERK_TABLES_H
 
 typedef struct {
-  const char* name;         /* e.g. "dormand_prince_8_5" */
-  const char* source;       /* where the coefficients come from (paper + where copied from) */
+  const char* name;   /* e.g. "dormand_prince_8_5" */
+  const char* source; /* where the coefficients come from (paper + where copied from) */
   int stages, order, embedded_order;
   const double* A;          /* stages x stages, row-major, strictly lower triangular */
   const double* b;          /* stages: the method's weights */

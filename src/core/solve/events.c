@@ -30,8 +30,10 @@ int f3r_event_next_breakpoint(const f3r_model* m, double t, double t_out, double
   int lo = 0, hi = m->n_breakpoints;
   while (lo < hi) {
     const int mid = lo + (hi - lo) / 2;
-    if (m->breakpoints[mid] > t) hi = mid;
-    else lo = mid + 1;
+    if (m->breakpoints[mid] > t)
+      hi = mid;
+    else
+      lo = mid + 1;
   }
   if (lo == m->n_breakpoints || m->breakpoints[lo] > t_out) return 0;
   *t_stop = m->breakpoints[lo];
@@ -50,13 +52,14 @@ f3r_status f3r_event_collapse_error(const f3r_model* m, f3r_formulation form, co
   if (f3r_state_to_full(m, form, y, q, v) != F3R_OK)
     return f3r_error_set(err, F3R_ERR_SINGULAR,
                          "leg %d collapsed at t = %.9g: the loop no longer closes; the last good "
-                         "state is kept", leg + 1, t);
-  return f3r_error_set(err, F3R_ERR_SINGULAR,
-                       "leg %d collapsed at t = %.9g: rho_%d + l = %.4g m reached the guard %.2g l, "
-                       "where the beam's root nears A_%d and the loop closure degenerates; the "
-                       "last good state is kept",
-                       leg + 1, t, leg + 1, q[leg] + m->link_length, F3R_COLLAPSE_LEG_FRACTION,
-                       leg + 1);
+                         "state is kept",
+                         leg + 1, t);
+  return f3r_error_set(
+      err, F3R_ERR_SINGULAR,
+      "leg %d collapsed at t = %.9g: rho_%d + l = %.4g m reached the guard %.2g l, "
+      "where the beam's root nears A_%d and the loop closure degenerates; the "
+      "last good state is kept",
+      leg + 1, t, leg + 1, q[leg] + m->link_length, F3R_COLLAPSE_LEG_FRACTION, leg + 1);
 }
 
 f3r_status f3r_event_impact(const f3r_model* m, double t, const int* root_info, const double* q,
@@ -85,10 +88,11 @@ f3r_status f3r_event_impact(const f3r_model* m, double t, const int* root_info, 
   if (st != F3R_OK) return f3r_error_set(err, st, "end stop at t = %.9g: singular impact", t);
   for (int c = 0; c < count; ++c)
     if (fabs(v_after[legs[c]]) < F3R_RESTING_SPEED)
-      return f3r_error_set(err, F3R_ERR_SOLVER,
-                           "leg %d rests against its end stop at t = %.9g (rebound %.3g m/s, below "
-                           "%g m/s): resting contact is not modelled; reduce the force into the stop",
-                           legs[c] + 1, t, fabs(v_after[legs[c]]), F3R_RESTING_SPEED);
+      return f3r_error_set(
+          err, F3R_ERR_SOLVER,
+          "leg %d rests against its end stop at t = %.9g (rebound %.3g m/s, below "
+          "%g m/s): resting contact is not modelled; reduce the force into the stop",
+          legs[c] + 1, t, fabs(v_after[legs[c]]), F3R_RESTING_SPEED);
   record->t = t;
   record->leg = legs[0];
   record->at_max = at_max[0];

@@ -47,7 +47,6 @@ typedef struct {
  * end-stop root fired). work holds f3r_impact_work_size doubles. */
 f3r_status f3r_event_impact(const f3r_model* m, double t, const int* root_info, const double* q,
                             const double* v, f3r_impact_window* window, double* v_after,
-                            f3r_impact_record* record, int* legs_hit, double* work,
-                            f3r_error* err);
+                            f3r_impact_record* record, int* legs_hit, double* work, f3r_error* err);
 
 #endif

@@ -10,13 +10,13 @@
 #include "dense.h"
 
 typedef struct {
-  int nz, nr;      /* kinematic rows; the rest (nr = ny - nz) */
+  int nz, nr;              /* kinematic rows; the rest (nr = ny - nz) */
   const double* cj_source; /* where the stepper keeps the current cj */
-  double cj;       /* of the last setup */
-  int* kr_nonzero; /* nr: 1 where J_kr's column has a nonzero (rates, mu) */
-  double* S;       /* nr x nr, the factored Schur complement */
-  int* piv;        /* nr */
-  double* bz;      /* nz: b_z kept, since IDA may pass x == b */
+  double cj;               /* of the last setup */
+  int* kr_nonzero;         /* nr: 1 where J_kr's column has a nonzero (rates, mu) */
+  double* S;               /* nr x nr, the factored Schur complement */
+  int* piv;                /* nr */
+  double* bz;              /* nz: b_z kept, since IDA may pass x == b */
   int last_flag;
 } schur_content;
 

@@ -22,9 +22,9 @@ struct f3r_sim {
   N_Vector y, yp;
   f3r_workspace* out_ws; /* scratch for outputs, so outputs never disturb the residual's */
   double held[F3R_MAX_Q];
-  double t;              /* time of the current state */
-  double energy0;        /* T + V at t = 0 (W = 0 there) */
-  double* impact_work;   /* f3r_impact_work_size */
+  double t;            /* time of the current state */
+  double energy0;      /* T + V at t = 0 (W = 0 there) */
+  double* impact_work; /* f3r_impact_work_size */
   long impacts;
   double impact_loss;
   f3r_impact_record last_impact;
@@ -65,9 +65,9 @@ static f3r_status consistent(f3r_sim* s, const double* q, const double* v, const
                                              N_VGetArrayPointer(s->yp), NULL, s->stepper.ws);
   s->stepper.yp_stale = 0;
   if (st != F3R_OK)
-    return f3r_error_set(err, st, "no consistent state at t = %.9g: %s", s->t,
-                         st == F3R_ERR_SINGULAR ? "the constrained mass matrix is singular"
-                                                : "non-finite values");
+    return f3r_error_set(
+        err, st, "no consistent state at t = %.9g: %s", s->t,
+        st == F3R_ERR_SINGULAR ? "the constrained mass matrix is singular" : "non-finite values");
   return F3R_OK;
 }
 
@@ -93,7 +93,8 @@ f3r_status f3r_sim_create(const f3r_model* model, const f3r_solver_settings* set
       s->settings.formulation != F3R_FORMULATION_MINIMAL) {
     st = f3r_error_set(err, F3R_ERR_ARGUMENT,
                        "formulation %d: a simulation integrates dae or minimal (index3 is for "
-                       "external solvers)", (int)s->settings.formulation);
+                       "external solvers)",
+                       (int)s->settings.formulation);
     goto fail;
   }
   if (!(s->settings.rtol > 0.0) || !(s->settings.atol > 0.0)) {
@@ -252,9 +253,9 @@ f3r_status f3r_sim_set_state(f3r_sim* s, const double pose[3], const double twis
   st = f3r_consistent_state(m, s->settings.formulation, nextafter(s->t, INFINITY), q, v, s->held,
                             lag_states(s, lag), 0.0, y, yp, NULL, s->out_ws);
   if (st != F3R_OK)
-    return f3r_error_set(err, st, "no consistent state at pose (%g, %g, %g): %s", pose[0], pose[1],
-                         pose[2], st == F3R_ERR_SINGULAR ? "the constrained mass matrix is singular"
-                                                         : "non-finite values");
+    return f3r_error_set(
+        err, st, "no consistent state at pose (%g, %g, %g): %s", pose[0], pose[1], pose[2],
+        st == F3R_ERR_SINGULAR ? "the constrained mass matrix is singular" : "non-finite values");
   double* sy = N_VGetArrayPointer(s->y);
   double* syp = N_VGetArrayPointer(s->yp);
   double keep_y[F3R_MAX_STATE], keep_yp[F3R_MAX_STATE];
@@ -284,7 +285,8 @@ static f3r_status handle_impact(f3r_sim* s, f3r_error* err) {
   const double* y = N_VGetArrayPointer(s->y);
   double q[F3R_MAX_Q], v[F3R_MAX_Q], v_after[F3R_MAX_Q], lag[3];
   f3r_status st = f3r_state_to_full(m, s->settings.formulation, y, q, v);
-  if (st != F3R_OK) return f3r_error_set(err, st, "end stop at t = %.9g: the loops do not close", s->t);
+  if (st != F3R_OK)
+    return f3r_error_set(err, st, "end stop at t = %.9g: the loops do not close", s->t);
   int legs_hit = 0;
   st = f3r_event_impact(m, s->t, s->stepper.root_info, q, v, &s->impact_window, v_after,
                         &s->last_impact, &legs_hit, s->impact_work, err);
@@ -316,7 +318,8 @@ f3r_status f3r_sim_advance(f3r_sim* s, double t_out, f3r_error* err) {
       limit = 1e300;
     double t_reached = s->t;
     int event = 0;
-    f3r_status st = s->ops->advance(&s->stepper, t_stop, limit, s->y, s->yp, &t_reached, &event, err);
+    f3r_status st =
+        s->ops->advance(&s->stepper, t_stop, limit, s->y, s->yp, &t_reached, &event, err);
     if (st != F3R_OK) {
       s->t = t_reached;
       return st;
@@ -376,7 +379,8 @@ const f3r_outputs* f3r_sim_outputs(f3r_sim* s) {
    * states, or the held force plus the scripted input it commanded), the rest is passive. */
   for (int i = 0; i < 3; ++i) {
     const int leg = F3R_FORCE_RHO + i, cylinder = F3R_FORCE_THETA + i;
-    o->actuator[leg] = m->n_lag ? lag[i] : s->held[leg] + f3r_input_value(&m->scene.inputs[leg], s->t);
+    o->actuator[leg] =
+        m->n_lag ? lag[i] : s->held[leg] + f3r_input_value(&m->scene.inputs[leg], s->t);
     o->actuator[cylinder] = s->held[cylinder] + f3r_input_value(&m->scene.inputs[cylinder], s->t);
   }
   for (int j = 0; j < F3R_Q_LEG_JOINTS; ++j) o->passive[j] = d->Q[j] - o->actuator[j];

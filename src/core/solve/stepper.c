@@ -30,9 +30,9 @@ ARKodeButcherTable f3r_stepper_load_table(int implicit, const char* name) {
 
 int f3r_stepper_explicit_rhs(realtype t, N_Vector y, N_Vector ydot, void* user) {
   f3r_stepper* st = user;
-  const f3r_status s = f3r_explicit_rhs(st->model, f3r_stepper_force_time(st, t),
-                                        N_VGetArrayPointer(y), st->held,
-                                        N_VGetArrayPointer(ydot), st->ws);
+  const f3r_status s =
+      f3r_explicit_rhs(st->model, f3r_stepper_force_time(st, t), N_VGetArrayPointer(y), st->held,
+                       N_VGetArrayPointer(ydot), st->ws);
   if (s == F3R_OK) return 0;
   st->recoverable++;
   return 1; /* recoverable: ARKODE retries with a smaller step */

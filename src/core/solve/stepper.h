@@ -21,26 +21,26 @@
 typedef struct {
   const f3r_model* model;
   f3r_solver_settings settings;
-  const double* held;     /* the simulation's held forces */
-  f3r_workspace* ws;      /* residual scratch */
+  const double* held; /* the simulation's held forces */
+  f3r_workspace* ws;  /* residual scratch */
   SUNContext ctx;
-  void* mem;              /* IDA or ERKStep memory */
-  N_Vector id, atol;      /* IDA only */
-  SUNMatrix J;            /* IDA, DIRK */
-  SUNLinearSolver ls;     /* IDA, DIRK */
-  f3r_sim_stats base;     /* statistics accumulated before the last restart */
-  int root_info[F3R_NROOTS];/* -1 where a root was found: 2i, 2i+1 end stops of leg i (min, max);
+  void* mem;                 /* IDA or ERKStep memory */
+  N_Vector id, atol;         /* IDA only */
+  SUNMatrix J;               /* IDA, DIRK */
+  SUNLinearSolver ls;        /* IDA, DIRK */
+  f3r_sim_stats base;        /* statistics accumulated before the last restart */
+  int root_info[F3R_NROOTS]; /* -1 where a root was found: 2i, 2i+1 end stops of leg i (min, max);
                             * F3R_COLLAPSE_ROOT + i: leg i reached the collapse guard */
-  long recoverable;       /* right-hand side calls that asked for a smaller step */
-  long jacobian_rhs_evals;/* DIRK: right-hand sides of its difference-quotient Jacobian */
-  double jacobian_cj;     /* IDA: cj of the last Jacobian, for the Schur solver's setup */
-  double t_segment;       /* the last (re)start. An explicit stage at exactly this time takes
+  long recoverable;          /* right-hand side calls that asked for a smaller step */
+  long jacobian_rhs_evals;   /* DIRK: right-hand sides of its difference-quotient Jacobian */
+  double jacobian_cj;        /* IDA: cj of the last Jacobian, for the Schur solver's setup */
+  double t_segment;          /* the last (re)start. An explicit stage at exactly this time takes
                            * the forces' right limit (f3r_stepper_force_time), as the consistent
                            * state there did: a held force that jumps at a breakpoint belongs to
                            * the segment after it */
-  int yp_stale;           /* 1: advance left y' unset (an explicit method needs no y'); the
+  int yp_stale;              /* 1: advance left y' unset (an explicit method needs no y'); the
                            * simulation evaluates it only when outputs ask for it */
-  char message[256];      /* the solver's last error message: the core never prints */
+  char message[256];         /* the solver's last error message: the core never prints */
 } f3r_stepper;
 
 typedef struct {

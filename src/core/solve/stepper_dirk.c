@@ -54,8 +54,7 @@ static f3r_status failed(f3r_stepper* st, f3r_error* err, const char* call, int 
     if (flag_ < 0) return failed(st, err, #call, flag_); \
   } while (0)
 
-static f3r_status dirk_setup(f3r_stepper* st, N_Vector y, N_Vector yp, double t0,
-                             f3r_error* err) {
+static f3r_status dirk_setup(f3r_stepper* st, N_Vector y, N_Vector yp, double t0, f3r_error* err) {
   (void)yp;
   st->t_segment = t0;
   if (st->settings.formulation != F3R_FORMULATION_MINIMAL)
@@ -117,8 +116,7 @@ static void dirk_stats(const f3r_stepper* st, f3r_sim_stats* out) {
   out->last_order = 0;
 }
 
-static f3r_status dirk_restart(f3r_stepper* st, N_Vector y, N_Vector yp, double t,
-                               f3r_error* err) {
+static f3r_status dirk_restart(f3r_stepper* st, N_Vector y, N_Vector yp, double t, f3r_error* err) {
   (void)yp;
   dirk_stats(st, &st->base);
   st->jacobian_rhs_evals = 0; /* now in base */

@@ -29,9 +29,9 @@ static int uses_schur(const f3r_solver_settings* s) {
 
 static int residual_fn(realtype t, N_Vector y, N_Vector yp, N_Vector res, void* user) {
   f3r_stepper* st = user;
-  const f3r_status s = f3r_residual(st->model, st->settings.formulation, t, N_VGetArrayPointer(y),
-                                    N_VGetArrayPointer(yp), st->held, N_VGetArrayPointer(res),
-                                    st->ws);
+  const f3r_status s =
+      f3r_residual(st->model, st->settings.formulation, t, N_VGetArrayPointer(y),
+                   N_VGetArrayPointer(yp), st->held, N_VGetArrayPointer(res), st->ws);
   if (s == F3R_OK) return 0;
   st->recoverable++;
   return 1; /* recoverable: IDA cuts the step */
@@ -42,9 +42,9 @@ static int jacobian_fn(realtype t, realtype cj, N_Vector y, N_Vector yp, N_Vecto
   (void)r, (void)t1, (void)t2, (void)t3;
   f3r_stepper* st = user;
   st->jacobian_cj = cj;
-  const f3r_status s = f3r_residual_jacobian(
-      st->model, st->settings.formulation, t, cj, N_VGetArrayPointer(y), N_VGetArrayPointer(yp),
-      st->held, SM_DATA_D(J), (int)SM_ROWS_D(J), st->ws);
+  const f3r_status s = f3r_residual_jacobian(st->model, st->settings.formulation, t, cj,
+                                             N_VGetArrayPointer(y), N_VGetArrayPointer(yp),
+                                             st->held, SM_DATA_D(J), (int)SM_ROWS_D(J), st->ws);
   if (s == F3R_OK) return 0;
   st->recoverable++;
   return 1;
@@ -56,14 +56,14 @@ static int root_fn(realtype t, N_Vector y, N_Vector yp, realtype* g, void* user)
 }
 
 static f3r_status failed(f3r_stepper* st, f3r_error* err, const char* call, int flag) {
-  return f3r_error_set(err, F3R_ERR_SOLVER, "%s failed: %s (%s)", call,
-                       IDAGetReturnFlagName(flag), st->message);
+  return f3r_error_set(err, F3R_ERR_SOLVER, "%s failed: %s (%s)", call, IDAGetReturnFlagName(flag),
+                       st->message);
 }
 
-#define CHECK(call)                                               \
-  do {                                                            \
-    const int flag_ = (call);                                     \
-    if (flag_ < 0) return failed(st, err, #call, flag_);          \
+#define CHECK(call)                                      \
+  do {                                                   \
+    const int flag_ = (call);                            \
+    if (flag_ < 0) return failed(st, err, #call, flag_); \
   } while (0)
 
 static f3r_status ida_setup(f3r_stepper* st, N_Vector y, N_Vector yp, double t0, f3r_error* err) {
@@ -81,7 +81,8 @@ static f3r_status ida_setup(f3r_stepper* st, N_Vector y, N_Vector yp, double t0,
   for (int n = 0; n < ny; ++n) atol[n] = st->settings.atol;
   if (st->settings.formulation == F3R_FORMULATION_DAE)
     for (int c = 0; c < 2 * F3R_NCON; ++c)
-      atol[2 * m->nq + c] = fmax(st->settings.atol * F3R_ALGEBRAIC_ATOL_SCALE, F3R_ALGEBRAIC_ATOL_MIN);
+      atol[2 * m->nq + c] =
+          fmax(st->settings.atol * F3R_ALGEBRAIC_ATOL_SCALE, F3R_ALGEBRAIC_ATOL_MIN);
   CHECK(IDASVtolerances(st->mem, st->settings.rtol, st->atol));
   CHECK(IDASetUserData(st->mem, st));
   CHECK(IDASetId(st->mem, st->id));
@@ -173,11 +174,10 @@ static f3r_status ida_advance(f3r_stepper* st, double tout, double tstop, N_Vect
     snprintf(message + strlen(message), sizeof message - strlen(message),
              "; the state is IDASolve's own");
   snprintf(st->message, sizeof st->message, "%s", message);
-  return f3r_error_set(err,
-                       flag == IDA_RES_FAIL || flag == IDA_REP_RES_ERR ? F3R_ERR_NONFINITE
-                                                                       : F3R_ERR_SOLVER,
-                       "IDASolve stopped at t = %.9g before %.9g: %s (%s)", t, tout,
-                       IDAGetReturnFlagName(flag), st->message);
+  return f3r_error_set(
+      err, flag == IDA_RES_FAIL || flag == IDA_REP_RES_ERR ? F3R_ERR_NONFINITE : F3R_ERR_SOLVER,
+      "IDASolve stopped at t = %.9g before %.9g: %s (%s)", t, tout, IDAGetReturnFlagName(flag),
+      st->message);
 }
 
 static void ida_release(f3r_stepper* st) {
