@@ -8,6 +8,7 @@
  *   flex3rpr_sim --geometry SCENE.yaml   (JSON for scripts/make_urdf.py)
  *   flex3rpr_sim --check SCENE.yaml [--set ...]   (loads and builds the model only) */
 #include <math.h>
+#include <stddef.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -55,82 +56,132 @@ typedef struct {
 } cli_options;
 
 static void usage(FILE* to) {
-  fprintf(to,
-          "usage: flex3rpr_sim SCENE.yaml [--out FILE.csv] [--formulation dae|minimal]\n"
-          "                    [--rtol R] [--atol A] [--max-order K] [--output-step DT] [--duration T]\n"
-          "                    [--fd-jacobian] [--dense-linear-solver] [--exact-kinematics]\n"
-          "                    [--ida | --erk | --dirk] [--table NAME]\n"
-          "                    [--stop-at-outputs] [--hold T:INDEX:VALUE ...]\n"
-          "                    [--accuracy METRES] [--linear-path FILE.csv] [--linearise FILE.mat]\n"
-          "                    [--set FIELD=VALUE ...]   (any scene field: --set links[0].modes=4)\n"
-          "       flex3rpr_sim --modal SCENE.yaml\n"
-          "       flex3rpr_sim --geometry SCENE.yaml\n"
-          "       flex3rpr_sim --check SCENE.yaml [--set FIELD=VALUE ...]   (load and build only)\n");
+  fprintf(
+      to,
+      "usage: flex3rpr_sim SCENE.yaml [--out FILE.csv] [--formulation dae|minimal]\n"
+      "                    [--rtol R] [--atol A] [--max-order K] [--output-step DT] [--duration "
+      "T]\n"
+      "                    [--fd-jacobian] [--dense-linear-solver] [--exact-kinematics]\n"
+      "                    [--ida | --erk | --dirk] [--table NAME]\n"
+      "                    [--stop-at-outputs] [--hold T:INDEX:VALUE ...]\n"
+      "                    [--accuracy METRES] [--linear-path FILE.csv] [--linearise FILE.mat]\n"
+      "                    [--set FIELD=VALUE ...]   (any scene field: --set links[0].modes=4)\n"
+      "       flex3rpr_sim --modal SCENE.yaml\n"
+      "       flex3rpr_sim --geometry SCENE.yaml\n"
+      "       flex3rpr_sim --check SCENE.yaml [--set FIELD=VALUE ...]   (load and build only)\n");
 }
 
 static int parse_number(const char* flag, const char* text, double* out) {
   char* end = NULL;
   const double v = text ? strtod(text, &end) : NAN;
   if (!text || end == text || *end || !isfinite(v) || v <= 0.0) {
-    fprintf(stderr, "flex3rpr_sim: %s needs a positive number, got '%s'\n", flag,
-            text ? text : "");
+    fprintf(stderr, "flex3rpr_sim: %s needs a positive number, got '%s'\n", flag, text ? text : "");
     return 0;
   }
   *out = v;
   return 1;
 }
 
-static int parse_args(int argc, char** argv, cli_options* o) {
-  memset(o, 0, sizeof *o);
-  for (int k = 1; k < argc; ++k) {
-    const char* a = argv[k];
-    const char* next = k + 1 < argc ? argv[k + 1] : NULL;
-    if (!strcmp(a, "--modal")) o->modal = 1;
-    else if (!strcmp(a, "--geometry")) o->geometry = 1;
-    else if (!strcmp(a, "--check")) o->check = 1;
-    else if (!strcmp(a, "--fd-jacobian")) o->fd_jacobian = 1;
-    else if (!strcmp(a, "--dense-linear-solver")) o->dense_linear_solver = 1;
-    else if (!strcmp(a, "--exact-kinematics")) o->exact_kinematics = 1;
-    else if (!strcmp(a, "--stop-at-outputs")) o->stop_at_outputs = 1;
-    else if (!strcmp(a, "--ida")) o->integrator_ida = 1;
-    else if (!strcmp(a, "--erk")) o->integrator_erk = 1;
-    else if (!strcmp(a, "--dirk")) o->integrator_dirk = 1;
-    else if (!strcmp(a, "--table") && next) { o->table = next; ++k; }
-    else if (!strcmp(a, "--hold") && next) {
-      hold_event* h = &o->holds[o->n_holds];
-      if (o->n_holds >= MAX_HOLDS || sscanf(next, "%lf:%d:%lf", &h->t, &h->index, &h->value) != 3 ||
-          !(h->t >= 0.0) || h->index < 0 || !isfinite(h->value)) {
-        fprintf(stderr, "flex3rpr_sim: --hold needs T:INDEX:VALUE (T >= 0), got '%s'\n", next);
-        return 0;
-      }
-      ++o->n_holds;
-      ++k;
-    }
-    else if (!strcmp(a, "--set") && next) {
-      if (o->n_sets >= MAX_SETS) {
-        fprintf(stderr, "flex3rpr_sim: at most %d --set overrides\n", MAX_SETS);
-        return 0;
-      }
-      o->sets[o->n_sets++] = next;
-      ++k;
-    }
-    else if (!strcmp(a, "--out") && next) { o->out_path = next; ++k; }
-    else if (!strcmp(a, "--linear-path") && next) { o->linear_path = next; ++k; }
-    else if (!strcmp(a, "--linearise") && next) { o->linearise_path = next; ++k; }
-    else if (!strcmp(a, "--accuracy")) { if (!parse_number(a, next, &o->accuracy)) return 0; ++k; }
-    else if (!strcmp(a, "--formulation") && next) { o->formulation = next; ++k; }
-    else if (!strcmp(a, "--rtol")) { if (!parse_number(a, next, &o->rtol)) return 0; ++k; }
-    else if (!strcmp(a, "--atol")) { if (!parse_number(a, next, &o->atol)) return 0; ++k; }
-    else if (!strcmp(a, "--max-order")) { if (!parse_number(a, next, &o->max_order)) return 0; ++k; }
-    else if (!strcmp(a, "--output-step")) { if (!parse_number(a, next, &o->output_step)) return 0; ++k; }
-    else if (!strcmp(a, "--duration")) { if (!parse_number(a, next, &o->duration)) return 0; ++k; }
-    else if (!strcmp(a, "--help") || !strcmp(a, "-h")) { usage(stdout); exit(0); }
-    else if (a[0] != '-' && !o->scene_path) o->scene_path = a;
-    else {
-      fprintf(stderr, "flex3rpr_sim: unknown or incomplete option '%s'\n", a);
+/* The options, by kind: a switch sets an int to 1, a path keeps its argument, a number takes a
+ * positive one (parse_number). */
+typedef struct {
+  const char* flag;
+  size_t offset;
+} option_field;
+
+static const option_field switches[] = {
+    {"--modal", offsetof(cli_options, modal)},
+    {"--geometry", offsetof(cli_options, geometry)},
+    {"--check", offsetof(cli_options, check)},
+    {"--fd-jacobian", offsetof(cli_options, fd_jacobian)},
+    {"--dense-linear-solver", offsetof(cli_options, dense_linear_solver)},
+    {"--exact-kinematics", offsetof(cli_options, exact_kinematics)},
+    {"--stop-at-outputs", offsetof(cli_options, stop_at_outputs)},
+    {"--ida", offsetof(cli_options, integrator_ida)},
+    {"--erk", offsetof(cli_options, integrator_erk)},
+    {"--dirk", offsetof(cli_options, integrator_dirk)},
+};
+static const option_field paths[] = {
+    {"--table", offsetof(cli_options, table)},
+    {"--out", offsetof(cli_options, out_path)},
+    {"--linear-path", offsetof(cli_options, linear_path)},
+    {"--linearise", offsetof(cli_options, linearise_path)},
+    {"--formulation", offsetof(cli_options, formulation)},
+};
+static const option_field numbers[] = {
+    {"--accuracy", offsetof(cli_options, accuracy)},
+    {"--rtol", offsetof(cli_options, rtol)},
+    {"--atol", offsetof(cli_options, atol)},
+    {"--max-order", offsetof(cli_options, max_order)},
+    {"--output-step", offsetof(cli_options, output_step)},
+    {"--duration", offsetof(cli_options, duration)},
+};
+#define COUNT(a) (sizeof(a) / sizeof((a)[0]))
+
+static const option_field* find_option(const option_field* table, size_t n, const char* flag) {
+  for (size_t k = 0; k < n; ++k)
+    if (!strcmp(table[k].flag, flag)) return &table[k];
+  return NULL;
+}
+
+/* --hold T:INDEX:VALUE and --set FIELD=VALUE, which collect. 1 taken, 0 an error (said). */
+static int collect_option(const char* a, const char* next, cli_options* o) {
+  if (!strcmp(a, "--hold")) {
+    hold_event* h = &o->holds[o->n_holds];
+    if (o->n_holds >= MAX_HOLDS || sscanf(next, "%lf:%d:%lf", &h->t, &h->index, &h->value) != 3 ||
+        !(h->t >= 0.0) || h->index < 0 || !isfinite(h->value)) {
+      fprintf(stderr, "flex3rpr_sim: --hold needs T:INDEX:VALUE (T >= 0), got '%s'\n", next);
       return 0;
     }
+    ++o->n_holds;
+    return 1;
   }
+  if (o->n_sets >= MAX_SETS) {
+    fprintf(stderr, "flex3rpr_sim: at most %d --set overrides\n", MAX_SETS);
+    return 0;
+  }
+  o->sets[o->n_sets++] = next;
+  return 1;
+}
+
+/* One argument (and its value, which *k then passes): 1 taken, 0 an error (said). */
+static int parse_arg(int argc, char** argv, int* k, cli_options* o) {
+  const char* a = argv[*k];
+  const char* next = *k + 1 < argc ? argv[*k + 1] : NULL;
+  const option_field* f;
+  if ((f = find_option(switches, COUNT(switches), a))) {
+    *(int*)((char*)o + f->offset) = 1;
+    return 1;
+  }
+  if (next && (f = find_option(paths, COUNT(paths), a))) {
+    *(const char**)((char*)o + f->offset) = next;
+    ++*k;
+    return 1;
+  }
+  if ((f = find_option(numbers, COUNT(numbers), a))) {
+    ++*k;
+    return parse_number(a, next, (double*)((char*)o + f->offset));
+  }
+  if (next && (!strcmp(a, "--hold") || !strcmp(a, "--set"))) {
+    ++*k;
+    return collect_option(a, next, o);
+  }
+  if (!strcmp(a, "--help") || !strcmp(a, "-h")) {
+    usage(stdout);
+    exit(0);
+  }
+  if (a[0] != '-' && !o->scene_path) {
+    o->scene_path = a;
+    return 1;
+  }
+  fprintf(stderr, "flex3rpr_sim: unknown or incomplete option '%s'\n", a);
+  return 0;
+}
+
+static int parse_args(int argc, char** argv, cli_options* o) {
+  memset(o, 0, sizeof *o);
+  for (int k = 1; k < argc; ++k)
+    if (!parse_arg(argc, argv, &k, o)) return 0;
   if (!o->scene_path) {
     fprintf(stderr, "flex3rpr_sim: no scene given\n");
     return 0;
@@ -142,16 +193,16 @@ static int parse_args(int argc, char** argv, cli_options* o) {
   f3r_formulation formulation;
   if (o->formulation && f3r_formulation_from_name(o->formulation, &formulation) != 0) {
     fprintf(stderr, "flex3rpr_sim: --formulation must be %s or %s, got '%s'\n",
-            f3r_formulation_name(F3R_FORMULATION_DAE), f3r_formulation_name(F3R_FORMULATION_MINIMAL),
-            o->formulation);
+            f3r_formulation_name(F3R_FORMULATION_DAE),
+            f3r_formulation_name(F3R_FORMULATION_MINIMAL), o->formulation);
     return 0;
   }
   return 1;
 }
 
 static void write_header(FILE* f, const f3r_model* m) {
-  static const char* rigid[9] = {"rho_1", "rho_2", "rho_3", "theta_1", "theta_2", "theta_3",
-                                 "x_p", "y_p", "phi_p"};
+  static const char* rigid[9] = {"rho_1",   "rho_2", "rho_3", "theta_1", "theta_2",
+                                 "theta_3", "x_p",   "y_p",   "phi_p"};
   fprintf(f, "t");
   for (int pass = 0; pass < 2; ++pass) {
     const char* suffix = pass ? "_dot" : "";
@@ -181,16 +232,20 @@ static void write_row(FILE* f, const f3r_model* m, const f3r_outputs* o) {
  * takes them from here, so that the URDF and the node's model come from one scene. */
 static void print_geometry(const f3r_model* m) {
   const f3r_scene* s = &m->scene;
-  printf("{\"base_joint\": [[%.17g, %.17g], [%.17g, %.17g], [%.17g, %.17g]],\n", m->base_joint[0][0],
-         m->base_joint[0][1], m->base_joint[1][0], m->base_joint[1][1], m->base_joint[2][0], m->base_joint[2][1]);
-  printf(" \"platform_angle\": [%.17g, %.17g, %.17g], \"platform_radius\": %.17g,\n", m->platform_angle[0],
-         m->platform_angle[1], m->platform_angle[2], m->platform_radius);
-  printf(" \"platform_mass\": %.17g, \"platform_inertia\": %.17g,\n", m->platform_mass, m->platform_inertia);
-  printf(" \"link_length\": %.17g, \"link_diameter\": %.17g, \"link_mass\": %.17g,\n", m->link_length,
-         s->link_diameter, m->link_mass);
-  printf(" \"cylinder_length\": %.17g, \"cylinder_inner_diameter\": %.17g, \"cylinder_outer_diameter\": %.17g,"
-         " \"cylinder_mass\": %.17g,\n", m->cylinder_length, s->cylinder_inner_diameter,
-         s->cylinder_outer_diameter, m->cylinder_mass);
+  printf("{\"base_joint\": [[%.17g, %.17g], [%.17g, %.17g], [%.17g, %.17g]],\n",
+         m->base_joint[0][0], m->base_joint[0][1], m->base_joint[1][0], m->base_joint[1][1],
+         m->base_joint[2][0], m->base_joint[2][1]);
+  printf(" \"platform_angle\": [%.17g, %.17g, %.17g], \"platform_radius\": %.17g,\n",
+         m->platform_angle[0], m->platform_angle[1], m->platform_angle[2], m->platform_radius);
+  printf(" \"platform_mass\": %.17g, \"platform_inertia\": %.17g,\n", m->platform_mass,
+         m->platform_inertia);
+  printf(" \"link_length\": %.17g, \"link_diameter\": %.17g, \"link_mass\": %.17g,\n",
+         m->link_length, s->link_diameter, m->link_mass);
+  printf(
+      " \"cylinder_length\": %.17g, \"cylinder_inner_diameter\": %.17g, "
+      "\"cylinder_outer_diameter\": %.17g,"
+      " \"cylinder_mass\": %.17g,\n",
+      m->cylinder_length, s->cylinder_inner_diameter, s->cylinder_outer_diameter, m->cylinder_mass);
   printf(" \"stroke_min\": %.17g, \"stroke_max\": %.17g, \"end_stops\": %s}\n", m->stroke_min,
          m->stroke_max, m->end_stops ? "true" : "false");
 }
@@ -217,21 +272,27 @@ static int write_linear_path(const f3r_model* m, const char* path) {
   f3r_error err = {0};
   FILE* f = NULL;
   int rc = 1, unreachable = 0;
-  if (!pose) fprintf(stderr, "flex3rpr_sim: out of memory\n");
+  if (!pose)
+    fprintf(stderr, "flex3rpr_sim: out of memory\n");
   else if (f3r_linearise(m, &lin, &err) != F3R_OK ||
-           f3r_linear_response(lin, m, m->scene.output_step, count, 1, pose, NULL, &err) != F3R_OK ||
-           f3r_linear_response(lin, m, m->scene.output_step, count, 2, pose + 3 * count, &unreachable, &err) != F3R_OK)
+           f3r_linear_response(lin, m, m->scene.output_step, count, 1, pose, NULL, &err) !=
+               F3R_OK ||
+           f3r_linear_response(lin, m, m->scene.output_step, count, 2, pose + 3 * count,
+                               &unreachable, &err) != F3R_OK)
     fprintf(stderr, "flex3rpr_sim: %s\n", err.message);
-  else if (!(f = fopen(path, "w"))) fprintf(stderr, "flex3rpr_sim: cannot write %s\n", path);
+  else if (!(f = fopen(path, "w")))
+    fprintf(stderr, "flex3rpr_sim: cannot write %s\n", path);
   else {
     fprintf(f, "t,x_p,y_p,phi_p,x_p_2,y_p_2,phi_p_2\n");
     for (int k = 0; k < count; ++k) {
       const double *a = pose + 3 * k, *b = pose + 3 * (count + k);
-      fprintf(f, "%.10g,%.15g,%.15g,%.15g,%.15g,%.15g,%.15g\n", k * m->scene.output_step, a[0], a[1],
-              a[2], b[0], b[1], b[2]);
+      fprintf(f, "%.10g,%.15g,%.15g,%.15g,%.15g,%.15g,%.15g\n", k * m->scene.output_step, a[0],
+              a[1], a[2], b[0], b[1], b[2]);
     }
     fclose(f);
-    if (unreachable) printf("linear path: %d samples beyond the reachable poses (no correction there)\n", unreachable);
+    if (unreachable)
+      printf("linear path: %d samples beyond the reachable poses (no correction there)\n",
+             unreachable);
     rc = 0;
   }
   f3r_linear_destroy(lin);
@@ -259,8 +320,10 @@ static int write_state_space(const f3r_model* m, const char* path) {
     fprintf(stderr, "flex3rpr_sim: --linearise: %s\n", why);
     rc = 1;
   } else {
-    printf("linearised at pose (%.9g, %.9g, %.9g): wrote %s (MATLAB level 4) and %s: nx %d, nu %d, "
-           "ny %d\n", ss->x0[0], ss->x0[1], ss->x0[2], path, json, ss->nx, ss->nu, ss->ny);
+    printf(
+        "linearised at pose (%.9g, %.9g, %.9g): wrote %s (MATLAB level 4) and %s: nx %d, nu %d, "
+        "ny %d\n",
+        ss->x0[0], ss->x0[1], ss->x0[2], path, json, ss->nx, ss->nu, ss->ny);
   }
   f3r_state_space_destroy(ss);
   return rc;
@@ -293,7 +356,8 @@ static void apply_options(const cli_options* o, f3r_scene* scene) {
   if (o->rtol > 0) scene->explicit_settings |= F3R_EXPLICIT_RTOL;
   if (o->atol > 0) scene->explicit_settings |= F3R_EXPLICIT_ATOL;
   if (o->exact_kinematics) scene->explicit_settings |= F3R_EXPLICIT_EXACT_KINEMATICS;
-  if (o->integrator_ida || o->integrator_erk || o->integrator_dirk) scene->explicit_settings |= F3R_EXPLICIT_INTEGRATOR;
+  if (o->integrator_ida || o->integrator_erk || o->integrator_dirk)
+    scene->explicit_settings |= F3R_EXPLICIT_INTEGRATOR;
   if (o->table) scene->explicit_settings |= F3R_EXPLICIT_TABLE;
   if (o->rtol > 0) scene->rtol = o->rtol;
   if (o->max_order > 0) scene->max_order = (int)o->max_order;
@@ -314,7 +378,8 @@ static void apply_options(const cli_options* o, f3r_scene* scene) {
 static int resolve_model(const cli_options* o, f3r_scene* scene, f3r_accuracy_choice* choice,
                          double* choose_cpu, f3r_model** model) {
   f3r_error err = {0};
-  const f3r_scene_options source = {.accuracy = o->accuracy, .overrides = o->sets, .override_count = o->n_sets};
+  const f3r_scene_options source = {
+      .accuracy = o->accuracy, .overrides = o->sets, .override_count = o->n_sets};
   if (f3r_scene_load_with(o->scene_path, &source, scene, &err) != F3R_OK) {
     fprintf(stderr, "flex3rpr_sim: %s\n", err.message);
     return 0;
@@ -334,14 +399,17 @@ static int resolve_model(const cli_options* o, f3r_scene* scene, f3r_accuracy_ch
   return 1;
 }
 
-static void report_choice(const cli_options* o, const f3r_scene* scene, const f3r_accuracy_choice* choice,
-                          double choose_cpu) {
+static void report_choice(const cli_options* o, const f3r_scene* scene,
+                          const f3r_accuracy_choice* choice, double choose_cpu) {
   if (choice->summary[0]) printf("%s\n", choice->summary);
   if (scene->accuracy > 0 && !choice->request_met)
-    fprintf(stderr, "flex3rpr_sim: warning: %s: the accuracy request %g m is not met: estimated %.3g m (see the summary)\n",
+    fprintf(stderr,
+            "flex3rpr_sim: warning: %s: the accuracy request %g m is not met: estimated %.3g m "
+            "(see the summary)\n",
             o->scene_path, scene->accuracy, choice->estimated_error);
   if (scene->accuracy > 0)
-    printf("choice cpu time     %.6f s (%d linear models)\n", choose_cpu, choice->linear_evaluations);
+    printf("choice cpu time     %.6f s (%d linear models)\n", choose_cpu,
+           choice->linear_evaluations);
 }
 
 /* What a run measures for its summary. */
@@ -352,7 +420,8 @@ typedef struct {
 } run_stats;
 
 /* The mode shapes of every link at its beam_points stations (beam_points <= 101). */
-static void eval_mode_shapes(const f3r_model* model, int beam_points, double shapes[3][101][F3R_MAX_MODES]) {
+static void eval_mode_shapes(const f3r_model* model, int beam_points,
+                             double shapes[3][101][F3R_MAX_MODES]) {
   for (int i = 0; i < 3; ++i)
     for (int k = 0; k < beam_points; ++k)
       for (int j = 0; j < model->link[i].modes; ++j) {
@@ -395,8 +464,8 @@ static f3r_status apply_holds(const cli_options* o, double output_step, f3r_sim*
 
 /* Advances to the scene's duration output step by output step, writing rows to csv (when not
  * NULL); returns 1 when the simulation failed (reported), 0 otherwise. */
-static int run_outputs(const cli_options* o, const f3r_scene* scene, const f3r_model* model, f3r_sim* sim,
-                       FILE* csv, run_stats* r) {
+static int run_outputs(const cli_options* o, const f3r_scene* scene, const f3r_model* model,
+                       f3r_sim* sim, FILE* csv, run_stats* r) {
   static double shapes[3][101][F3R_MAX_MODES]; /* mode shapes at the stations */
   eval_mode_shapes(model, scene->beam_points, shapes);
   const long steps = (long)llround(scene->duration / scene->output_step);
@@ -451,13 +520,15 @@ static void print_summary(const cli_options* o, const f3r_scene* scene, const f3
          r->cpu_integrating, r->cpu_outputs);
   printf("real-time factor    %.3g (%.3g with the outputs)\n",
          r->cpu_integrating > 0 ? out->t / r->cpu_integrating : INFINITY,
-         r->cpu_integrating + r->cpu_outputs > 0 ? out->t / (r->cpu_integrating + r->cpu_outputs) : INFINITY);
+         r->cpu_integrating + r->cpu_outputs > 0 ? out->t / (r->cpu_integrating + r->cpu_outputs)
+                                                 : INFINITY);
   printf("max constraint res  %.3e m\n", r->max_constraint);
   printf("energy balance err  %.3e J (%.3e of max T+V)\n", r->max_energy_error,
          r->max_energy > 0 ? r->max_energy_error / r->max_energy : 0.0);
   printf("max deflection      %.6e m (largest |w| at %d stations a link; at the tips %.6e m)\n",
          r->max_deflection, scene->beam_points, r->max_tip);
-  printf("final pose          x_p %.9f y_p %.9f phi_p %.9f\n", out->q[F3R_Q_X], out->q[F3R_Q_Y], out->q[F3R_Q_PHI]);
+  printf("final pose          x_p %.9f y_p %.9f phi_p %.9f\n", out->q[F3R_Q_X], out->q[F3R_Q_Y],
+         out->q[F3R_Q_PHI]);
   if (o->out_path) printf("csv                 %s\n", o->out_path);
 }
 
@@ -470,7 +541,8 @@ static int simulate(const cli_options* o, const f3r_scene* scene, const f3r_mode
   settings.stop_at_outputs = o->stop_at_outputs;
   for (int h = 0; h < o->n_holds; ++h)
     if (o->holds[h].index >= model->nq) {
-      fprintf(stderr, "flex3rpr_sim: --hold index %d is beyond nq = %d\n", o->holds[h].index, model->nq);
+      fprintf(stderr, "flex3rpr_sim: --hold index %d is beyond nq = %d\n", o->holds[h].index,
+              model->nq);
       return 2;
     }
   f3r_error err = {0};

@@ -10,7 +10,7 @@ typedef struct {
   yaml_document_t* doc;
   const char* path; /* the scene file, for messages */
   f3r_error* err;
-  int first_node;   /* the first node id the override added, 0: none yet */
+  int first_node; /* the first node id the override added, 0: none yet */
 } overriding;
 
 static const char* scalar(const yaml_node_t* n) {
@@ -29,15 +29,20 @@ static int copy_node(yaml_document_t* to, yaml_document_t* from, int id) {
     const int len = (int)(n->data.sequence.items.top - n->data.sequence.items.start);
     copy = yaml_document_add_sequence(to, NULL, n->data.sequence.style);
     for (int k = 0; copy && k < len; ++k) { /* adding nodes may move them: look `n` up again */
-      const int item = copy_node(to, from, yaml_document_get_node(from, id)->data.sequence.items.start[k]);
+      const int item =
+          copy_node(to, from, yaml_document_get_node(from, id)->data.sequence.items.start[k]);
       if (!item || !yaml_document_append_sequence_item(to, copy, item)) copy = 0;
     }
   } else if (n->type == YAML_MAPPING_NODE) {
     const int len = (int)(n->data.mapping.pairs.top - n->data.mapping.pairs.start);
     copy = yaml_document_add_mapping(to, NULL, n->data.mapping.style);
     for (int k = 0; copy && k < len; ++k) {
-      const int key = copy_node(to, from, yaml_document_get_node(from, id)->data.mapping.pairs.start[k].key);
-      const int value = key ? copy_node(to, from, yaml_document_get_node(from, id)->data.mapping.pairs.start[k].value) : 0;
+      const int key =
+          copy_node(to, from, yaml_document_get_node(from, id)->data.mapping.pairs.start[k].key);
+      const int value =
+          key ? copy_node(to, from,
+                          yaml_document_get_node(from, id)->data.mapping.pairs.start[k].value)
+              : 0;
       if (!value || !yaml_document_append_mapping_pair(to, copy, key, value)) copy = 0;
     }
   }
@@ -65,7 +70,8 @@ static int parse_path(const char* path, size_t length, path_step* steps, int cap
     size_t k = 0;
     while (i < length && path[i] != '.' && path[i] != '[') {
       const char c = path[i++];
-      if (!(c == '_' || (c >= 'a' && c <= 'z') || (c >= 'A' && c <= 'Z') || (c >= '0' && c <= '9')) ||
+      if (!(c == '_' || (c >= 'a' && c <= 'z') || (c >= 'A' && c <= 'Z') ||
+            (c >= '0' && c <= '9')) ||
           k + 1 >= sizeof st->key)
         return 0;
       st->key[k++] = c;
@@ -88,7 +94,9 @@ static int parse_path(const char* path, size_t length, path_step* steps, int cap
   return n;
 }
 
-static int node_count(const yaml_document_t* doc) { return (int)(doc->nodes.top - doc->nodes.start); }
+static int node_count(const yaml_document_t* doc) {
+  return (int)(doc->nodes.top - doc->nodes.start);
+}
 
 /* From here on, what the document gains is the override's: its value and any field it adds (a
  * link list made before from the file's shared mapping keeps pointing at the file). */
@@ -108,8 +116,41 @@ static int pair_count(const yaml_node_t* map) {
 /* Sets the field `steps` names under mapping `node` (a sequence of mappings: each of them) to a
  * copy of `value` of `from`; missing mappings on the way are made. `field` grows with the path for
  * messages. */
-static f3r_status set_field(overriding* O, int node, const path_step* steps, int count, yaml_document_t* from,
-                            int value, char* field, size_t field_size, const char* text) {
+/* A field the file leaves to its default, added under node: the value itself when it is the
+ * path's last step, else an empty mapping for the next step (*child). */
+static f3r_status add_field(overriding* O, int node, const path_step* step, int last,
+                            yaml_document_t* from, int value, const char* field, const char* text,
+                            int* child) {
+  if (step->index >= 0)
+    return f3r_error_set(O->err, F3R_ERR_SCENE,
+                         "--set %s: %s is not in %s, so [%d] has nothing to index", text, field,
+                         O->path, step->index);
+  override_nodes_begin(O);
+  const int key =
+      yaml_document_add_scalar(O->doc, NULL, (yaml_char_t*)step->key, -1, YAML_PLAIN_SCALAR_STYLE);
+  *child = !key   ? 0
+           : last ? copy_value(O, from, value)
+                  : yaml_document_add_mapping(O->doc, NULL, YAML_BLOCK_MAPPING_STYLE);
+  if (!*child || !yaml_document_append_mapping_pair(O->doc, node, key, *child))
+    return f3r_error_set(O->err, F3R_ERR_MEMORY, "--set %s: out of memory", text);
+  return F3R_OK;
+}
+
+/* One mapping for all three links (pair `found` of node, value `links`) becomes a list of three
+ * copies, of which an indexed override then sets one. The list, or 0 out of memory. */
+static int links_as_list(overriding* O, int node, int found, int links) {
+  const int list = yaml_document_add_sequence(O->doc, NULL, YAML_BLOCK_SEQUENCE_STYLE);
+  for (int k = 0; list && k < 3; ++k) {
+    const int copy = copy_node(O->doc, O->doc, links);
+    if (!copy || !yaml_document_append_sequence_item(O->doc, list, copy)) return 0;
+  }
+  if (list) yaml_document_get_node(O->doc, node)->data.mapping.pairs.start[found].value = list;
+  return list;
+}
+
+static f3r_status set_field(overriding* O, int node, const path_step* steps, int count,
+                            yaml_document_t* from, int value, char* field, size_t field_size,
+                            const char* text) {
   const yaml_node_t* n = yaml_document_get_node(O->doc, node);
   if (n->type == YAML_SEQUENCE_NODE) { /* "links.modes": every link */
     const int len = (int)(n->data.sequence.items.top - n->data.sequence.items.start);
@@ -136,40 +177,26 @@ static f3r_status set_field(overriding* O, int node, const path_step* steps, int
   }
   const int last = count == 1;
   if (found < 0) { /* a field the file leaves to its default */
-    if (step->index >= 0)
-      return f3r_error_set(O->err, F3R_ERR_SCENE, "--set %s: %s is not in %s, so [%d] has nothing to index",
-                           text, field, O->path, step->index);
-    override_nodes_begin(O);
-    const int key = yaml_document_add_scalar(O->doc, NULL, (yaml_char_t*)step->key, -1, YAML_PLAIN_SCALAR_STYLE);
-    const int child = !key ? 0 : last ? copy_value(O, from, value)
-                                      : yaml_document_add_mapping(O->doc, NULL, YAML_BLOCK_MAPPING_STYLE);
-    if (!child || !yaml_document_append_mapping_pair(O->doc, node, key, child))
-      return f3r_error_set(O->err, F3R_ERR_MEMORY, "--set %s: out of memory", text);
-    if (!last) return set_field(O, child, steps + 1, count - 1, from, value, field, field_size, text);
-    return F3R_OK;
+    int child = 0;
+    const f3r_status st = add_field(O, node, step, last, from, value, field, text, &child);
+    if (st != F3R_OK || last) return st;
+    return set_field(O, child, steps + 1, count - 1, from, value, field, field_size, text);
   }
   int child = n->data.mapping.pairs.start[found].value;
   if (step->index >= 0) {
     const yaml_node_t* c = yaml_document_get_node(O->doc, child);
     if (c->type == YAML_MAPPING_NODE && !strcmp(step->key, "links") && mark == 0) {
-      /* one mapping for all three links: three copies, of which one is set */
-      const int list = yaml_document_add_sequence(O->doc, NULL, YAML_BLOCK_SEQUENCE_STYLE);
-      for (int k = 0; list && k < 3; ++k) {
-        const int copy = copy_node(O->doc, O->doc, child);
-        if (!copy || !yaml_document_append_sequence_item(O->doc, list, copy))
-          return f3r_error_set(O->err, F3R_ERR_MEMORY, "--set %s: out of memory", text);
-      }
-      if (!list) return f3r_error_set(O->err, F3R_ERR_MEMORY, "--set %s: out of memory", text);
-      yaml_document_get_node(O->doc, node)->data.mapping.pairs.start[found].value = list;
-      child = list;
+      child = links_as_list(O, node, found, child);
+      if (!child) return f3r_error_set(O->err, F3R_ERR_MEMORY, "--set %s: out of memory", text);
       c = yaml_document_get_node(O->doc, child);
     }
     if (c->type != YAML_SEQUENCE_NODE)
-      return f3r_error_set(O->err, F3R_ERR_SCENE, "--set %s: %s in %s is not a list", text, field, O->path);
+      return f3r_error_set(O->err, F3R_ERR_SCENE, "--set %s: %s in %s is not a list", text, field,
+                           O->path);
     const int len = (int)(c->data.sequence.items.top - c->data.sequence.items.start);
     if (step->index >= len)
-      return f3r_error_set(O->err, F3R_ERR_SCENE, "--set %s: %s has %d entries in %s (index 0..%d)", text,
-                           field, len, O->path, len - 1);
+      return f3r_error_set(O->err, F3R_ERR_SCENE, "--set %s: %s has %d entries in %s (index 0..%d)",
+                           text, field, len, O->path, len - 1);
     snprintf(field + strlen(field), field_size - strlen(field), "[%d]", step->index);
     if (last) {
       const int copy = copy_value(O, from, value);
@@ -196,17 +223,19 @@ f3r_status f3r_scene_apply_override(yaml_document_t* doc, const char* path, cons
   path_step steps[16];
   const int count = eq ? parse_path(text, (size_t)(eq - text), steps, 16) : 0;
   if (!count)
-    return f3r_error_set(O->err, F3R_ERR_SCENE,
-                         "--set %s: expected FIELD=VALUE with FIELD like links[0].modes or effects.payload.mass",
-                         text);
+    return f3r_error_set(
+        O->err, F3R_ERR_SCENE,
+        "--set %s: expected FIELD=VALUE with FIELD like links[0].modes or effects.payload.mass",
+        text);
   if (!eq[1]) return f3r_error_set(O->err, F3R_ERR_SCENE, "--set %s: no value after '='", text);
   yaml_parser_t parser;
   yaml_document_t value;
   yaml_parser_initialize(&parser);
   yaml_parser_set_input_string(&parser, (const unsigned char*)(eq + 1), strlen(eq + 1));
   if (!yaml_parser_load(&parser, &value)) {
-    const f3r_status st = f3r_error_set(O->err, F3R_ERR_SCENE, "--set %s: the value is not YAML: %s", text,
-                                        parser.problem ? parser.problem : "?");
+    const f3r_status st =
+        f3r_error_set(O->err, F3R_ERR_SCENE, "--set %s: the value is not YAML: %s", text,
+                      parser.problem ? parser.problem : "?");
     yaml_parser_delete(&parser);
     return st;
   }
