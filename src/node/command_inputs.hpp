@@ -60,7 +60,6 @@ class CommandInputs {
   std::vector<double> scratch_, total_;
   std::deque<Queued> queue_;  // lockstep only
   uint64_t rejected_ = 0;
-  double now_ = 0.0;
   ros::Subscriber command_sub_, group_sub_, wrench_sub_;
   std::unique_ptr<tf2_ros::Buffer> tf_buffer_;
   std::unique_ptr<tf2_ros::TransformListener> tf_listener_;
