@@ -347,47 +347,91 @@ static double monotonic_seconds(void) {
   return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
 }
 
-/* Options on the command line are explicit settings: the accuracy knob keeps them. */
-static void apply_options(const cli_options* o, f3r_scene* scene) {
-  if (o->formulation) {
-    f3r_formulation_from_name(o->formulation, &scene->formulation); /* parse_args checked it */
-    scene->explicit_settings |= F3R_EXPLICIT_FORMULATION;
-  }
-  if (o->rtol > 0) scene->explicit_settings |= F3R_EXPLICIT_RTOL;
-  if (o->atol > 0) scene->explicit_settings |= F3R_EXPLICIT_ATOL;
-  if (o->exact_kinematics) scene->explicit_settings |= F3R_EXPLICIT_EXACT_KINEMATICS;
-  if (o->integrator_ida || o->integrator_erk || o->integrator_dirk)
-    scene->explicit_settings |= F3R_EXPLICIT_INTEGRATOR;
-  if (o->table) scene->explicit_settings |= F3R_EXPLICIT_TABLE;
-  if (o->rtol > 0) scene->rtol = o->rtol;
-  if (o->max_order > 0) scene->max_order = (int)o->max_order;
-  if (o->atol > 0) scene->atol = o->atol;
-  if (o->output_step > 0) scene->output_step = o->output_step;
-  if (o->duration > 0) scene->duration = o->duration;
-  if (o->exact_kinematics) scene->exact_kinematics = 1;
-  if (o->integrator_ida) scene->integrator = F3R_INTEGRATOR_IDA;
-  if (o->integrator_erk || o->integrator_dirk) {
-    scene->integrator = o->integrator_erk ? F3R_INTEGRATOR_ERK : F3R_INTEGRATOR_DIRK;
-    scene->formulation = F3R_FORMULATION_MINIMAL;
-  }
-  if (o->table) snprintf(scene->table, sizeof scene->table, "%s", o->table);
+/* The scene fields the options set, as overrides "FIELD=VALUE" for the loader (numbers with
+ * %.17g, which round-trip): they pass the file's checks and fix what the file would, so the
+ * accuracy knob keeps them. */
+#define MAX_OPTION_SETS 12
+typedef struct {
+  char own[MAX_OPTION_SETS][96];
+  const char* all[MAX_OPTION_SETS + MAX_SETS];
+  int n_own, n_all;
+} override_list;
+
+static void add_number(override_list* l, const char* field, double value) {
+  if (value > 0) snprintf(l->own[l->n_own++], sizeof l->own[0], "%s=%.17g", field, value);
 }
 
-/* The scene (file, overrides, options), what the accuracy knob chose for it in *choose_cpu s,
+/* A string as a YAML single-quoted scalar, so that the name is read as it is. */
+static void add_string(override_list* l, const char* field, const char* value) {
+  char* out = l->own[l->n_own++];
+  size_t n = (size_t)snprintf(out, sizeof l->own[0], "%s='", field);
+  for (const char* c = value; *c && n + 3 < sizeof l->own[0]; ++c) {
+    if (*c == '\'') out[n++] = '\'';
+    out[n++] = *c;
+  }
+  snprintf(out + n, sizeof l->own[0] - n, "'");
+}
+
+/* The options' overrides, then the user's --set: applied in order, so a --set wins over an
+ * option (--set solver.rtol=1e-5 --rtol 1e-6 runs at 1e-5). --erk and --dirk force the minimal
+ * formulation, over --formulation but not over a --set, with force_minimal only (resolve_model). */
+static void build_overrides(const cli_options* o, int force_minimal, override_list* l) {
+  memset(l, 0, sizeof *l);
+  if (o->formulation) add_string(l, "solver.formulation", o->formulation);
+  if (o->integrator_ida) add_string(l, "solver.integrator", "ida");
+  if (o->integrator_erk || o->integrator_dirk) {
+    add_string(l, "solver.integrator", o->integrator_erk ? "erk" : "dirk");
+    if (force_minimal) add_string(l, "solver.formulation", "minimal");
+  }
+  if (o->table) add_string(l, "solver.table", o->table);
+  add_number(l, "solver.rtol", o->rtol);
+  add_number(l, "solver.atol", o->atol);
+  add_number(l, "solver.max_order", o->max_order);
+  add_number(l, "run.output_step", o->output_step);
+  add_number(l, "run.duration", o->duration);
+  if (o->exact_kinematics)
+    snprintf(l->own[l->n_own++], sizeof l->own[0], "%s", "effects.exact_kinematics=true");
+  for (int k = 0; k < l->n_own; ++k) l->all[l->n_all++] = l->own[k];
+  for (int k = 0; k < o->n_sets; ++k) l->all[l->n_all++] = o->sets[k];
+}
+
+/* A message about an option's override ("--set solver.rtol=0.5: ...") names the scene instead,
+ * as it did when the options were written into the loaded scene. */
+static void report_load_error(const cli_options* o, const override_list* l, const f3r_error* err) {
+  for (int k = 0; k < l->n_own; ++k) {
+    char prefix[128];
+    const int n = snprintf(prefix, sizeof prefix, "--set %s: ", l->own[k]);
+    if (!strncmp(err->message, prefix, (size_t)n)) {
+      fprintf(stderr, "flex3rpr_sim: %s: %s\n", o->scene_path, err->message + n);
+      return;
+    }
+  }
+  fprintf(stderr, "flex3rpr_sim: %s\n", err->message);
+}
+
+/* The scene (file, options, overrides), what the accuracy knob chose for it in *choose_cpu s,
  * and its model. 0 with a message when any of them fails. */
 static int resolve_model(const cli_options* o, f3r_scene* scene, f3r_accuracy_choice* choice,
                          double* choose_cpu, f3r_model** model) {
   f3r_error err = {0};
-  const f3r_scene_options source = {
-      .accuracy = o->accuracy, .overrides = o->sets, .override_count = o->n_sets};
-  if (f3r_scene_load_with(o->scene_path, &source, scene, &err) != F3R_OK) {
-    fprintf(stderr, "flex3rpr_sim: %s\n", err.message);
+  override_list overrides;
+  /* Minimal is the default formulation, and an override would make it an explicit setting, which
+   * the accuracy knob keeps: --erk and --dirk force it only when the scene does not load without
+   * (a dae from the file or --formulation, which is explicit already). */
+  f3r_status st = F3R_ERR_SCENE;
+  for (int force = 0; force < 2 && st != F3R_OK; ++force) {
+    if (force && !o->integrator_erk && !o->integrator_dirk) break;
+    build_overrides(o, force, &overrides);
+    const f3r_scene_options source = {
+        .accuracy = o->accuracy, .overrides = overrides.all, .override_count = overrides.n_all};
+    st = f3r_scene_load_with(o->scene_path, &source, scene, &err);
+  }
+  if (st != F3R_OK) {
+    report_load_error(o, &overrides, &err);
     return 0;
   }
-  apply_options(o, scene);
   const double choose_start = cpu_seconds();
-  if (f3r_scene_validate(scene, &err) != F3R_OK ||
-      f3r_accuracy_resolve(scene, 0, choice, &err) != F3R_OK) {
+  if (f3r_accuracy_resolve(scene, 0, choice, &err) != F3R_OK) {
     fprintf(stderr, "flex3rpr_sim: %s: %s\n", o->scene_path, err.message);
     return 0;
   }
@@ -537,7 +581,6 @@ static int simulate(const cli_options* o, const f3r_scene* scene, const f3r_mode
   f3r_solver_settings settings = f3r_solver_settings_from_scene(scene);
   settings.analytic_jacobian = !o->fd_jacobian;
   settings.dense_linear_solver = o->dense_linear_solver;
-  if (o->table) snprintf(settings.rk_table, sizeof settings.rk_table, "%s", o->table);
   settings.stop_at_outputs = o->stop_at_outputs;
   for (int h = 0; h < o->n_holds; ++h)
     if (o->holds[h].index >= model->nq) {
