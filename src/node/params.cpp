@@ -7,6 +7,7 @@
 #include <cmath>
 #include <sstream>
 #include <type_traits>
+#include <vector>
 
 namespace flex3rpr {
 
@@ -124,7 +125,75 @@ bool ReadBasePose(const ros::NodeHandle& pnh, std::array<double, 3>* pose, std::
   return false;
 }
 
-// ~scene, loaded with ~accuracy (m; the scene's accuracy.end_effector when 0).
+// A parameter that sets a scene field, as an override "FIELD=VALUE" for the scene loader.
+struct SceneOverride {
+  const char* param;
+  std::string text;
+};
+
+// A string as a YAML single-quoted scalar, so that the loader reads it as it is.
+std::string Quoted(const std::string& value) {
+  std::string out = "'";
+  for (char c : value) out += c == '\'' ? std::string("''") : std::string(1, c);
+  return out + "'";
+}
+
+// A number that round-trips.
+std::string Number(double value) {
+  char text[32];
+  std::snprintf(text, sizeof text, "%.17g", value);
+  return text;
+}
+
+// The solver parameters and ~end_stops as overrides of single entries of the scene: the loader
+// checks them as it checks the file, and a solver parameter is an explicit setting that the
+// accuracy knob keeps, as it would be in the file.
+bool ReadSolverParams(const ros::NodeHandle& pnh, NodeParams* p, std::vector<SceneOverride>* out,
+                      std::string* error) {
+  std::string formulation, integrator, table;
+  if (!Read(pnh, "formulation", std::string(), &formulation, error) ||
+      !Read(pnh, "integrator", std::string(), &integrator, error) ||
+      !Read(pnh, "table", std::string(), &table, error) ||
+      !Read(pnh, "end_stops", false, &p->end_stops, error))
+    return false;
+  if (!formulation.empty())
+    out->push_back({"formulation", "solver.formulation=" + Quoted(formulation)});
+  if (!integrator.empty())
+    out->push_back({"integrator", "solver.integrator=" + Quoted(integrator)});
+  if (!table.empty()) out->push_back({"table", "solver.table=" + Quoted(table)});
+  for (const char* name : {"rtol", "atol"}) {
+    double value = 0.0;
+    if (!pnh.hasParam(name)) continue;
+    if (!Read(pnh, name, 0.0, &value, error)) return false;
+    out->push_back({name, std::string("solver.") + name + "=" + Number(value)});
+  }
+  return true;
+}
+
+// ~scene with the overrides, loaded with ~accuracy (m; the scene's accuracy.end_effector when
+// 0). An error about an override names its parameter: "parameter ~rtol: solver.rtol: ...".
+bool LoadOverridden(NodeParams* p, double accuracy, const std::vector<SceneOverride>& overrides,
+                    std::string* error) {
+  std::vector<const char*> texts;
+  for (const SceneOverride& o : overrides) texts.push_back(o.text.c_str());
+  const f3r_scene_options options = {accuracy, texts.data(), static_cast<int>(texts.size())};
+  f3r_error err{};
+  if (f3r_scene_load_with(p->scene_path.c_str(), &options, &p->scene, &err) == F3R_OK) return true;
+  const std::string message = err.message;
+  for (const SceneOverride& o : overrides) {
+    const std::string prefix = "--set " + o.text + ": ";
+    if (message.compare(0, prefix.size(), prefix) == 0) {
+      *error = std::string("parameter ~") + o.param + ": " + message.substr(prefix.size());
+      return false;
+    }
+  }
+  *error = "parameter ~scene: " + message;
+  return false;
+}
+
+// ~scene, with ~accuracy and the solver parameters. ~end_stops (true) makes the scene's stroke
+// hard: a file without effects.end_stops gets an empty one (a file with it has hard stops
+// already, whose values an override would replace).
 bool LoadScene(const ros::NodeHandle& pnh, NodeParams* p, std::string* error) {
   if (!Read(pnh, "scene", DefaultScenePath(), &p->scene_path, error)) return false;
   double accuracy = 0.0;
@@ -135,66 +204,19 @@ bool LoadScene(const ros::NodeHandle& pnh, NodeParams* p, std::string* error) {
     *error = os.str();
     return false;
   }
-  f3r_error err{};
-  if (f3r_scene_load_accuracy(p->scene_path.c_str(), accuracy, &p->scene, &err) != F3R_OK) {
-    *error = std::string("parameter ~scene: ") + err.message;
+  std::vector<SceneOverride> overrides;
+  if (!ReadSolverParams(pnh, p, &overrides, error) ||
+      !LoadOverridden(p, accuracy, overrides, error))
     return false;
-  }
-  return true;
+  if (!p->end_stops || p->scene.end_stops) return true;
+  overrides.push_back({"end_stops", "effects.end_stops={}"});
+  return LoadOverridden(p, accuracy, overrides, error);
 }
 
-// The solver parameters and ~end_stops, which override single entries of the scene.
-bool ReadSolverParams(const ros::NodeHandle& pnh, NodeParams* p, std::string* error) {
-  std::string formulation, integrator, table;
-  if (!Read(pnh, "formulation", std::string(), &formulation, error) ||
-      !Read(pnh, "integrator", std::string(), &integrator, error) ||
-      !Read(pnh, "table", std::string(), &table, error) ||
-      !Read(pnh, "end_stops", false, &p->end_stops, error))
-    return false;
-  // A solver parameter is an explicit setting: the accuracy knob keeps it.
-  if (!formulation.empty()) p->scene.explicit_settings |= F3R_EXPLICIT_FORMULATION;
-  if (!integrator.empty()) p->scene.explicit_settings |= F3R_EXPLICIT_INTEGRATOR;
-  if (!table.empty()) p->scene.explicit_settings |= F3R_EXPLICIT_TABLE;
-  if (pnh.hasParam("rtol")) p->scene.explicit_settings |= F3R_EXPLICIT_RTOL;
-  if (pnh.hasParam("atol")) p->scene.explicit_settings |= F3R_EXPLICIT_ATOL;
-  char allowed[64];
-  if (!formulation.empty() &&
-      f3r_formulation_from_name(formulation.c_str(), &p->scene.formulation) != 0) {
-    *error = "parameter ~formulation: '" + formulation + "' is not one of " +
-             f3r_formulation_names(allowed, sizeof allowed);
-    return false;
-  }
-  if (!integrator.empty() &&
-      f3r_integrator_from_name(integrator.c_str(), &p->scene.integrator) != 0) {
-    *error = "parameter ~integrator: '" + integrator + "' is not one of " +
-             f3r_integrator_names(allowed, sizeof allowed);
-    return false;
-  }
-  if (!table.empty())  // checked with the scene below (solver.table)
-    std::snprintf(p->scene.table, sizeof p->scene.table, "%s", table.c_str());
-  if (!Read(pnh, "rtol", p->scene.rtol, &p->scene.rtol, error) ||
-      !Read(pnh, "atol", p->scene.atol, &p->scene.atol, error))
-    return false;
-  if (p->end_stops) p->scene.end_stops = 1;  // the scene's stroke becomes hard
-  return true;
-}
-
-// Validates the overridden scene, lets the accuracy knob fix what it left open, and derives the
-// solver settings.
-bool ResolveScene(const ros::NodeHandle& pnh, NodeParams* p, std::string* error) {
+// Lets the accuracy knob fix what the (validated) scene left open, and derives the solver
+// settings.
+bool ResolveScene(NodeParams* p, std::string* error) {
   f3r_error err{};
-  if (f3r_scene_validate(&p->scene, &err) != F3R_OK) {
-    // name the parameter that set the field, where one did
-    const std::string field = err.field;
-    for (const char* name : {"rtol", "atol", "table"}) {
-      if (field == std::string("solver.") + name && pnh.hasParam(name)) {
-        *error = std::string("parameter ~") + name + ": " + err.message;
-        return false;
-      }
-    }
-    *error = std::string("parameters override the scene badly: ") + err.message;
-    return false;
-  }
   // The accuracy knob (or modes: auto) fixes what the scene left open; commands are held from
   // publish time to publish time, so its solver relation is the commanded one.
   if (f3r_accuracy_resolve(&p->scene, 1, &p->accuracy, &err) != F3R_OK) {
@@ -304,9 +326,8 @@ bool ReadClock(const ros::NodeHandle& pnh, NodeParams* p, std::string* error) {
 }  // namespace
 
 bool LoadParams(const ros::NodeHandle& pnh, NodeParams* p, std::string* error) {
-  return LoadScene(pnh, p, error) && ReadSolverParams(pnh, p, error) &&
-         ResolveScene(pnh, p, error) && ReadRunParams(pnh, p, error) && MakeFrames(p, error) &&
-         ReadClock(pnh, p, error);
+  return LoadScene(pnh, p, error) && ResolveScene(p, error) && ReadRunParams(pnh, p, error) &&
+         MakeFrames(p, error) && ReadClock(pnh, p, error);
 }
 
 }  // namespace flex3rpr
