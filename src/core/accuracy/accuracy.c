@@ -8,34 +8,7 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "accuracy_parts.h"
-
-/* s: the longest of the work-precision benchmark's scenes (paper simulation 3), over which the
- * solver relations of solver_table.c were measured */
-#define BENCHMARK_DURATION 0.5
-/* The largest ratio of the nonlinear to the linear mode-count difference the pilot measured on the
- * shipped scenes is 30 (paper simulation 3, fixed-free links); a linear estimate this many times
- * below the model's share is left unchecked, as no such ratio lifts it there. */
-#define PAIR_SKIP_FACTOR 100.0
-/* The largest ratio of exact kinematics' effect in the pilot to its linear estimate
- * (f3r_linear_kinematics) on the shipped scenes is 23 (free_vibration_long; paper simulation 3
- * with fixed-free links 16, payload_pick 10, all others below 3.2 at the pilot's tightest
- * tolerance); where a scene turns exact kinematics off, a linear estimate this many times below
- * the kinematics' share is taken as its effect unchecked. */
-#define KINEMATICS_SKIP_FACTOR 100.0
-/* A measured relation whose error is within this share of the solver's budget is left unchecked
- * on a run no longer than the benchmark's scenes. */
-#define SOLVER_CHECK_SHARE 0.1
-/* Impacts amplify the solver's error far beyond the relations: on end_stop_impact, 20 modes with
- * exact kinematics at rtol 1e-5 land 7.2e-3 m from the reference, where the relation says
- * 1.75e-7 m (4e4 times); at rtol 1e-6, 2.3e-3 m against 2.55e-8 (9e4 times); at rtol 1e-7,
- * 7.0e-6 m against 4.6e-9 (1.5e3 times). */
-#define IMPACT_AMPLIFICATION 1e5
-
-/* The relations were measured with 3 modes a flexible link (the paper's scenes). An explicit
- * integrator's step is bound by the highest mode, whose frequency grows as r^2 for a beam; an
- * implicit one's is not. */
-#define BENCHMARK_MODES 3
+#include "accuracy_choice.h"
 
 /* A relation's cost, an explicit integrator's scaled by explicit_scale. */
 static double relation_cost(const f3r_solver_relation* r, double explicit_scale) {
@@ -82,96 +55,6 @@ static double solver_error_of(const f3r_scene* s, const char* kind) {
   }
   return error;
 }
-
-static const char* integrator_name(f3r_integrator i) {
-  return i == F3R_INTEGRATOR_ERK ? "erk" : i == F3R_INTEGRATOR_DIRK ? "dirk" : "ida";
-}
-
-static void append(char* text, size_t size, const char* fmt, ...)
-    __attribute__((format(printf, 3, 4)));
-static void append(char* text, size_t size, const char* fmt, ...) {
-  const size_t used = strlen(text);
-  if (used + 1 >= size) return;
-  va_list ap;
-  va_start(ap, fmt);
-  vsnprintf(text + used, size - used, fmt, ap);
-  va_end(ap);
-}
-
-/* Why a choice's estimate exceeds its request: the largest part, and what holds it there. */
-static void unmet_reason(const f3r_scene* scene, const f3r_accuracy_choice* c, unsigned chosen,
-                         int solver_open, char* why, size_t size) {
-  const double solver = isfinite(c->solver_error) ? c->solver_error : 0.0;
-  if (c->model_error >= c->kinematics_error && c->model_error >= solver) {
-    int fixed = 0, at_most = 0;
-    for (int i = 0; i < 3; ++i) {
-      if (!f3r_is_flexible(scene, i)) continue;
-      if (!(chosen >> i & 1))
-        fixed = 1;
-      else if (c->modes[i] >= F3R_MAX_MODES)
-        at_most = 1;
-    }
-    snprintf(why, size, "the largest part is the model's (%.3g m): %s", c->model_error,
-             fixed     ? "the scene sets mode counts"
-             : at_most ? "the mode counts are at their most"
-                       : "as the pilot scales it");
-  } else if (c->kinematics_error >= solver) {
-    snprintf(why, size,
-             "the largest part is exact kinematics' effect (%.3g m): the scene turns it off",
-             c->kinematics_error);
-  } else {
-    const unsigned set = scene->explicit_settings;
-    char fixed[64] = "";
-    if (set & F3R_EXPLICIT_FORMULATION) append(fixed, sizeof fixed, " formulation");
-    if (set & F3R_EXPLICIT_INTEGRATOR) append(fixed, sizeof fixed, " integrator");
-    if (set & F3R_EXPLICIT_RTOL) append(fixed, sizeof fixed, " rtol");
-    if (set & F3R_EXPLICIT_TABLE) append(fixed, sizeof fixed, " table");
-    if (!solver_open)
-      snprintf(why, size, "the largest part is the solver's (%.3g m): the scene sets the solver",
-               solver);
-    else if (fixed[0])
-      snprintf(why, size, "the largest part is the solver's (%.3g m): the scene sets its%s", solver,
-               fixed);
-    else
-      snprintf(why, size,
-               "the largest part is the solver's (%.3g m): no measured solver reaches the budget "
-               "on this run",
-               solver);
-  }
-}
-
-/* What the stages of one choice share: the scene and its working copy (the chosen links' modes
- * a placeholder), what the scene leaves open, the mode search and the pilot (freed at the end),
- * and the facts the summary reports. */
-typedef struct {
-  const f3r_scene* scene; /* the caller's */
-  const f3r_scene* s;     /* the working copy */
-  double request;
-  double model_target; /* m: the model's share of the request */
-  const char* kind;    /* the solver relations' kind: rigid, flexible or commanded */
-  unsigned chosen;     /* the links whose mode counts the knob chooses */
-  int any_flexible;
-  int kinematics_open, kinematics_off, solver_open;
-  f3r_mode_search ms;
-  int impacts;            /* end stops on a path that moves: the most faithful model */
-  int long_run;           /* longer than the benchmark's scenes */
-  double linear_error;    /* m: the search's last linear estimate */
-  int pair, pair_skipped; /* the pilot's pair ran, or was skipped as needless */
-  int kinematics;         /* a pilot measures exact kinematics' effect */
-  int kinematics_linear_only;
-  f3r_pilot pilot;
-  int pilot_started;
-} choice_run;
-
-/* The solver relation being checked: the budget, the current limit on the relation's error,
- * and what the pilot measured. */
-typedef struct {
-  double budget, limit, measured;
-  int checked;
-  const f3r_solver_relation* relation;
-  const f3r_solver_relation*
-      skipped_check; /* the cheapest one, whose check cost more than it saves */
-} solver_pick;
 
 /* What the scene leaves open (links' mode counts, exact kinematics, the solver) and which
  * solver relations apply to it; s becomes the working copy. */
@@ -295,90 +178,6 @@ static f3r_status check_modes(choice_run* run, f3r_accuracy_choice* c, f3r_error
   return st;
 }
 
-/* The summary's lines on the request, the mode counts and the pilot that checked them. */
-static void summarise_modes(const choice_run* run, f3r_accuracy_choice* c) {
-  char* text = c->summary;
-  const size_t size = sizeof c->summary;
-  const f3r_mode_search* ms = &run->ms;
-  append(text, size,
-         "accuracy %g m on the end-effector path (shares: model %g, kinematics %g, solver %g)\n",
-         run->request, F3R_ACCURACY_MODEL_SHARE, F3R_ACCURACY_KINEMATICS_SHARE,
-         F3R_ACCURACY_SOLVER_SHARE);
-  for (int i = 0; i < 3; ++i) {
-    if (!f3r_is_flexible(run->scene, i))
-      append(text, size, "links[%d]: rigid\n", i);
-    else if (!(run->chosen >> i & 1))
-      append(text, size, "links[%d]: %d modes, as the scene sets\n", i, c->modes[i]);
-    else
-      append(text, size, "links[%d]: %d modes\n", i, c->modes[i]);
-  }
-  if (run->chosen && run->impacts)
-    append(text, size,
-           "modes: end stops: impacts are outside the linear estimate, and the path need not "
-           "converge in the mode count; the most faithful model (%d modes)\n",
-           F3R_MAX_MODES);
-  else if (run->chosen && ms->at_rest)
-    append(text, size,
-           "modes: nothing excites the scene (no inputs, initial rates or deflections)\n");
-  else if (run->chosen)
-    append(text, size,
-           "modes: the %s-order linearised path is within %.3g m of the same with %d modes (path "
-           "extent %.3g m, %d linear models)\n",
-           ms->order == 2 ? "second" : "first", run->linear_error, ms->ref_r, c->extent,
-           c->linear_evaluations);
-  if (c->pilot && run->pair)
-    append(text, size,
-           "pilot: the path leaves the initial pose (%.3g m); nonlinear runs at the least mode "
-           "counts over "
-           "the first %.0f%% of it, carried to the whole, scale the linear estimate by %.3g\n",
-           c->extent, 100.0 * F3R_PILOT_SHARE, c->pilot_ratio);
-  else if (run->pair_skipped)
-    append(text, size,
-           "pilot: the path leaves the initial pose (%.3g m), but its linear estimate is below "
-           "1/%g of the "
-           "model's share, beyond any nonlinear ratio measured; not checked\n",
-           c->extent, PAIR_SKIP_FACTOR);
-}
-
-/* The summary's line on exact kinematics: on, or off as the scene sets and how its effect is
- * counted. */
-static void summarise_kinematics(const choice_run* run, f3r_accuracy_choice* c) {
-  char* text = c->summary;
-  const size_t size = sizeof c->summary;
-  if (!run->any_flexible)
-    append(text, size, "exact kinematics: no flexible link\n");
-  else if (run->kinematics_open && run->impacts)
-    append(text, size, "exact kinematics: on (the most faithful model)\n");
-  else if (run->kinematics_open)
-    append(
-        text, size,
-        "exact kinematics: on: it costs no measurable CPU time (the same steps and time as "
-        "without it on the shipped scenes), so its part of the error is removed, not estimated\n");
-  else if (!run->kinematics_off)
-    append(text, size, "exact kinematics: on, as the scene sets\n");
-  else if (run->kinematics_linear_only)
-    append(text, size,
-           "exact kinematics: off, as the scene sets; its linear estimate %.3g m, below 1/%g of "
-           "its share "
-           "%.3g m (beyond any ratio a pilot measured), is counted unchecked\n",
-           c->kinematics_linear, KINEMATICS_SKIP_FACTOR,
-           F3R_ACCURACY_KINEMATICS_SHARE * run->request);
-  else if (!run->kinematics)
-    append(
-        text, size,
-        "exact kinematics: off, as the scene sets; its effect is second order in the deflections "
-        "and the path stays near the initial pose: not estimated\n");
-  else {
-    char linear[64] = "";
-    if (c->kinematics_linear > 0.0)
-      snprintf(linear, sizeof linear, ", its linear estimate %.3g m", c->kinematics_linear);
-    append(text, size,
-           "exact kinematics: off, as the scene sets; a pilot estimates its effect at %.3g m%s, "
-           "counted in the estimate\n",
-           c->kinematics_effect, linear);
-  }
-}
-
 /* The solver settings of relation r for a pilot's check, on the working copy's other settings. */
 static f3r_solver_settings relation_settings(const choice_run* run, const f3r_solver_relation* r) {
   f3r_solver_settings settings = f3r_solver_settings_from_scene(run->s);
@@ -450,42 +249,6 @@ static f3r_status pick_relation(choice_run* run, const f3r_accuracy_choice* c, s
   return st;
 }
 
-/* The summary's lines on the relation taken: where it was measured, and how it was checked. */
-static void summarise_relation(const choice_run* run, f3r_accuracy_choice* c,
-                               const solver_pick* p) {
-  char* text = c->summary;
-  const size_t size = sizeof c->summary;
-  const f3r_solver_relation* r = p->relation;
-  append(text, size,
-         "solver: %s, %s%s%s, rtol %g, atol %g: the cheapest measured within %.3g m (at most %.3g "
-         "m on "
-         "the %d %s benchmark scenes; cost %.2g of minimal IDA at 1e-6; measured on %s)\n",
-         r->formulation == F3R_FORMULATION_DAE ? "dae" : "minimal", integrator_name(r->integrator),
-         r->table[0] ? " " : "", r->table, r->rtol, c->atol, p->limit, r->error, r->scenes, r->kind,
-         r->cost, f3r_solver_relations_source);
-  if (run->impacts)
-    append(text, size,
-           "solver: impacts amplify the solver's error (up to %g times on end_stop_impact); "
-           "the budget %.3g m is divided by that\n",
-           IMPACT_AMPLIFICATION, p->budget);
-  else if (p->checked && run->long_run)
-    append(text, size,
-           "solver: the run is longer than the benchmark's scenes (%g s); a pilot over its first "
-           "%.0f%% measures %.3g m for it over the run\n",
-           BENCHMARK_DURATION, 100.0 * F3R_PILOT_SHARE, p->measured);
-  else if (p->checked)
-    append(text, size, "solver: the pilot measures %.3g m for it over the run\n", p->measured);
-  else if (p->skipped_check)
-    append(text, size,
-           "solver: rtol %g, the cheapest within the budget, would need a pilot's check that "
-           "costs more than this one does over it; this one's measured error is below %g of "
-           "the budget: not checked\n",
-           p->skipped_check->rtol, SOLVER_CHECK_SHARE);
-  else if (run->ms.far)
-    append(text, size, "solver: its measured error is below %g of the budget; not checked\n",
-           SOLVER_CHECK_SHARE);
-}
-
 /* The solver: the scene's own where it sets one, else the cheapest measured relation within the
  * budget the model and exact kinematics leave, kept unless none fits. */
 static f3r_status choose_solver(choice_run* run, f3r_accuracy_choice* c, f3r_error* err) {
@@ -500,10 +263,10 @@ static f3r_status choose_solver(choice_run* run, f3r_accuracy_choice* c, f3r_err
   snprintf(c->table, sizeof c->table, "%s", scene->table);
   if (!run->solver_open) {
     c->solver_error = solver_error_of(scene, run->kind);
-    append(c->summary, sizeof c->summary,
-           "solver: %s, %s, rtol %g, as the scene sets (measured error %.3g m)\n",
-           scene->formulation == F3R_FORMULATION_DAE ? "dae" : "minimal",
-           integrator_name(scene->integrator), scene->rtol, c->solver_error);
+    f3r_accuracy_append(c->summary, sizeof c->summary,
+                        "solver: %s, %s, rtol %g, as the scene sets (measured error %.3g m)\n",
+                        f3r_formulation_name(scene->formulation),
+                        f3r_integrator_name(scene->integrator), scene->rtol, c->solver_error);
     return F3R_OK;
   }
   const f3r_status st = pick_relation(run, c, &p, err);
@@ -511,9 +274,9 @@ static f3r_status choose_solver(choice_run* run, f3r_accuracy_choice* c, f3r_err
   const f3r_solver_relation* r = p.relation;
   if (!r) {
     c->solver_error = solver_error_of(scene, run->kind);
-    append(c->summary, sizeof c->summary,
-           "solver: no measured solver fits %.3g m; keeping %s, rtol %g\n", p.limit,
-           integrator_name(scene->integrator), scene->rtol);
+    f3r_accuracy_append(c->summary, sizeof c->summary,
+                        "solver: no measured solver fits %.3g m; keeping %s, rtol %g\n", p.limit,
+                        f3r_integrator_name(scene->integrator), scene->rtol);
     return F3R_OK;
   }
   c->formulation = r->formulation;
@@ -522,46 +285,8 @@ static f3r_status choose_solver(choice_run* run, f3r_accuracy_choice* c, f3r_err
   if (!(scene->explicit_settings & F3R_EXPLICIT_ATOL)) c->atol = r->atol;
   snprintf(c->table, sizeof c->table, "%s", r->table);
   c->solver_error = fmax(r->error, p.measured);
-  summarise_relation(run, c, &p);
+  f3r_summarise_relation(run, c, &p);
   return F3R_OK;
-}
-
-/* The estimate's total, whether it meets the request (and what holds it where it does not), and
- * the one-line brief. */
-static void summarise_estimate(const choice_run* run, f3r_accuracy_choice* c) {
-  const double request = run->request;
-  const double total =
-      c->model_error + c->kinematics_error + (isfinite(c->solver_error) ? c->solver_error : 0.0);
-  c->estimated_error = total;
-  c->request_met = total <= request;
-  append(
-      c->summary, sizeof c->summary,
-      "estimated error %.3g m (model %.3g, kinematics %.3g, solver %.3g)%s", total, c->model_error,
-      c->kinematics_error, c->solver_error,
-      run->impacts
-          ? "; the impacts' effect on the model is not estimated: check the result against a run "
-            "with other modes"
-          : "");
-  if (!c->request_met) {
-    char why[160];
-    unmet_reason(run->scene, c, run->chosen, run->solver_open, why, sizeof why);
-    append(c->summary, sizeof c->summary, "\nnot met: the estimate is %.3g times the request; %s",
-           total / request, why);
-  }
-  char how[64] = "linear estimate";
-  if (run->impacts)
-    snprintf(how, sizeof how, "the most faithful: impacts");
-  else if (c->pilot)
-    snprintf(how, sizeof how, "linear estimate x %.3g from the pilot", c->pilot_ratio);
-  snprintf(c->brief, sizeof c->brief,
-           "accuracy %g m: modes %d/%d/%d (%s), exact kinematics %s, %s %s%s%s rtol %g; "
-           "estimated %.3g m%s",
-           request, c->modes[0], c->modes[1], c->modes[2], how, c->exact_kinematics ? "on" : "off",
-           c->formulation == F3R_FORMULATION_DAE ? "dae" : "minimal",
-           integrator_name(c->integrator), c->table[0] ? " " : "", c->table, c->rtol, total,
-           run->impacts ? " without the impacts" : "");
-  if (!c->request_met)
-    append(c->brief, sizeof c->brief, "; NOT MET (%.3g x the request)", total / request);
 }
 
 /* The stages in order: what is open, the mode counts and their check, the summary of both, the
@@ -580,13 +305,13 @@ f3r_status f3r_accuracy_choose(const f3r_scene* scene, double request, int comma
   if (st == F3R_OK) st = check_modes(&run, c, err);
   c->linear_evaluations = run.ms.evaluations;
   if (st == F3R_OK) {
-    summarise_modes(&run, c);
-    summarise_kinematics(&run, c);
+    f3r_summarise_modes(&run, c);
+    f3r_summarise_kinematics(&run, c);
     st = choose_solver(&run, c, err);
   }
   f3r_pilot_free(&run.pilot);
   f3r_mode_search_free(&run.ms);
-  if (st == F3R_OK) summarise_estimate(&run, c);
+  if (st == F3R_OK) f3r_summarise_estimate(&run, c);
   return st;
 }
 
@@ -635,10 +360,11 @@ f3r_status f3r_accuracy_resolve(f3r_scene* scene, int commanded, f3r_accuracy_ch
   for (int i = 0; i < 3; ++i) {
     if (chosen >> i & 1) scene->links[i].modes = c->modes[i];
     if (chosen >> i & 1)
-      append(c->summary, sizeof c->summary,
-             "links[%d]: modes auto -> %d (linearised path within %.3g m of 3r + 3 modes: "
-             "auto_tolerance %g of its extent %.3g m)\n",
-             i, c->modes[i], c->model_error, tolerance, c->extent);
+      f3r_accuracy_append(
+          c->summary, sizeof c->summary,
+          "links[%d]: modes auto -> %d (linearised path within %.3g m of 3r + 3 modes: "
+          "auto_tolerance %g of its extent %.3g m)\n",
+          i, c->modes[i], c->model_error, tolerance, c->extent);
   }
   return F3R_OK;
 }
