@@ -1,0 +1,16 @@
+/* The CLI's reports on a model (model_reports.c): each returns the process exit code, or prints. */
+#ifndef FLEX3RPR_CLI_MODEL_REPORTS_H
+#define FLEX3RPR_CLI_MODEL_REPORTS_H
+
+#include "flex3rpr/model.h"
+
+/* --geometry: geometry, masses and stroke as JSON on stdout (scripts/make_urdf.py reads it). */
+void f3r_cli_print_geometry(const f3r_model* m);
+/* --modal: the linearised natural frequencies (Hz) at the initial pose. */
+int f3r_cli_run_modal(const f3r_model* m);
+/* --linear-path FILE.csv: the linear model's platform path. */
+int f3r_cli_write_linear_path(const f3r_model* m, const char* path);
+/* --linearise FILE.mat: the state-space model, and FILE.json beside it. */
+int f3r_cli_write_state_space(const f3r_model* m, const char* path);
+
+#endif
