@@ -209,11 +209,15 @@ class NodeConventions(unittest.TestCase):
                 s.unregister()
             rospy.ServiceProxy(NODE + "/resume", Empty)()
 
-    def test_f_readme_examples_move_the_platform(self):
+    def readme_commands(self, marker, prefix):
+        """The lines starting with prefix in the README's code block after <!-- marker -->."""
         text = open(os.path.join(PKG, "README.md")).read()
-        block = re.search(r"<!-- ros-examples -->\s*```\n(.*?)```", text, re.S)
-        self.assertIsNotNone(block, "README: the rostopic pub examples after <!-- ros-examples -->")
-        commands = [line for line in block.group(1).splitlines() if line.startswith("rostopic pub")]
+        block = re.search(r"<!-- %s -->\s*```\n(.*?)```" % marker, text, re.S)
+        self.assertIsNotNone(block, "README: the examples after <!-- %s -->" % marker)
+        return [line for line in block.group(1).splitlines() if line.startswith(prefix)]
+
+    def test_f_readme_examples_move_the_platform(self):
+        commands = self.readme_commands("ros-examples", "rostopic pub")
         self.assertGreaterEqual(len(commands), 3)
         for command in commands:
             wait_for(lambda: self.rec.odom, 60, "~odom")
@@ -233,10 +237,7 @@ class NodeConventions(unittest.TestCase):
         self.assertFalse(any(status.outside_stroke), "the examples stay within the stroke")
 
     def test_z_readme_service_examples(self):
-        text = open(os.path.join(PKG, "README.md")).read()
-        block = re.search(r"<!-- ros-service-examples -->\s*```\n(.*?)```", text, re.S)
-        self.assertIsNotNone(block, "README: the rosservice examples after <!-- ros-service-examples -->")
-        commands = [line for line in block.group(1).splitlines() if line.startswith("rosservice call")]
+        commands = self.readme_commands("ros-service-examples", "rosservice call")
         self.assertGreaterEqual(len(commands), 4)
         for command in commands:
             out = subprocess.run(shlex.split(command), check=True, timeout=300, capture_output=True,
