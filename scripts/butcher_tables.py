@@ -110,8 +110,15 @@ def strip_c_comments(text):
     return re.sub(r"/\*.*?\*/|//[^\n]*", " ", text, flags=re.S)
 
 
+def read_with_includes(path):
+    """The C source with its local #include "X.def" data files inlined (erk_tables.def)."""
+    folder = os.path.dirname(path)
+    return re.sub(r'#include\s+"(\w+\.def)"', lambda m: open(os.path.join(folder, m.group(1))).read(),
+                  open(path).read())
+
+
 def parse_erk_c(path):
-    text = strip_c_comments(open(path).read())
+    text = strip_c_comments(read_with_includes(path))
     arrays = {}
     for m in re.finditer(r"static\s+const\s+double\s+(\w+)\s*\[([^\]]*)\]\s*=\s*\{(.*?)\};",
                          text, re.S):

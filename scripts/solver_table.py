@@ -1,14 +1,13 @@
 #!/usr/bin/python3
-"""Writes src/core/accuracy/solver_table.c, the accuracy knob's measured solver relations, from the
+"""Writes src/core/accuracy/solver_table.def, the accuracy knob's measured solver relations, from the
 work-precision benchmark's build/bench/tolerance.csv (scripts/bench calls it after a full run).
-
-usage: scripts/solver_table.py [TOLERANCE_CSV] [--stamp TEXT]
 
 For each kind of scene (flexible links; all links rigid; held commands, as the node gives them),
 each of our own methods measured on every benchmark scene of that kind and each tolerance
 measured on all of them: the largest end-effector error over those scenes (m) and the median
 over them of the CPU time relative to that scene's minimal IDA at rtol 1e-6.
 """
+import argparse
 import collections
 import csv
 import os
@@ -16,7 +15,7 @@ import statistics
 import sys
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
-OUT = os.path.join(ROOT, "src/core/accuracy/solver_table.c")
+OUT = os.path.join(ROOT, "src/core/accuracy/solver_table.def")
 
 # benchmark scene label -> kind
 KINDS = {"rigid (sim1 forcing)": "rigid", "closed loop (1 kHz hold)": "commanded"}
@@ -57,38 +56,31 @@ def relations(rows):
 
 
 def write(rels, stamp):
-    lines = ["/* Written by scripts/solver_table.py from the work-precision benchmark (scripts/bench):",
-             " * do not edit. The accuracy knob (accuracy.c) picks the cheapest row whose error fits.",
-             " * error: largest end-effector error (m) over the benchmark scenes of the kind;",
-             " * cost: median over them of CPU time / CPU time of minimal IDA at rtol 1e-6. */",
-             '#include "flex3rpr/accuracy.h"', "",
-             f'const char f3r_solver_relations_source[] = "{stamp}";', "",
-             "const f3r_solver_relation f3r_solver_relations[] = {"]
+    """The rows as solver_table.c's data: one F3R_RELATION(...) per line."""
+    lines = ["/* Written by scripts/solver_table.py from the work-precision benchmark (scripts/bench): do not",
+             " * edit. Data for solver_table.c: error is the largest end-effector error (m) over the benchmark",
+             " * scenes of the kind, cost the median over them of CPU time / CPU time of minimal IDA at rtol 1e-6.",
+             " * F3R_RELATION(kind, formulation, integrator, table, rtol, atol, error, cost, scenes) */",
+             f'F3R_RELATIONS_SOURCE("{stamp}")']
     for kind, (form, integ, table), rtol, error, cost, n in rels:
         atol = rtol * 1e-2  # scripts/bench's tol_args
-        lines.append(f'    {{"{kind}", {form}, {integ}, "{table}", {rtol:.6g}, {atol:.6g}, {error:.3g}, {cost:.3g}, {n}}},')
-    lines += ["};", "",
-              "const int f3r_solver_relation_count =",
-              "    (int)(sizeof f3r_solver_relations / sizeof f3r_solver_relations[0]);", ""]
+        lines.append(f'F3R_RELATION("{kind}", {form}, {integ}, "{table}", {rtol:.6g}, {atol:.6g}, {error:.3g}, {cost:.3g}, {n})')
     with open(OUT, "w") as f:
-        f.write("\n".join(lines))
+        f.write("\n".join(lines) + "\n")
 
 
 def main():
-    args = [a for a in sys.argv[1:]]
-    stamp = "unstamped"
-    if "--stamp" in args:
-        k = args.index("--stamp")
-        stamp = args[k + 1]
-        del args[k:k + 2]
-    path = args[0] if args else os.path.join(ROOT, "build/bench/tolerance.csv")
-    rows = list(csv.DictReader(open(path)))
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    ap.add_argument("tolerance_csv", nargs="?", default=os.path.join(ROOT, "build/bench/tolerance.csv"),
+                    help="the benchmark's tolerance sweep (default: %(default)s)")
+    ap.add_argument("--stamp", default="unstamped", help="machine, date and commit of the measurement")
+    args = ap.parse_args()
+    rows = list(csv.DictReader(open(args.tolerance_csv)))
     rels = relations(rows)
     if not rels:
-        sys.exit(f"solver_table: no complete relation in {path}")
-    write(rels, stamp.replace('"', "'"))
+        sys.exit(f"solver_table: no complete relation in {args.tolerance_csv}")
+    write(rels, args.stamp.replace('"', "'"))
     print(f"solver_table: {len(rels)} relations -> {os.path.relpath(OUT, ROOT)}")
-
 
 if __name__ == "__main__":
     main()
