@@ -8,6 +8,7 @@
 #include <math.h>
 #include <stdio.h> /* arkode_butcher.h uses FILE without including it */
 
+#include <arkode/arkode.h>
 #include <arkode/arkode_butcher.h>
 #include <nvector/nvector_serial.h>
 #include <sundials/sundials_context.h>
@@ -24,11 +25,12 @@ typedef struct {
   const double* held; /* the simulation's held forces */
   f3r_workspace* ws;  /* residual scratch */
   SUNContext ctx;
-  void* mem;                 /* IDA or ERKStep memory */
-  N_Vector id, atol;         /* IDA only */
-  SUNMatrix J;               /* IDA, DIRK */
-  SUNLinearSolver ls;        /* IDA, DIRK */
-  f3r_sim_stats base;        /* statistics accumulated before the last restart */
+  void* mem;                             /* IDA or ERKStep memory */
+  const struct f3r_arkode_calls* arkode; /* ERK, DIRK: their ARKODE calls (stepper.c) */
+  N_Vector id, atol;                     /* IDA only */
+  SUNMatrix J;                           /* IDA, DIRK */
+  SUNLinearSolver ls;                    /* IDA, DIRK */
+  f3r_sim_stats base;                    /* statistics accumulated before the last restart */
   int root_info[F3R_NROOTS]; /* -1 where a root was found: 2i, 2i+1 end stops of leg i (min, max);
                             * F3R_COLLAPSE_ROOT + i: leg i reached the collapse guard */
   long recoverable;          /* right-hand side calls that asked for a smaller step */
@@ -78,6 +80,70 @@ int f3r_stepper_explicit_roots(realtype t, N_Vector y, realtype* g, void* user);
 static inline double f3r_stepper_force_time(const f3r_stepper* st, double t) {
   return t <= st->t_segment ? nextafter(st->t_segment, INFINITY) : t;
 }
+/* A failed SUNDIALS call as F3R_ERR_SOLVER: the call, its flag's name (flag_name, which SUNDIALS
+ * allocates: freed here) and the solver's last message. */
+f3r_status f3r_stepper_failed(const f3r_stepper* st, f3r_error* err, const char* call,
+                              char* flag_name);
+/* Returns f3r_stepper_failed from the enclosing function (which has st and err) when call
+ * returns a negative flag; name_of is the back end's GetReturnFlagName. */
+#define F3R_STEPPER_CHECK(call, name_of)                                      \
+  do {                                                                        \
+    const int flag_ = (call);                                                 \
+    if (flag_ < 0) return f3r_stepper_failed(st, err, #call, name_of(flag_)); \
+  } while (0)
+/* Every root only when moving into a stop or the guard (direction -1). */
+void f3r_stepper_root_directions(int directions[F3R_NROOTS]);
+/* The ARKODE back ends' shared start: t0 as the segment's start, the minimal formulation
+ * required, and the settings' Butcher table (or default_table) loaded; integrator names the back
+ * end in errors ("erk", "dirk"). *table is NULL on error; the caller frees it. */
+f3r_status f3r_stepper_explicit_start(f3r_stepper* st, double t0, int implicit,
+                                      const char* default_table, ARKodeButcherTable* table,
+                                      f3r_error* err);
+typedef struct f3r_arkode_calls f3r_arkode_calls;
+
+/* The calls ERKStep and ARKStep share, by back end, so that one restart, advance and set-up serve
+ * both (stepper.c). */
+struct f3r_arkode_calls {
+  const char* evolve_name; /* "ERKStepEvolve", for errors */
+  char* (*flag_name)(long flag);
+  int (*set_err_handler)(void* mem, ARKErrHandlerFn handler, void* user);
+  int (*ss_tolerances)(void* mem, realtype rtol, realtype atol);
+  int (*set_user_data)(void* mem, void* user);
+  int (*set_max_num_steps)(void* mem, long steps);
+  int (*set_interpolant_degree)(void* mem, int degree);
+  int (*set_max_step)(void* mem, realtype h);
+  int (*root_init)(void* mem, int count, ARKRootFn g);
+  int (*set_root_direction)(void* mem, int* directions);
+  int (*set_stop_time)(void* mem, realtype t);
+  int (*evolve)(void* mem, realtype tout, N_Vector y, realtype* t, int task);
+  int (*get_root_info)(void* mem, int* roots);
+  int (*get_dky)(void* mem, realtype t, int k, N_Vector dky);
+  int (*reset)(void* mem, realtype t, N_Vector y);
+  int (*get_num_steps)(void* mem, long* steps);
+  int (*get_num_err_test_fails)(void* mem, long* fails);
+  int (*get_last_step)(void* mem, realtype* h);
+  void (*stats)(const f3r_stepper* st, f3r_sim_stats* out); /* the back end's ops->stats */
+};
+/* The calls of one back end by its prefix (ERKStep, ARKStep), whose functions are named alike. */
+#define F3R_ARKODE_CALLS(prefix, stats)                                                          \
+  {                                                                                              \
+#prefix "Evolve", prefix##GetReturnFlagName, prefix##SetErrHandlerFn, prefix##SStolerances,  \
+        prefix##SetUserData, prefix##SetMaxNumSteps, prefix##SetInterpolantDegree,               \
+        prefix##SetMaxStep, prefix##RootInit, prefix##SetRootDirection, prefix##SetStopTime,     \
+        prefix##Evolve, prefix##GetRootInfo, prefix##GetDky, prefix##Reset, prefix##GetNumSteps, \
+        prefix##GetNumErrTestFails, prefix##GetLastStep, stats                                   \
+  }
+/* The options both ARKODE back ends set once their memory and table exist: the error handler,
+ * tolerances, user data, step limits, cubic Hermite output and the roots. */
+f3r_status f3r_arkode_configure(f3r_stepper* st, const f3r_arkode_calls* calls, f3r_error* err);
+/* ops->restart and ops->advance of both ARKODE back ends, through st->arkode. */
+f3r_status f3r_arkode_restart(f3r_stepper* st, N_Vector y, N_Vector yp, double t, f3r_error* err);
+f3r_status f3r_arkode_advance(f3r_stepper* st, double tout, double tstop, N_Vector y, N_Vector yp,
+                              double* t_reached, int* event, f3r_error* err);
+/* out = the stepper's base statistics plus the counters every back end has (steps, error test
+ * failures, last step; a failed getter counts 0), with the given evaluations added. */
+void f3r_arkode_stats(const f3r_stepper* st, const f3r_arkode_calls* calls, long evaluations,
+                      f3r_sim_stats* out);
 /* A Butcher table by name (ARKODE's, e.g. ARKODE_FEHLBERG_13_7_8, or erk_tables.c's), explicit
  * or diagonally implicit; NULL when there is none by that name. The caller frees it. */
 ARKodeButcherTable f3r_stepper_load_table(int implicit, const char* name);

@@ -3,7 +3,8 @@
  * Kvaerno 7(4,5), L-stable). A-stable tables stay stable on the imaginary axis, where the
  * undamped elastic modes put their eigenvalues, at any step; they pay for it with a Newton
  * iteration per stage. Newton uses a dense LU with a forward-difference Jacobian of f computed
- * here into the stepper's own vectors (ARKODE's allocates a vector on every evaluation). */
+ * here into the stepper's own vectors (ARKODE's allocates a vector on every evaluation). What
+ * it shares with the ERK back end (options, restart, advance) is in stepper.c. */
 #include <arkode/arkode_arkstep.h>
 #include <float.h>
 #include <math.h>
@@ -13,6 +14,10 @@
 #include "stepper.h"
 
 #define F3R_DIRK_DEFAULT_TABLE "ARKODE_KVAERNO_7_4_5"
+
+static void dirk_stats(const f3r_stepper* st, f3r_sim_stats* out);
+
+static const f3r_arkode_calls dirk_calls = F3R_ARKODE_CALLS(ARKStep, dirk_stats);
 
 /* df/dy by forward differences, column j into J's column j: ny right-hand sides. */
 static int jacobian_fn(realtype t, N_Vector y, N_Vector fy, SUNMatrix J, void* user, N_Vector t1,
@@ -43,28 +48,13 @@ static int jacobian_fn(realtype t, N_Vector y, N_Vector fy, SUNMatrix J, void* u
   return 0;
 }
 
-static f3r_status failed(f3r_stepper* st, f3r_error* err, const char* call, int flag) {
-  return f3r_error_set(err, F3R_ERR_SOLVER, "%s failed: %s (%s)", call,
-                       ARKStepGetReturnFlagName(flag), st->message);
-}
-
-#define CHECK(call)                                      \
-  do {                                                   \
-    const int flag_ = (call);                            \
-    if (flag_ < 0) return failed(st, err, #call, flag_); \
-  } while (0)
+#define CHECK(call) F3R_STEPPER_CHECK(call, ARKStepGetReturnFlagName)
 
 static f3r_status dirk_setup(f3r_stepper* st, N_Vector y, N_Vector yp, double t0, f3r_error* err) {
   (void)yp;
-  st->t_segment = t0;
-  if (st->settings.formulation != F3R_FORMULATION_MINIMAL)
-    return f3r_error_set(err, F3R_ERR_ARGUMENT,
-                         "solver.integrator: dirk needs the minimal formulation, not dae");
-  const char* name = st->settings.rk_table[0] ? st->settings.rk_table : F3R_DIRK_DEFAULT_TABLE;
-  ARKodeButcherTable table = f3r_stepper_load_table(1, name);
-  if (!table)
-    return f3r_error_set(err, F3R_ERR_ARGUMENT,
-                         "solver.table: '%s' is not a diagonally implicit table", name);
+  ARKodeButcherTable table;
+  const f3r_status s = f3r_stepper_explicit_start(st, t0, 1, F3R_DIRK_DEFAULT_TABLE, &table, err);
+  if (s != F3R_OK) return s;
   st->mem = ARKStepCreate(NULL, f3r_stepper_explicit_rhs, t0, y, st->ctx);
   if (!st->mem) {
     ARKodeButcherTable_Free(table);
@@ -74,12 +64,8 @@ static f3r_status dirk_setup(f3r_stepper* st, N_Vector y, N_Vector yp, double t0
   const int flag = ARKStepSetTables(st->mem, table->q, table->p, table, NULL);
   ARKodeButcherTable_Free(table);
   CHECK(flag);
-  CHECK(ARKStepSetErrHandlerFn(st->mem, f3r_stepper_error_handler, st));
-  CHECK(ARKStepSStolerances(st->mem, st->settings.rtol, st->settings.atol));
-  CHECK(ARKStepSetUserData(st->mem, st));
-  CHECK(ARKStepSetMaxNumSteps(st->mem, 100000000L));
-  CHECK(ARKStepSetInterpolantDegree(st->mem, 3)); /* see stepper_erk.c */
-  if (st->settings.max_step > 0.0) CHECK(ARKStepSetMaxStep(st->mem, st->settings.max_step));
+  const f3r_status configured = f3r_arkode_configure(st, &dirk_calls, err);
+  if (configured != F3R_OK) return configured;
   const int ny = (int)N_VGetLength(y);
   st->J = SUNDenseMatrix(ny, ny, st->ctx);
   if (!st->J) return f3r_error_set(err, F3R_ERR_MEMORY, "SUNDenseMatrix failed");
@@ -87,60 +73,20 @@ static f3r_status dirk_setup(f3r_stepper* st, N_Vector y, N_Vector yp, double t0
   if (!st->ls) return f3r_error_set(err, F3R_ERR_MEMORY, "SUNLinSol_Dense failed");
   CHECK(ARKStepSetLinearSolver(st->mem, st->ls, st->J));
   CHECK(ARKStepSetJacFn(st->mem, jacobian_fn));
-  int directions[F3R_NROOTS];
-  for (int k = 0; k < F3R_NROOTS; ++k) directions[k] = -1;
-  CHECK(ARKStepRootInit(st->mem, F3R_NROOTS, f3r_stepper_explicit_roots));
-  CHECK(ARKStepSetRootDirection(st->mem, directions));
   return F3R_OK;
 }
 
 static void dirk_stats(const f3r_stepper* st, f3r_sim_stats* out) {
-  long nst = 0, nfe = 0, nfi = 0, netf = 0, nje = 0, nfi_ls = 0, nncf = 0;
-  realtype hlast = 0.0;
+  long nfe = 0, nfi = 0, nje = 0, nfi_ls = 0, nncf = 0;
   /* a failed getter leaves its counter at 0 rather than garbage */
-  if (ARKStepGetNumSteps(st->mem, &nst) < 0) nst = 0;
   if (ARKStepGetNumRhsEvals(st->mem, &nfe, &nfi) < 0) nfe = nfi = 0;
-  if (ARKStepGetNumErrTestFails(st->mem, &netf) < 0) netf = 0;
   if (ARKStepGetNumJacEvals(st->mem, &nje) < 0) nje = 0;
   if (ARKStepGetNumLinRhsEvals(st->mem, &nfi_ls) < 0) nfi_ls = 0;
   if (ARKStepGetNumNonlinSolvConvFails(st->mem, &nncf) < 0) nncf = 0;
-  if (ARKStepGetLastStep(st->mem, &hlast) < 0) hlast = 0.0;
-  *out = st->base;
-  out->steps += nst;
-  out->residual_evals += nfe + nfi + nfi_ls + st->jacobian_rhs_evals;
+  f3r_arkode_stats(st, &dirk_calls, nfe + nfi + nfi_ls + st->jacobian_rhs_evals, out);
   out->jacobian_evals += nje;
-  out->error_test_failures += netf;
   out->nonlinear_failures += nncf;
-  out->recoverable_errors = st->recoverable;
-  out->last_step = hlast;
   out->last_order = 0;
-}
-
-static f3r_status dirk_restart(f3r_stepper* st, N_Vector y, N_Vector yp, double t, f3r_error* err) {
-  (void)yp;
-  dirk_stats(st, &st->base);
-  st->jacobian_rhs_evals = 0; /* now in base */
-  st->base.restarts++;
-  CHECK(ARKStepReset(st->mem, t, y));
-  st->t_segment = t;
-  return F3R_OK;
-}
-
-static f3r_status dirk_advance(f3r_stepper* st, double tout, double tstop, N_Vector y, N_Vector yp,
-                               double* t_reached, int* event, f3r_error* err) {
-  (void)yp; /* y' costs a right-hand side: the simulation evaluates it when outputs need it */
-  CHECK(ARKStepSetStopTime(st->mem, tstop)); /* see stepper_ida.c */
-  realtype t = *t_reached;
-  const int flag = ARKStepEvolve(st->mem, tout, y, &t, ARK_NORMAL);
-  *t_reached = t;
-  *event = flag == ARK_ROOT_RETURN;
-  st->yp_stale = 1;
-  if (*event) CHECK(ARKStepGetRootInfo(st->mem, st->root_info));
-  if (flag >= 0) return F3R_OK;
-  (void)ARKStepGetDky(st->mem, t, 0, y); /* the last good state, as stepper_erk.c */
-  return f3r_error_set(err, flag == ARK_RHSFUNC_FAIL ? F3R_ERR_NONFINITE : F3R_ERR_SOLVER,
-                       "ARKStepEvolve stopped at t = %.9g before %.9g: %s (%s)", t, tout,
-                       ARKStepGetReturnFlagName(flag), st->message);
 }
 
 static void dirk_release(f3r_stepper* st) {
@@ -151,5 +97,5 @@ static void dirk_release(f3r_stepper* st) {
   st->J = NULL;
 }
 
-const f3r_stepper_ops f3r_dirk_stepper = {dirk_setup, dirk_restart, dirk_advance, dirk_stats,
-                                          dirk_release};
+const f3r_stepper_ops f3r_dirk_stepper = {dirk_setup, f3r_arkode_restart, f3r_arkode_advance,
+                                          dirk_stats, dirk_release};

@@ -5,6 +5,7 @@
 #include <ida/ida.h>
 #include <math.h>
 #include <stdio.h>
+#include <stdlib.h>
 #include <string.h>
 
 #include "linsol_schur.h"
@@ -55,16 +56,7 @@ static int root_fn(realtype t, N_Vector y, N_Vector yp, realtype* g, void* user)
   return f3r_stepper_roots(user, N_VGetArrayPointer(y), g);
 }
 
-static f3r_status failed(f3r_stepper* st, f3r_error* err, const char* call, int flag) {
-  return f3r_error_set(err, F3R_ERR_SOLVER, "%s failed: %s (%s)", call, IDAGetReturnFlagName(flag),
-                       st->message);
-}
-
-#define CHECK(call)                                      \
-  do {                                                   \
-    const int flag_ = (call);                            \
-    if (flag_ < 0) return failed(st, err, #call, flag_); \
-  } while (0)
+#define CHECK(call) F3R_STEPPER_CHECK(call, IDAGetReturnFlagName)
 
 static f3r_status ida_setup(f3r_stepper* st, N_Vector y, N_Vector yp, double t0, f3r_error* err) {
   const f3r_model* m = st->model;
@@ -103,7 +95,7 @@ static f3r_status ida_setup(f3r_stepper* st, N_Vector y, N_Vector yp, double t0,
   CHECK(IDASetLinearSolver(st->mem, st->ls, st->J));
   if (st->settings.analytic_jacobian) CHECK(IDASetJacFn(st->mem, jacobian_fn));
   int directions[F3R_NROOTS];
-  for (int k = 0; k < F3R_NROOTS; ++k) directions[k] = -1; /* only moving into a stop or guard */
+  f3r_stepper_root_directions(directions); /* only moving into a stop or guard */
   CHECK(IDARootInit(st->mem, F3R_NROOTS, root_fn));
   CHECK(IDASetRootDirection(st->mem, directions));
   return F3R_OK;
@@ -174,10 +166,12 @@ static f3r_status ida_advance(f3r_stepper* st, double tout, double tstop, N_Vect
     snprintf(message + strlen(message), sizeof message - strlen(message),
              "; the state is IDASolve's own");
   snprintf(st->message, sizeof st->message, "%s", message);
-  return f3r_error_set(
+  char* name = IDAGetReturnFlagName(flag); /* allocated by IDA */
+  const f3r_status s = f3r_error_set(
       err, flag == IDA_RES_FAIL || flag == IDA_REP_RES_ERR ? F3R_ERR_NONFINITE : F3R_ERR_SOLVER,
-      "IDASolve stopped at t = %.9g before %.9g: %s (%s)", t, tout, IDAGetReturnFlagName(flag),
-      st->message);
+      "IDASolve stopped at t = %.9g before %.9g: %s (%s)", t, tout, name ? name : "?", st->message);
+  free(name);
+  return s;
 }
 
 static void ida_release(f3r_stepper* st) {
