@@ -47,47 +47,19 @@ static const char* join(const char* const* names, int count, char* list, size_t 
   return list;
 }
 
-const char* f3r_link_model_name(f3r_link_model model) {
-  return name_of(link_model_names, COUNT(link_model_names), (int)model);
-}
+/* The three functions scene.h declares for one enum: type_name, type_from_name and type_names.
+ * named: how many of the table's names a value may have; chosen: how many a scene may choose. */
+#define F3R_ENUM_NAMES(type, table, named, chosen)                                  \
+  const char* type##_name(type value) { return name_of(table, named, (int)value); } \
+  int type##_from_name(const char* name, type* value) {                             \
+    const int k = value_of(table, chosen, name);                                    \
+    if (k < 0) return -1;                                                           \
+    *value = (type)k;                                                               \
+    return 0;                                                                       \
+  }                                                                                 \
+  const char* type##_names(char* list, size_t size) { return join(table, chosen, list, size); }
 
-int f3r_link_model_from_name(const char* name, f3r_link_model* model) {
-  const int k = value_of(link_model_names, COUNT(link_model_names), name);
-  if (k < 0) return -1;
-  *model = (f3r_link_model)k;
-  return 0;
-}
-
-const char* f3r_link_model_names(char* list, size_t size) {
-  return join(link_model_names, COUNT(link_model_names), list, size);
-}
-
-const char* f3r_formulation_name(f3r_formulation formulation) {
-  return name_of(formulation_names, COUNT(formulation_names), (int)formulation);
-}
-
-int f3r_formulation_from_name(const char* name, f3r_formulation* formulation) {
-  const int k = value_of(formulation_names, SELECTABLE_FORMULATIONS, name);
-  if (k < 0) return -1;
-  *formulation = (f3r_formulation)k;
-  return 0;
-}
-
-const char* f3r_formulation_names(char* list, size_t size) {
-  return join(formulation_names, SELECTABLE_FORMULATIONS, list, size);
-}
-
-const char* f3r_integrator_name(f3r_integrator integrator) {
-  return name_of(integrator_names, COUNT(integrator_names), (int)integrator);
-}
-
-int f3r_integrator_from_name(const char* name, f3r_integrator* integrator) {
-  const int k = value_of(integrator_names, COUNT(integrator_names), name);
-  if (k < 0) return -1;
-  *integrator = (f3r_integrator)k;
-  return 0;
-}
-
-const char* f3r_integrator_names(char* list, size_t size) {
-  return join(integrator_names, COUNT(integrator_names), list, size);
-}
+F3R_ENUM_NAMES(f3r_link_model, link_model_names, COUNT(link_model_names), COUNT(link_model_names))
+F3R_ENUM_NAMES(f3r_formulation, formulation_names, COUNT(formulation_names),
+               SELECTABLE_FORMULATIONS)
+F3R_ENUM_NAMES(f3r_integrator, integrator_names, COUNT(integrator_names), COUNT(integrator_names))
