@@ -5,13 +5,38 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "accuracy_parts.h"
 #include "dense.h"
-#include "flex3rpr/linear.h"
 
-void f3r_state_space_destroy(f3r_state_space* ss) {
-  if (!ss) return;
-  free(ss->A), free(ss->B), free(ss->C), free(ss->D), free(ss->x0), free(ss->state_names);
-  free(ss);
+void f3r_state_space_destroy(f3r_state_space* ss) { free(ss); }
+
+/* One allocation: the struct, then A, B, C, D, x0 (doubles), then the state names. */
+static f3r_state_space* state_space_alloc(int nx) {
+  const size_t doubles = (size_t)nx * nx + (size_t)nx * F3R_SS_INPUTS +
+                         (size_t)F3R_SS_OUTPUTS * nx + F3R_SS_OUTPUTS * F3R_SS_INPUTS + (size_t)nx;
+  const size_t head = (sizeof(f3r_state_space) + sizeof(double) - 1) / sizeof(double);
+  double* block = calloc(1, (head + doubles) * sizeof(double) + (size_t)nx * F3R_SS_NAME);
+  f3r_state_space* ss = (f3r_state_space*)block;
+  if (!ss) return NULL;
+  ss->nx = nx;
+  ss->nu = F3R_SS_INPUTS;
+  ss->ny = F3R_SS_OUTPUTS;
+  ss->A = block + head;
+  ss->B = ss->A + (size_t)nx * nx;
+  ss->C = ss->B + (size_t)nx * F3R_SS_INPUTS;
+  ss->D = ss->C + (size_t)F3R_SS_OUTPUTS * nx;
+  ss->x0 = ss->D + F3R_SS_OUTPUTS * F3R_SS_INPUTS;
+  ss->state_names = (char(*)[F3R_SS_NAME])(ss->x0 + nx);
+  return ss;
+}
+
+f3r_status f3r_linear_mass_factor(const f3r_linear_model* lin, double* L, const char* who,
+                                  f3r_error* err) {
+  memcpy(L, lin->mass, (size_t)lin->n * lin->n * sizeof(double));
+  if (f3r_cholesky_factor(L, lin->n))
+    return f3r_error_set(err, F3R_ERR_SINGULAR,
+                         "%s: the reduced mass matrix is not positive definite", who);
+  return F3R_OK;
 }
 
 static void name_everything(const f3r_model* m, f3r_state_space* ss) {
@@ -67,30 +92,14 @@ f3r_status f3r_state_space_create(const f3r_model* model, f3r_state_space** out,
   f3r_status st = f3r_linearise(model, &lin, err);
   if (st != F3R_OK) return st;
   const int n = lin->n, nx = 2 * n;
-  f3r_state_space* ss = calloc(1, sizeof *ss);
-  double* L = malloc((size_t)n * n * sizeof(double));
-  double* col = malloc((size_t)n * sizeof(double));
-  if (ss) {
-    ss->nx = nx;
-    ss->nu = F3R_SS_INPUTS;
-    ss->ny = F3R_SS_OUTPUTS;
-    ss->A = calloc((size_t)nx * nx, sizeof(double));
-    ss->B = calloc((size_t)nx * F3R_SS_INPUTS, sizeof(double));
-    ss->C = calloc((size_t)F3R_SS_OUTPUTS * nx, sizeof(double));
-    ss->D = calloc((size_t)F3R_SS_OUTPUTS * F3R_SS_INPUTS, sizeof(double));
-    ss->x0 = calloc((size_t)nx, sizeof(double));
-    ss->state_names = calloc((size_t)nx, sizeof *ss->state_names);
-  }
-  if (!ss || !L || !col || !ss->A || !ss->B || !ss->C || !ss->D || !ss->x0 || !ss->state_names) {
+  f3r_state_space* ss = state_space_alloc(nx);
+  double* L = malloc(((size_t)n * n + (size_t)n) * sizeof(double));
+  double* col = L ? L + (size_t)n * n : NULL;
+  if (!ss || !L) {
     st = f3r_error_set(err, F3R_ERR_MEMORY, "state space: out of memory");
     goto done;
   }
-  memcpy(L, lin->mass, (size_t)n * n * sizeof(double));
-  if (f3r_cholesky_factor(L, n)) {
-    st = f3r_error_set(err, F3R_ERR_SINGULAR,
-                       "state space: the reduced mass matrix is not positive definite");
-    goto done;
-  }
+  if ((st = f3r_linear_mass_factor(lin, L, "state space", err)) != F3R_OK) goto done;
   for (int k = 0; k < n; ++k) F3R_AT(ss->A, nx, k, n + k) = 1.0;
   /* Lower block rows: -M^-1 K and -M^-1 D, a column at a time; B's from U's actuated columns. */
   for (int j = 0; j < n; ++j)
@@ -116,7 +125,7 @@ f3r_status f3r_state_space_create(const f3r_model* model, f3r_state_space** out,
   name_everything(model, ss);
 done:
   f3r_linear_destroy(lin);
-  free(L), free(col);
+  free(L);
   if (st == F3R_OK)
     *out = ss;
   else
