@@ -214,6 +214,7 @@ TEST(Urdf, GeneratedForAnySettingIsCompleteAndMatchesTheModel) {
   EXPECT_EQ(flex3rpr::CheckUrdf(ss.str(), *m, &frames), "");
   EXPECT_EQ(u->getJoint("leg_2_prismatic")->limits->upper, m->stroke_max);
   f3r_model_destroy(m);
+  f3r_scene_free(&s);
 }
 
 TEST(Pacer, KeepsTheRequestedScheduleWhenOnTime) {

@@ -17,16 +17,18 @@ extern "C" {
 
 #define F3R_MAX_Q (9 + 3 * F3R_MAX_MODES)
 
+/* A link's modal constants: arrays of `modes` values in the model's buffer, NULL for a rigid
+ * link. */
 typedef struct {
   f3r_link_model model;
-  int modes;                           /* r_i (chosen by the model when the scene says auto) */
-  int eta_index;                       /* index of this link's first modal coordinate in q */
-  double alpha[F3R_MAX_MODES];         /* roots of the frequency equation */
-  double mean[F3R_MAX_MODES];          /* int_0^1 psi_j dxi */
-  double first_moment[F3R_MAX_MODES];  /* int_0^1 xi psi_j dxi */
-  double tip[F3R_MAX_MODES];           /* psi_j(1): 0 for fixed-pinned */
-  double stiffness[F3R_MAX_MODES];     /* EI/l^3 int psi_j''^2 (N/m), diagonal modal stiffness */
-  double omega_clamped[F3R_MAX_MODES]; /* alpha_j^2 sqrt(EI/(m l^3)) (rad/s) */
+  int modes;             /* r_i (chosen by the model when the scene says auto) */
+  int eta_index;         /* index of this link's first modal coordinate in q */
+  double* alpha;         /* roots of the frequency equation */
+  double* mean;          /* int_0^1 psi_j dxi */
+  double* first_moment;  /* int_0^1 xi psi_j dxi */
+  double* tip;           /* psi_j(1): 0 for fixed-pinned */
+  double* stiffness;     /* EI/l^3 int psi_j''^2 (N/m), diagonal modal stiffness */
+  double* omega_clamped; /* alpha_j^2 sqrt(EI/(m l^3)) (rad/s) */
 } f3r_link_params;
 
 struct f3r_model;
@@ -48,8 +50,12 @@ typedef struct {
 
 #define F3R_MAX_EFFECTS 8
 
+/* One allocation, laid out by f3r_model_create as MuJoCo lays out mjModel: this struct, then the
+ * sized arrays its pointers point into (the scene's input tables, the breakpoints, the links'
+ * modal constants, the modal damping). */
 typedef struct f3r_model {
-  f3r_scene scene; /* the scene the model was built from (validated) */
+  f3r_scene scene; /* the scene the model was built from (validated); its tables are in the
+                    * model's buffer */
 
   /* geometry (../shared/MODEL.md) */
   double base_joint[3][2];         /* A_i (m) */
@@ -72,19 +78,20 @@ typedef struct f3r_model {
   int n_effects;
   const f3r_force_effect* effects[F3R_MAX_EFFECTS];
 
-  f3r_link_params link[3];
+  f3r_link_params link[3]; /* modal constants: link[i].modes values each, in the buffer */
   int exact_kinematics;
 
-  /* breakpoints of the scripted inputs (s), ascending: integration stops */
+  /* breakpoints of the scripted inputs (s), ascending: integration stops (n_breakpoints values
+   * in the buffer, room for every table time and shape end) */
   int n_breakpoints;
-  double breakpoints[F3R_RIGID_FORCES * F3R_MAX_TABLE];
+  double* breakpoints;
 
   int n_lag;                /* 3 with actuator lag (applied leg forces are states), else 0 */
   double lag_time_constant; /* s */
 
   /* coefficients of the effects (effects.c), copied from the scene so that the loop never reads it */
-  double joint_friction[6];        /* viscous, per coordinate: rho_i (N s/m), theta_i (N m s) */
-  double modal_damping[F3R_MAX_Q]; /* per modal coordinate n >= 9: 2 zeta omega_j m (N s/m) */
+  double joint_friction[6]; /* viscous, per coordinate: rho_i (N s/m), theta_i (N m s) */
+  double* modal_damping;    /* nq values; for modal coordinate n >= 9: 2 zeta omega_j m (N s/m) */
 
   /* end stops of the pistons (events.c): active only when end_stops is 1 */
   int end_stops;
@@ -98,8 +105,8 @@ typedef struct f3r_model {
 
 /* Builds a model from a scene (validating it first). Every flexible link's mode count must be a
  * number: modes left open (modes: auto, or none under an accuracy request) are an error, resolved
- * above the model by f3r_accuracy_resolve (accuracy.h). The result owns no pointers, so a model
- * is freed with f3r_model_destroy or simply copied. */
+ * above the model by f3r_accuracy_resolve (accuracy.h). The model is one allocation, its copy
+ * of the scene included: f3r_model_destroy frees it. */
 f3r_status f3r_model_create(const f3r_scene* scene, f3r_model** model, f3r_error* err);
 void f3r_model_destroy(f3r_model* model);
 

@@ -328,12 +328,10 @@ static int resolve_model(const cli_options* o, f3r_scene* scene, f3r_accuracy_ch
     return 0;
   }
   const double choose_start = cpu_seconds();
-  if (f3r_accuracy_resolve(scene, 0, choice, &err) != F3R_OK) {
-    fprintf(stderr, "flex3rpr_sim: %s: %s\n", o->scene_path, err.message);
-    return 0;
-  }
+  st = f3r_accuracy_resolve(scene, 0, choice, &err);
   *choose_cpu = cpu_seconds() - choose_start;
-  if (f3r_model_create(scene, model, &err) != F3R_OK) {
+  if (st == F3R_OK) st = f3r_model_create(scene, model, &err);
+  if (st != F3R_OK) {
     fprintf(stderr, "flex3rpr_sim: %s: %s\n", o->scene_path, err.message);
     return 0;
   }
@@ -534,12 +532,12 @@ int main(int argc, char** argv) {
     usage(stderr);
     return 2;
   }
-  f3r_scene scene;
+  f3r_scene scene = f3r_default_scene(); /* the loaded one owns tables: freed at the end */
   f3r_accuracy_choice choice;
   double choose_cpu = 0.0;
   f3r_model* model = NULL;
-  if (!resolve_model(&o, &scene, &choice, &choose_cpu, &model)) return 1;
-  int rc;
+  int rc = 1;
+  if (!resolve_model(&o, &scene, &choice, &choose_cpu, &model)) goto done;
   if (o.check || o.geometry) {
     rc = describe_model(&o, model);
   } else {
@@ -547,6 +545,8 @@ int main(int argc, char** argv) {
     rc = analyse(&o, model);
     if (rc < 0) rc = simulate(&o, &scene, model);
   }
+done:
   f3r_model_destroy(model);
+  f3r_scene_free(&scene);
   return rc;
 }

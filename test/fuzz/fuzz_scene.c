@@ -80,5 +80,6 @@ int LLVMFuzzerTestOneInput(const unsigned char* data, size_t size) {
   } else if (err.message[0] == '\0') {
     fail("f3r_model_create failed without a message", &err);
   }
+  f3r_scene_free(&scene);
   return 0;
 }
