@@ -223,7 +223,7 @@ TEST(SceneFiles, AHandMadeTableIsCopiedIntoTheModel) {
   EXPECT_EQ(s.inputs[F3R_FORCE_RHO].kind, F3R_INPUT_TABLE);
   EXPECT_EQ(f3r_input_value(&s.inputs[F3R_FORCE_RHO], 0.15), 2.0);
   ModelPtr m = MakeModel(s);
-  const f3r_input& kept = m->scene.inputs[F3R_FORCE_RHO];
+  const f3r_input& kept = f3r_model_scene(m.get())->inputs[F3R_FORCE_RHO];
   EXPECT_NE(kept.table_time, s.inputs[F3R_FORCE_RHO].table_time);
   f3r_scene_free(&s);
   f3r_scene_free(&s); /* twice is safe */

@@ -9,6 +9,7 @@
 
 #include "flex3rpr/residual.h"
 #include "flex3rpr/sim.h"
+#include "model_layout.h" /* the tests read the model's fields */
 
 struct ModelDeleter {
   void operator()(f3r_model* m) const { f3r_model_destroy(m); }

@@ -82,6 +82,7 @@
 #include "flex3rpr/residual.h"
 #include "flex3rpr/scene.h"
 #include "flex3rpr/stages.h"
+#include "model_layout.h"
 
 #define F3R_PEER_EXPORT __attribute__((visibility("default")))
 

@@ -7,6 +7,7 @@
 
 #include "dense.h"
 #include "flex3rpr/linear.h"
+#include "model_layout.h"
 
 void f3r_state_space_destroy(f3r_state_space* ss) {
   if (!ss) return;

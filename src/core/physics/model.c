@@ -7,6 +7,7 @@
 
 #include "flex3rpr/beam_modes.h"
 #include "flex3rpr/model.h"
+#include "model_layout.h"
 #include "effects.h"
 #include "data.h"
 
@@ -192,6 +193,30 @@ f3r_status f3r_model_create(const f3r_scene* source, f3r_model** out, f3r_error*
 }
 
 void f3r_model_destroy(f3r_model* model) { free(model); }
+
+f3r_geometry f3r_model_geometry(const f3r_model* m) {
+  f3r_geometry g = {.platform_radius = m->platform_radius,
+                    .link_length = m->link_length,
+                    .link_mass = m->link_mass,
+                    .cylinder_mass = m->cylinder_mass,
+                    .cylinder_length = m->cylinder_length,
+                    .platform_mass = m->platform_mass,
+                    .platform_inertia = m->platform_inertia,
+                    .end_stops = m->end_stops,
+                    .stroke_min = m->stroke_min,
+                    .stroke_max = m->stroke_max};
+  memcpy(g.base_joint, m->base_joint, sizeof g.base_joint);
+  memcpy(g.platform_angle, m->platform_angle, sizeof g.platform_angle);
+  return g;
+}
+
+int f3r_model_nq(const f3r_model* m) { return m->nq; }
+
+int f3r_model_lag_states(const f3r_model* m) { return m->n_lag; }
+
+const f3r_link_params* f3r_model_link(const f3r_model* m, int link) { return &m->link[link]; }
+
+const f3r_scene* f3r_model_scene(const f3r_model* m) { return &m->scene; }
 
 double f3r_model_tip_deflection(const f3r_model* m, const double* q, int link) {
   const f3r_link_params* lp = &m->link[link];
