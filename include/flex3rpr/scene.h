@@ -207,7 +207,9 @@ f3r_status f3r_scene_validate(const f3r_scene* scene, f3r_error* err);
  * SDIRK_5_3_4. NULL for ida. */
 const char* const* f3r_rk_tables(f3r_integrator integrator);
 
-/* Reads a scene YAML file over the defaults, then validates it. Errors start with "path:line: ". */
+/* Reads a scene YAML file over the defaults, then validates it. Errors start with "path:line: ".
+ * On success *scene is overwritten (free what it held first) and owns its tables; on error it is
+ * left as it was. */
 f3r_status f3r_scene_load(const char* path, f3r_scene* scene, f3r_error* err);
 
 /* The same with an accuracy request from outside the file (a CLI flag, a node parameter): it
