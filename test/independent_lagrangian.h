@@ -7,6 +7,7 @@
 #define FLEX3RPR_TEST_INDEPENDENT_LAGRANGIAN_H
 
 #include "flex3rpr/model.h"
+#include "model_layout.h"
 
 #ifdef __cplusplus
 extern "C" {

@@ -479,6 +479,7 @@ TEST(Accuracy, ALongRunHasItsSolverMeasured) {
 // faithful model and a tolerance for the budget over 1e5, and says so in the summary and the brief.
 TEST(Accuracy, ImpactsTakeTheMostFaithfulModelAndSayWhy) {
   f3r_scene s = OpenScene("end_stop_impact.yaml");
+  SceneTables owned{&s};
   f3r_error err{};
   ASSERT_TRUE(s.end_stops);
   s.duration = 0.05;

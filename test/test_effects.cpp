@@ -232,8 +232,9 @@ TEST(Effects, ScriptedInputShapesAndTheirBreakpoints) {
   f3r_input table{};
   table.kind = F3R_INPUT_TABLE;
   table.table_size = 3;
-  table.table_time[0] = 0.0, table.table_time[1] = 0.1, table.table_time[2] = 0.3;
-  table.table_value[0] = 0.0, table.table_value[1] = 5.0, table.table_value[2] = 1.0;
+  double time[3] = {0.0, 0.1, 0.3}, value[3] = {0.0, 5.0, 1.0};
+  table.table_time = time; /* a view of these lists: nothing to free */
+  table.table_value = value;
   EXPECT_DOUBLE_EQ(f3r_input_value(&table, 0.2), 3.0);
   EXPECT_DOUBLE_EQ(f3r_input_value(&table, 1.0), 1.0);
   double times[8];
@@ -246,6 +247,9 @@ TEST(Effects, LongTablesGiveTheValueOfTheirInterval) {
   f3r_input table{};
   table.kind = F3R_INPUT_TABLE;
   table.table_size = F3R_MAX_TABLE;
+  std::vector<double> time(F3R_MAX_TABLE), value(F3R_MAX_TABLE);
+  table.table_time = time.data();
+  table.table_value = value.data();
   double t = 0.0;
   for (int k = 0; k < F3R_MAX_TABLE; ++k) {
     t += 1e-3 * (1.0 + (k * 7919 % 13));  // uneven steps
@@ -374,7 +378,8 @@ double EffectiveMass(const f3r_model* m, const double* q, int leg) {
 }
 
 TEST(Effects, EndStopImpactsAreLocatedAndObeyTheRestitutionLaw) {
-  f3r_scene s;
+  f3r_scene s = f3r_default_scene();
+  SceneTables owned{&s};
   f3r_error err{};
   ASSERT_EQ(f3r_scene_load(ScenePath("end_stop_impact.yaml").c_str(), &s, &err), F3R_OK)
       << err.message;

@@ -109,7 +109,7 @@ TEST_F(Fixture, ShippedUrdfMatchesAndAMovedJointIsNamed) {
   ASSERT_FALSE(urdf.empty());
   const flex3rpr::FrameNames frames = flex3rpr::MakeFrameNames("", "world", "base", 11);
   EXPECT_EQ(flex3rpr::CheckUrdf(urdf, *model, &frames), "");
-  f3r_scene s = model->scene;
+  f3r_scene s = *f3r_model_scene(model); /* a view: rest.yaml has no tables */
   s.link_length = 0.21;
   f3r_model* other = nullptr;
   f3r_error err{};
@@ -119,7 +119,7 @@ TEST_F(Fixture, ShippedUrdfMatchesAndAMovedJointIsNamed) {
   EXPECT_NE(why.find("0.21"), std::string::npos) << why;
   f3r_model_destroy(other);
   // The stroke is the prismatic joints' limits.
-  s = model->scene;
+  s = *f3r_model_scene(model);
   s.stroke_max = 0.25;
   ASSERT_EQ(f3r_model_create(&s, &other, &err), F3R_OK);
   why = flex3rpr::CheckUrdf(urdf, *other, &frames);
@@ -208,12 +208,14 @@ TEST(Urdf, GeneratedForAnySettingIsCompleteAndMatchesTheModel) {
   ASSERT_EQ(f3r_scene_load(scene.c_str(), &s, &err), F3R_OK) << err.message;
   f3r_model* m = nullptr;
   ASSERT_EQ(f3r_model_create(&s, &m, &err), F3R_OK);
-  EXPECT_NEAR(mass, m->platform_mass + 3 * (m->link_mass + m->cylinder_mass), 1e-12);
+  const f3r_geometry g = f3r_model_geometry(m);
+  EXPECT_NEAR(mass, g.platform_mass + 3 * (g.link_mass + g.cylinder_mass), 1e-12);
   const flex3rpr::FrameNames frames =
       flex3rpr::MakeFrameNames("robot2/", "world", "robot2/base", 5);
   EXPECT_EQ(flex3rpr::CheckUrdf(ss.str(), *m, &frames), "");
-  EXPECT_EQ(u->getJoint("leg_2_prismatic")->limits->upper, m->stroke_max);
+  EXPECT_EQ(u->getJoint("leg_2_prismatic")->limits->upper, g.stroke_max);
   f3r_model_destroy(m);
+  f3r_scene_free(&s);
 }
 
 TEST(Pacer, KeepsTheRequestedScheduleWhenOnTime) {

@@ -34,7 +34,8 @@ TEST(SceneFiles, EveryShippedSceneLoadsAndRunsToItsEnd) {
   const auto names = ShippedScenes();
   ASSERT_GE(names.size(), 12u);
   for (const auto& name : names) {
-    f3r_scene s;
+    f3r_scene s = f3r_default_scene();
+    SceneTables owned{&s};
     f3r_error err{};
     ASSERT_EQ(f3r_scene_load(ScenePath(name).c_str(), &s, &err), F3R_OK) << err.message;
     auto m = MakeModel(s);
@@ -159,10 +160,10 @@ namespace {
 
 // test/invalid_scenes/NN_name.yaml holds a bad scene and NN_name.expected the error after
 // "path:": the line, the field and the allowed range or values.
-// f3r_scene_copy copies everything a scene holds but the unused tails of its input tables, which
-// the destination keeps; a model built from the copy runs the same path as one built from the
+// f3r_scene_copy is a deep copy: the copy's tables are its own, of their real sizes, and
+// outlive the original's; a model built from the copy runs the same path as one built from the
 // original (end_stop_impact drives a leg by a table).
-TEST(SceneFiles, ACopyHoldsEverythingButTheTablesUnusedTails) {
+TEST(SceneFiles, ACopyOwnsItsTables) {
   f3r_scene s;
   f3r_error err{};
   ASSERT_EQ(f3r_scene_load(ScenePath("end_stop_impact.yaml").c_str(), &s, &err), F3R_OK)
@@ -172,18 +173,21 @@ TEST(SceneFiles, ACopyHoldsEverythingButTheTablesUnusedTails) {
     if (s.inputs[k].kind == F3R_INPUT_TABLE) table = k;
   ASSERT_GE(table, 0);
   const int used = s.inputs[table].table_size;
-  ASSERT_LT(used, F3R_MAX_TABLE);
-  std::vector<unsigned char> room(sizeof(f3r_scene), 0xAB);
-  f3r_scene* copy = reinterpret_cast<f3r_scene*>(room.data());
-  f3r_scene_copy(copy, &s);
-  f3r_scene expected = s; /* the whole struct, with copy's untouched tails put in */
-  for (int k = 0; k < F3R_RIGID_FORCES; ++k) {
-    const int n = s.inputs[k].table_size;
-    std::memset(expected.inputs[k].table_time + n, 0xAB, (F3R_MAX_TABLE - n) * sizeof(double));
-    std::memset(expected.inputs[k].table_value + n, 0xAB, (F3R_MAX_TABLE - n) * sizeof(double));
+  EXPECT_EQ(f3r_scene_table_doubles(&s), 2u * used);
+  f3r_scene copy_room, *copy = &copy_room;
+  ASSERT_EQ(f3r_scene_copy(copy, &s, &err), F3R_OK);
+  const f3r_input &from = s.inputs[table], &to = copy->inputs[table];
+  EXPECT_NE(to.table_time, from.table_time);
+  for (int k = 0; k < used; ++k) {
+    EXPECT_EQ(to.table_time[k], from.table_time[k]);
+    EXPECT_EQ(to.table_value[k], from.table_value[k]);
   }
-  EXPECT_EQ(std::memcmp(copy, &expected, sizeof expected), 0);
-  EXPECT_EQ(copy->inputs[table].table_value[used - 1], s.inputs[table].table_value[used - 1]);
+  f3r_scene fields = *copy, expected = s; /* all but the table pointers alike */
+  for (int k = 0; k < F3R_RIGID_FORCES; ++k) {
+    fields.inputs[k].table_time = fields.inputs[k].table_value = nullptr;
+    expected.inputs[k].table_time = expected.inputs[k].table_value = nullptr;
+  }
+  EXPECT_EQ(std::memcmp(&fields, &expected, sizeof expected), 0);
   s.duration = copy->duration = 0.05;
   s.end_stops = copy->end_stops = 0;
   auto final_state = [](const f3r_scene& scene) {
@@ -202,7 +206,29 @@ TEST(SceneFiles, ACopyHoldsEverythingButTheTablesUnusedTails) {
   };
   const std::vector<double> original = final_state(s);
   ASSERT_FALSE(original.empty());
+  f3r_scene_free(&s); /* the copy's tables outlive the original's */
+  EXPECT_EQ(s.inputs[table].table_time, nullptr);
   EXPECT_EQ(original, final_state(*copy));
+  f3r_scene_free(copy);
+}
+
+// A table set by hand is the input's own copy; the model keeps a copy of its own in its buffer.
+TEST(SceneFiles, AHandMadeTableIsCopiedIntoTheModel) {
+  f3r_scene s = f3r_default_scene();
+  const double time[] = {0.0, 0.1, 0.2}, value[] = {1.0, 2.0, 0.5};
+  f3r_error err{};
+  ASSERT_EQ(f3r_input_set_table(&s.inputs[F3R_FORCE_RHO], time, value, 1, 0, &err),
+            F3R_ERR_ARGUMENT);
+  ASSERT_EQ(f3r_input_set_table(&s.inputs[F3R_FORCE_RHO], time, value, 3, 1, &err), F3R_OK);
+  EXPECT_EQ(s.inputs[F3R_FORCE_RHO].kind, F3R_INPUT_TABLE);
+  EXPECT_EQ(f3r_input_value(&s.inputs[F3R_FORCE_RHO], 0.15), 2.0);
+  ModelPtr m = MakeModel(s);
+  const f3r_input& kept = f3r_model_scene(m.get())->inputs[F3R_FORCE_RHO];
+  EXPECT_NE(kept.table_time, s.inputs[F3R_FORCE_RHO].table_time);
+  f3r_scene_free(&s);
+  f3r_scene_free(&s); /* twice is safe */
+  EXPECT_EQ(f3r_input_value(&kept, 0.15), 2.0);
+  EXPECT_EQ(m->n_breakpoints, 2); /* 0.1 and 0.2: breakpoints are after t = 0 */
 }
 
 TEST(SceneFiles, InvalidSceneCorpusGivesTheExpectedErrors) {

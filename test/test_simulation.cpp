@@ -342,7 +342,8 @@ void PassiveForces(const f3r_model* m, const f3r_scene& s, const double* q, cons
 // are the rest of Q on the leg joints: friction and gravity.
 TEST(Simulation, ActuatorEffortsAreHeldPlusScriptedAndPassiveIsTheRest) {
   for (int lagged = 0; lagged < 2; ++lagged) {
-    f3r_scene s;
+    f3r_scene s = f3r_default_scene();
+    SceneTables owned{&s};
     f3r_error err{};
     ASSERT_EQ(
         f3r_scene_load((std::string(F3R_SOURCE_DIR) + "/test/scenes/all_effects.yaml").c_str(), &s,
@@ -350,11 +351,8 @@ TEST(Simulation, ActuatorEffortsAreHeldPlusScriptedAndPassiveIsTheRest) {
         F3R_OK)
         << err.message;
     f3r_input& table = s.inputs[F3R_FORCE_THETA + 1];
-    table.kind = F3R_INPUT_TABLE;
-    table.table_size = 3;
     const double times[3] = {0.0, 0.01, 0.02}, values[3] = {0.0, 0.1, -0.05};
-    std::copy(times, times + 3, table.table_time);
-    std::copy(values, values + 3, table.table_value);
+    ASSERT_EQ(f3r_input_set_table(&table, times, values, 3, table.table_hold, &err), F3R_OK);
     if (!lagged) s.actuator_lag = 0.0;
     auto m = MakeModel(s);
     ASSERT_EQ(m->n_lag, lagged ? 3 : 0);

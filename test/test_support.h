@@ -9,6 +9,7 @@
 
 #include "flex3rpr/residual.h"
 #include "flex3rpr/sim.h"
+#include "model_layout.h" /* the tests read the model's fields */
 
 struct ModelDeleter {
   void operator()(f3r_model* m) const { f3r_model_destroy(m); }
@@ -36,6 +37,12 @@ inline f3r_scene SceneWithLinks(f3r_link_model a, int ra, f3r_link_model b, int 
   return s;
 }
 
+// Frees a scene's input tables (scene.h: a loaded scene owns them) at the end of a scope.
+struct SceneTables {
+  f3r_scene* scene;
+  ~SceneTables() { f3r_scene_free(scene); }
+};
+
 inline ModelPtr MakeModel(const f3r_scene& s) {
   f3r_model* m = nullptr;
   f3r_error err{};
@@ -47,8 +54,12 @@ inline ModelPtr LoadModel(const std::string& path, f3r_scene* out = nullptr) {
   f3r_scene s;
   f3r_error err{};
   if (f3r_scene_load(path.c_str(), &s, &err) != F3R_OK) throw std::runtime_error(err.message);
-  if (out) *out = s;
-  return MakeModel(s);
+  ModelPtr m = MakeModel(s);
+  if (out)
+    *out = s; /* the caller's, with its tables */
+  else
+    f3r_scene_free(&s);
+  return m;
 }
 
 inline std::string ScenePath(const std::string& name) {

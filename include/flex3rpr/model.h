@@ -17,89 +17,55 @@ extern "C" {
 
 #define F3R_MAX_Q (9 + 3 * F3R_MAX_MODES)
 
+/* A link's modal constants: arrays of `modes` values in the model's buffer, NULL for a rigid
+ * link. */
 typedef struct {
   f3r_link_model model;
-  int modes;                           /* r_i (chosen by the model when the scene says auto) */
-  int eta_index;                       /* index of this link's first modal coordinate in q */
-  double alpha[F3R_MAX_MODES];         /* roots of the frequency equation */
-  double mean[F3R_MAX_MODES];          /* int_0^1 psi_j dxi */
-  double first_moment[F3R_MAX_MODES];  /* int_0^1 xi psi_j dxi */
-  double tip[F3R_MAX_MODES];           /* psi_j(1): 0 for fixed-pinned */
-  double stiffness[F3R_MAX_MODES];     /* EI/l^3 int psi_j''^2 (N/m), diagonal modal stiffness */
-  double omega_clamped[F3R_MAX_MODES]; /* alpha_j^2 sqrt(EI/(m l^3)) (rad/s) */
+  int modes;             /* r_i (chosen by the model when the scene says auto) */
+  int eta_index;         /* index of this link's first modal coordinate in q */
+  double* alpha;         /* roots of the frequency equation */
+  double* mean;          /* int_0^1 psi_j dxi */
+  double* first_moment;  /* int_0^1 xi psi_j dxi */
+  double* tip;           /* psi_j(1): 0 for fixed-pinned */
+  double* stiffness;     /* EI/l^3 int psi_j''^2 (N/m), diagonal modal stiffness */
+  double* omega_clamped; /* alpha_j^2 sqrt(EI/(m l^3)) (rad/s) */
 } f3r_link_params;
 
-struct f3r_model;
-struct f3r_data; /* the core's evaluation data (src/core/physics/data.h): private */
+/* Opaque to the CLI and the node: they read it through the accessors below. The core's layers
+ * see its layout in src/core/physics/model_layout.h. */
+typedef struct f3r_model f3r_model;
 
-/* An optional force stage: adds its generalized forces to Q and, where they depend on q or v,
- * scale times their derivatives into a column-major A. A NULL derivative is zero. d holds the
- * forward pass's position stage at q (the legs' directions), so an effect computes no
- * trigonometry of its own. */
+/* The numbers the shells draw and check a robot with (../shared/MODEL.md). */
 typedef struct {
-  const char* name;
-  void (*add)(const struct f3r_model* m, double t, const double* q, const double* v,
-              const struct f3r_data* d, double* Q);
-  void (*add_dq)(const struct f3r_model* m, const double* q, const double* v,
-                 const struct f3r_data* d, double scale, double* A, int ld);
-  void (*add_dv)(const struct f3r_model* m, const double* q, const double* v, double scale,
-                 double* A, int ld);
-} f3r_force_effect;
-
-#define F3R_MAX_EFFECTS 8
-
-typedef struct f3r_model {
-  f3r_scene scene; /* the scene the model was built from (validated) */
-
-  /* geometry (../shared/MODEL.md) */
-  double base_joint[3][2];         /* A_i (m) */
-  double platform_angle[3];        /* phi_i of C_i on the platform: -pi/6, pi/2, 7pi/6 */
-  double platform_radius;          /* r_PC (m) */
-  double platform_direction[3][2]; /* (cos, sin) phi_i: C_i's direction at phi_p = 0 */
-
-  /* inertia and stiffness */
-  double link_length;       /* l (m) */
-  double link_mass;         /* m (kg) */
-  double bending_stiffness; /* EI (N m^2) */
-  double cylinder_inertia;  /* I_c about A_i (kg m^2) */
-  double cylinder_mass;     /* m_c (kg) */
-  double cylinder_length;   /* L (m) */
-  double platform_mass;     /* m_p plus the payload's mass (kg) */
-  double platform_inertia;  /* I_p plus the payload's inertia (kg m^2) */
-  double gravity[3];        /* m/s^2, world frame; only X and Y do work */
-
-  /* the enabled force effects, in order (effects.c); disabled ones are absent */
-  int n_effects;
-  const f3r_force_effect* effects[F3R_MAX_EFFECTS];
-
-  f3r_link_params link[3];
-  int exact_kinematics;
-
-  /* breakpoints of the scripted inputs (s), ascending: integration stops */
-  int n_breakpoints;
-  double breakpoints[F3R_RIGID_FORCES * F3R_MAX_TABLE];
-
-  int n_lag;                /* 3 with actuator lag (applied leg forces are states), else 0 */
-  double lag_time_constant; /* s */
-
-  /* coefficients of the effects (effects.c), copied from the scene so that the loop never reads it */
-  double joint_friction[6];        /* viscous, per coordinate: rho_i (N s/m), theta_i (N m s) */
-  double modal_damping[F3R_MAX_Q]; /* per modal coordinate n >= 9: 2 zeta omega_j m (N s/m) */
-
-  /* end stops of the pistons (events.c): active only when end_stops is 1 */
-  int end_stops;
+  double base_joint[3][2];       /* A_i (m) */
+  double platform_angle[3];      /* phi_i of C_i on the platform: -pi/6, pi/2, 7pi/6 */
+  double platform_radius;        /* r_PC (m) */
+  double link_length;            /* l (m) */
+  double link_mass;              /* m (kg) */
+  double cylinder_mass;          /* m_c (kg) */
+  double cylinder_length;        /* L (m) */
+  double platform_mass;          /* m_p plus the payload's mass (kg) */
+  double platform_inertia;       /* I_p plus the payload's inertia (kg m^2) */
+  int end_stops;                 /* 1: the stroke is hard */
   double stroke_min, stroke_max; /* limits of rho_i (m) */
-  double restitution;            /* Newton's coefficient c: rho_i' -> -c rho_i' at a stop */
+} f3r_geometry;
 
-  int nq;                 /* number of generalized coordinates */
-  int n_independent;      /* 3 + sum r_i: platform pose and modal coordinates */
-  double theta_branch[3]; /* leg directions at the scene's initial pose: branch of atan2 */
-} f3r_model;
+f3r_geometry f3r_model_geometry(const f3r_model* model);
+
+/* The number of generalized coordinates, and of actuator lag states (3 or 0). */
+int f3r_model_nq(const f3r_model* model);
+int f3r_model_lag_states(const f3r_model* model);
+
+/* Link i's (0..2) model, mode count and modal constants. */
+const f3r_link_params* f3r_model_link(const f3r_model* model, int link);
+
+/* The scene the model was built from (validated), valid while the model lives. */
+const f3r_scene* f3r_model_scene(const f3r_model* model);
 
 /* Builds a model from a scene (validating it first). Every flexible link's mode count must be a
  * number: modes left open (modes: auto, or none under an accuracy request) are an error, resolved
- * above the model by f3r_accuracy_resolve (accuracy.h). The result owns no pointers, so a model
- * is freed with f3r_model_destroy or simply copied. */
+ * above the model by f3r_accuracy_resolve (accuracy.h). The model is one allocation, its copy
+ * of the scene included: f3r_model_destroy frees it. */
 f3r_status f3r_model_create(const f3r_scene* scene, f3r_model** model, f3r_error* err);
 void f3r_model_destroy(f3r_model* model);
 

@@ -49,7 +49,7 @@ int f3r_state_size(const f3r_model* model, f3r_formulation form);
 long f3r_workspace_sincos_pairs(const f3r_workspace* ws);
 /* Index of the actuator lag states in y (valid when model->n_lag == 3). */
 static inline int f3r_lag_index(const f3r_model* model, f3r_formulation form) {
-  return f3r_state_size(model, form) - 1 - model->n_lag;
+  return f3r_state_size(model, form) - 1 - f3r_model_lag_states(model);
 }
 /* 1 for differential components of y, 0 for algebraic ones (lambda, mu of dae; lambda of index3). */
 void f3r_state_kinds(const f3r_model* model, f3r_formulation form, double* id);

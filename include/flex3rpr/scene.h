@@ -61,7 +61,7 @@ typedef enum {
   F3R_INPUT_TABLE = 6     /* piecewise linear through (time[k], value[k]); constant outside */
 } f3r_input_kind;
 
-#define F3R_MAX_TABLE 1024
+#define F3R_MAX_TABLE 1024 /* the most entries a table may have */
 
 typedef struct {
   f3r_input_kind kind;
@@ -72,10 +72,13 @@ typedef struct {
   double t0, t1;        /* s: step time (t0); ramp and chirp start and end */
   double before, after; /* step and ramp values before t0 and after (t1) */
   double f0, f1;        /* Hz: chirp start and end frequency */
-  int table_size;       /* 2..F3R_MAX_TABLE */
+  int table_size;       /* 2..F3R_MAX_TABLE entries in table_time and table_value */
   int table_hold;       /* 1: piecewise constant, value[k] on (time[k], time[k+1]] (a controller's
                      * held command); 0: piecewise linear */
-  double table_time[F3R_MAX_TABLE], table_value[F3R_MAX_TABLE];
+  /* table_size entries each, one block owned by the scene (f3r_input_set_table, the loader,
+   * f3r_scene_copy): NULL for an input without a table */
+  double* table_time;
+  double* table_value;
 } f3r_input;
 
 /* Index of a rigid generalized force in f3r_scene.inputs and in force vectors. */
@@ -169,10 +172,30 @@ typedef struct {
 /* Table I, rigid links, home pose (P = O, phi_p = 0), no inputs, minimal on IDA at rtol 2e-7. */
 f3r_scene f3r_default_scene(void);
 
-/* Copies src into dst but for the unused tails of its input tables (entries table_size and on),
- * which dst keeps as they were: a scene is 150 kB, almost all of it the tables' room, and models
- * and the accuracy knob copy scenes many times over. */
-void f3r_scene_copy(f3r_scene* dst, const f3r_scene* src);
+/* A scene owns its input tables; everything else is plain values. Ownership:
+ * - f3r_default_scene gives a scene without tables; f3r_scene_load (on success: a failed load
+ *   leaves *scene as it was), f3r_scene_copy and f3r_input_set_table give tables it owns.
+ * - f3r_scene_free releases them (and turns table inputs into none); it is safe on any scene
+ *   that came from these functions, and twice.
+ * - A struct assignment `b = a` shares a's tables: b is a view, valid while a lives, and only a
+ *   is freed. f3r_scene_copy is the deep copy, of the tables' real sizes only (a few kB). */
+void f3r_scene_free(f3r_scene* scene);
+
+/* Deep copy: dst is overwritten whole (free what it held first), with tables of its own. On
+ * F3R_ERR_MEMORY dst holds no tables. */
+f3r_status f3r_scene_copy(f3r_scene* dst, const f3r_scene* src, f3r_error* err);
+
+/* The doubles src's tables take (2 * table_size of each table input), and the same deep copy
+ * with the tables in storage (that many doubles), which the caller owns: a model keeps its
+ * scene in its one buffer this way. Never f3r_scene_free such a copy. */
+size_t f3r_scene_table_doubles(const f3r_scene* src);
+void f3r_scene_copy_into(f3r_scene* dst, const f3r_scene* src, double* storage);
+
+/* Gives input a table of its own (a copy of size entries of time and value), kind table, freeing
+ * the one it held. size must be 2..F3R_MAX_TABLE (F3R_ERR_ARGUMENT); F3R_ERR_MEMORY leaves the
+ * input as it was. */
+f3r_status f3r_input_set_table(f3r_input* input, const double* time, const double* value, int size,
+                               int hold, f3r_error* err);
 
 /* Checks every field against its allowed range. The message names the field, the value and the
  * range, e.g. "links[1].modes: 25 is out of range 1..20". */
@@ -184,7 +207,9 @@ f3r_status f3r_scene_validate(const f3r_scene* scene, f3r_error* err);
  * SDIRK_5_3_4. NULL for ida. */
 const char* const* f3r_rk_tables(f3r_integrator integrator);
 
-/* Reads a scene YAML file over the defaults, then validates it. Errors start with "path:line: ". */
+/* Reads a scene YAML file over the defaults, then validates it. Errors start with "path:line: ".
+ * On success *scene is overwritten (free what it held first) and owns its tables; on error it is
+ * left as it was. */
 f3r_status f3r_scene_load(const char* path, f3r_scene* scene, f3r_error* err);
 
 /* The same with an accuracy request from outside the file (a CLI flag, a node parameter): it

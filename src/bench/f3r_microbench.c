@@ -18,6 +18,7 @@
 #include "linsol_schur.h"
 #include "flex3rpr/residual.h"
 #include "flex3rpr/stages.h"
+#include "model_layout.h"
 
 /* weak: absent from cores built before the forward pass */
 extern long f3r_workspace_sincos_pairs(const f3r_workspace* ws) __attribute__((weak));

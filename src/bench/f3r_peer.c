@@ -82,6 +82,7 @@
 #include "flex3rpr/residual.h"
 #include "flex3rpr/scene.h"
 #include "flex3rpr/stages.h"
+#include "model_layout.h"
 
 #define F3R_PEER_EXPORT __attribute__((visibility("default")))
 
@@ -142,6 +143,7 @@ F3R_PEER_EXPORT int f3r_peer_create(const char* scene_path, int formulation, int
   f3r_peer* p = calloc(1, sizeof *p);
   if (!p) return fail(F3R_ERR_MEMORY, "f3r_peer_create: out of memory");
   st = f3r_model_create(&scene, &p->model, &err);
+  f3r_scene_free(&scene); /* the model keeps its own copy of the tables */
   if (st != F3R_OK) {
     f3r_peer_destroy(p);
     return fail(st, "%s: %s", scene_path, err.message);

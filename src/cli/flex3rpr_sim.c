@@ -206,7 +206,8 @@ static void write_header(FILE* f, const f3r_model* m) {
     const char* suffix = pass ? "_dot" : "";
     for (int n = 0; n < F3R_Q_MODAL; ++n) fprintf(f, ",%s%s", rigid[n], suffix);
     for (int i = 0; i < 3; ++i)
-      for (int j = 0; j < m->link[i].modes; ++j) fprintf(f, ",eta_%d_%d%s", i + 1, j + 1, suffix);
+      for (int j = 0; j < f3r_model_link(m, i)->modes; ++j)
+        fprintf(f, ",eta_%d_%d%s", i + 1, j + 1, suffix);
     for (int i = 0; i < 3; ++i) fprintf(f, ",w_tip_%d%s", i + 1, suffix);
   }
   fprintf(f, ",lambda_1x,lambda_1y,lambda_2x,lambda_2y,lambda_3x,lambda_3y");
@@ -217,7 +218,7 @@ static void write_row(FILE* f, const f3r_model* m, const f3r_outputs* o) {
   fprintf(f, "%.10g", o->t);
   for (int pass = 0; pass < 2; ++pass) {
     const double* x = pass ? o->v : o->q;
-    for (int n = 0; n < m->nq; ++n) fprintf(f, ",%.15g", x[n]);
+    for (int n = 0; n < f3r_model_nq(m); ++n) fprintf(f, ",%.15g", x[n]);
     const double* w = pass ? o->tip_deflection_rate : o->tip_deflection;
     for (int i = 0; i < 3; ++i) fprintf(f, ",%.15g", w[i]);
   }
@@ -328,12 +329,10 @@ static int resolve_model(const cli_options* o, f3r_scene* scene, f3r_accuracy_ch
     return 0;
   }
   const double choose_start = cpu_seconds();
-  if (f3r_accuracy_resolve(scene, 0, choice, &err) != F3R_OK) {
-    fprintf(stderr, "flex3rpr_sim: %s: %s\n", o->scene_path, err.message);
-    return 0;
-  }
+  st = f3r_accuracy_resolve(scene, 0, choice, &err);
   *choose_cpu = cpu_seconds() - choose_start;
-  if (f3r_model_create(scene, model, &err) != F3R_OK) {
+  if (st == F3R_OK) st = f3r_model_create(scene, model, &err);
+  if (st != F3R_OK) {
     fprintf(stderr, "flex3rpr_sim: %s: %s\n", o->scene_path, err.message);
     return 0;
   }
@@ -363,13 +362,15 @@ typedef struct {
 /* The mode shapes of every link at its beam_points stations (beam_points <= 101). */
 static void eval_mode_shapes(const f3r_model* model, int beam_points,
                              double shapes[3][101][F3R_MAX_MODES]) {
-  for (int i = 0; i < 3; ++i)
+  for (int i = 0; i < 3; ++i) {
+    const f3r_link_params* lp = f3r_model_link(model, i);
     for (int k = 0; k < beam_points; ++k)
-      for (int j = 0; j < model->link[i].modes; ++j) {
+      for (int j = 0; j < lp->modes; ++j) {
         double dpsi;
-        f3r_beam_mode_eval((f3r_beam_end)model->link[i].model, model->link[i].alpha[j],
-                           (double)k / (beam_points - 1), &shapes[i][k][j], &dpsi, NULL);
+        f3r_beam_mode_eval((f3r_beam_end)lp->model, lp->alpha[j], (double)k / (beam_points - 1),
+                           &shapes[i][k][j], &dpsi, NULL);
       }
+  }
 }
 
 static void track_maxima(run_stats* r, const f3r_model* model, int beam_points,
@@ -378,7 +379,7 @@ static void track_maxima(run_stats* r, const f3r_model* model, int beam_points,
   r->max_energy_error = fmax(r->max_energy_error, out->energy_balance_error);
   r->max_energy = fmax(r->max_energy, out->kinetic_energy + out->potential_energy);
   for (int i = 0; i < 3; ++i) {
-    const f3r_link_params* lp = &model->link[i];
+    const f3r_link_params* lp = f3r_model_link(model, i);
     if (!lp->modes) continue;
     r->max_tip = fmax(r->max_tip, fabs(out->tip_deflection[i]));
     for (int k = 0; k < beam_points; ++k) {
@@ -452,7 +453,8 @@ static void print_summary(const cli_options* o, const f3r_scene* scene, const f3
     printf("butcher table       %s\n", scene->table[0] ? scene->table : "default");
   if (scene->integrator == F3R_INTEGRATOR_IDA) printf("max BDF order       %d\n", scene->max_order);
   printf("sundials            %s, %s\n", SUNDIALS_VERSION, F3R_SUNDIALS_BUILD);
-  printf("state dimension     %d (nq %d)\n", f3r_state_size(model, scene->formulation), model->nq);
+  printf("state dimension     %d (nq %d)\n", f3r_state_size(model, scene->formulation),
+         f3r_model_nq(model));
   printf("simulated time      %.6g s\n", out->t);
   printf("steps               %ld\n", out->stats.steps);
   printf("residual evals      %ld\n", out->stats.residual_evals);
@@ -480,9 +482,9 @@ static int simulate(const cli_options* o, const f3r_scene* scene, const f3r_mode
   settings.dense_linear_solver = o->dense_linear_solver;
   settings.stop_at_outputs = o->stop_at_outputs;
   for (int h = 0; h < o->n_holds; ++h)
-    if (o->holds[h].index >= model->nq) {
+    if (o->holds[h].index >= f3r_model_nq(model)) {
       fprintf(stderr, "flex3rpr_sim: --hold index %d is beyond nq = %d\n", o->holds[h].index,
-              model->nq);
+              f3r_model_nq(model));
       return 2;
     }
   f3r_error err = {0};
@@ -513,7 +515,7 @@ static int simulate(const cli_options* o, const f3r_scene* scene, const f3r_mode
 /* --check and --geometry: the model only, before the accuracy knob's report. */
 static int describe_model(const cli_options* o, const f3r_model* model) {
   if (o->check) /* the scene, its overrides and the model are valid: what a sweep checks first */
-    printf("ok: %s, nq %d\n", o->scene_path, model->nq);
+    printf("ok: %s, nq %d\n", o->scene_path, f3r_model_nq(model));
   else
     f3r_cli_print_geometry(model);
   return 0;
@@ -534,12 +536,12 @@ int main(int argc, char** argv) {
     usage(stderr);
     return 2;
   }
-  f3r_scene scene;
+  f3r_scene scene = f3r_default_scene(); /* the loaded one owns tables: freed at the end */
   f3r_accuracy_choice choice;
   double choose_cpu = 0.0;
   f3r_model* model = NULL;
-  if (!resolve_model(&o, &scene, &choice, &choose_cpu, &model)) return 1;
-  int rc;
+  int rc = 1;
+  if (!resolve_model(&o, &scene, &choice, &choose_cpu, &model)) goto done;
   if (o.check || o.geometry) {
     rc = describe_model(&o, model);
   } else {
@@ -547,6 +549,8 @@ int main(int argc, char** argv) {
     rc = analyse(&o, model);
     if (rc < 0) rc = simulate(&o, &scene, model);
   }
+done:
   f3r_model_destroy(model);
+  f3r_scene_free(&scene);
   return rc;
 }

@@ -11,24 +11,25 @@
 
 /* The model's geometry, masses and stroke as JSON: the URDF generator (scripts/make_urdf.py)
  * takes them from here, so that the URDF and the node's model come from one scene. */
-void f3r_cli_print_geometry(const f3r_model* m) {
-  const f3r_scene* s = &m->scene;
-  printf("{\"base_joint\": [[%.17g, %.17g], [%.17g, %.17g], [%.17g, %.17g]],\n",
-         m->base_joint[0][0], m->base_joint[0][1], m->base_joint[1][0], m->base_joint[1][1],
-         m->base_joint[2][0], m->base_joint[2][1]);
+void f3r_cli_print_geometry(const f3r_model* model) {
+  const f3r_scene* s = f3r_model_scene(model);
+  const f3r_geometry g = f3r_model_geometry(model);
+  printf("{\"base_joint\": [[%.17g, %.17g], [%.17g, %.17g], [%.17g, %.17g]],\n", g.base_joint[0][0],
+         g.base_joint[0][1], g.base_joint[1][0], g.base_joint[1][1], g.base_joint[2][0],
+         g.base_joint[2][1]);
   printf(" \"platform_angle\": [%.17g, %.17g, %.17g], \"platform_radius\": %.17g,\n",
-         m->platform_angle[0], m->platform_angle[1], m->platform_angle[2], m->platform_radius);
-  printf(" \"platform_mass\": %.17g, \"platform_inertia\": %.17g,\n", m->platform_mass,
-         m->platform_inertia);
+         g.platform_angle[0], g.platform_angle[1], g.platform_angle[2], g.platform_radius);
+  printf(" \"platform_mass\": %.17g, \"platform_inertia\": %.17g,\n", g.platform_mass,
+         g.platform_inertia);
   printf(" \"link_length\": %.17g, \"link_diameter\": %.17g, \"link_mass\": %.17g,\n",
-         m->link_length, s->link_diameter, m->link_mass);
+         g.link_length, s->link_diameter, g.link_mass);
   printf(
       " \"cylinder_length\": %.17g, \"cylinder_inner_diameter\": %.17g, "
       "\"cylinder_outer_diameter\": %.17g,"
       " \"cylinder_mass\": %.17g,\n",
-      m->cylinder_length, s->cylinder_inner_diameter, s->cylinder_outer_diameter, m->cylinder_mass);
-  printf(" \"stroke_min\": %.17g, \"stroke_max\": %.17g, \"end_stops\": %s}\n", m->stroke_min,
-         m->stroke_max, m->end_stops ? "true" : "false");
+      g.cylinder_length, s->cylinder_inner_diameter, s->cylinder_outer_diameter, g.cylinder_mass);
+  printf(" \"stroke_min\": %.17g, \"stroke_max\": %.17g, \"end_stops\": %s}\n", g.stroke_min,
+         g.stroke_max, g.end_stops ? "true" : "false");
 }
 
 int f3r_cli_run_modal(const f3r_model* m) {
@@ -47,7 +48,8 @@ int f3r_cli_run_modal(const f3r_model* m) {
 /* The platform pose of the linearised model (linear.h) at the output step, as CSV: first order
  * and with the second-order correction. */
 int f3r_cli_write_linear_path(const f3r_model* m, const char* path) {
-  const int count = (int)llround(m->scene.duration / m->scene.output_step) + 1;
+  const double dt = f3r_model_scene(m)->output_step;
+  const int count = (int)llround(f3r_model_scene(m)->duration / dt) + 1;
   double* pose = malloc((size_t)count * 6 * sizeof(double));
   f3r_linear_model* lin = NULL;
   f3r_error err = {0};
@@ -56,10 +58,9 @@ int f3r_cli_write_linear_path(const f3r_model* m, const char* path) {
   if (!pose)
     fprintf(stderr, "flex3rpr_sim: out of memory\n");
   else if (f3r_linearise(m, &lin, &err) != F3R_OK ||
-           f3r_linear_response(lin, m, m->scene.output_step, count, 1, pose, NULL, &err) !=
-               F3R_OK ||
-           f3r_linear_response(lin, m, m->scene.output_step, count, 2, pose + 3 * count,
-                               &unreachable, &err) != F3R_OK)
+           f3r_linear_response(lin, m, dt, count, 1, pose, NULL, &err) != F3R_OK ||
+           f3r_linear_response(lin, m, dt, count, 2, pose + 3 * count, &unreachable, &err) !=
+               F3R_OK)
     fprintf(stderr, "flex3rpr_sim: %s\n", err.message);
   else if (!(f = fopen(path, "w")))
     fprintf(stderr, "flex3rpr_sim: cannot write %s\n", path);
@@ -67,8 +68,8 @@ int f3r_cli_write_linear_path(const f3r_model* m, const char* path) {
     fprintf(f, "t,x_p,y_p,phi_p,x_p_2,y_p_2,phi_p_2\n");
     for (int k = 0; k < count; ++k) {
       const double *a = pose + 3 * k, *b = pose + 3 * (count + k);
-      fprintf(f, "%.10g,%.15g,%.15g,%.15g,%.15g,%.15g,%.15g\n", k * m->scene.output_step, a[0],
-              a[1], a[2], b[0], b[1], b[2]);
+      fprintf(f, "%.10g,%.15g,%.15g,%.15g,%.15g,%.15g,%.15g\n", k * dt, a[0], a[1], a[2], b[0],
+              b[1], b[2]);
     }
     fclose(f);
     if (unreachable)

@@ -29,7 +29,7 @@ std::string Indexed(const char* name, size_t i) {
 
 std::string DecodeEffortCommand(const EffortCommand& msg, const f3r_model& model,
                                 const CommandLimits& limits, std::vector<double>* forces) {
-  const size_t n_modal = static_cast<size_t>(model.nq - F3R_Q_MODAL);
+  const size_t n_modal = static_cast<size_t>(f3r_model_nq(&model) - F3R_Q_MODAL);
   if (!msg.modal.empty() && msg.modal.size() != n_modal)
     return "modal has " + std::to_string(msg.modal.size()) + " values, expected 0 or " +
            std::to_string(n_modal);
@@ -45,7 +45,7 @@ std::string DecodeEffortCommand(const EffortCommand& msg, const f3r_model& model
     const std::string why = Check(Indexed("modal", k), msg.modal[k], limits.modal);
     if (!why.empty()) return why;
   }
-  forces->assign(static_cast<size_t>(model.nq), 0.0);
+  forces->assign(static_cast<size_t>(f3r_model_nq(&model)), 0.0);
   for (size_t i = 0; i < 3; ++i) {
     (*forces)[F3R_FORCE_RHO + i] = msg.leg_force[i];
     (*forces)[F3R_FORCE_THETA + i] = msg.cylinder_torque[i];
@@ -65,7 +65,7 @@ std::string DecodeEffortGroup(const std_msgs::Float64MultiArray& msg, const f3r_
         Check(Indexed("data", k), msg.data[k], k < F3R_Q_THETA ? limits.force : limits.torque);
     if (!why.empty()) return why;
   }
-  forces->assign(static_cast<size_t>(model.nq), 0.0);
+  forces->assign(static_cast<size_t>(f3r_model_nq(&model)), 0.0);
   for (size_t k = 0; k < F3R_Q_LEG_JOINTS; ++k)
     (*forces)[F3R_Q_RHO + k] = msg.data[k];  // ros_control order is q's
   return "";
@@ -110,7 +110,7 @@ std::string DecodeWrench(const geometry_msgs::WrenchStamped& msg, const Rotation
   if (why.empty()) why = Check("force.y turned into the base frame", fb[1], limits.force);
   if (why.empty()) why = Check("torque.z turned into the base frame", mb[2], limits.torque);
   if (!why.empty()) return why;
-  forces->assign(static_cast<size_t>(model.nq), 0.0);
+  forces->assign(static_cast<size_t>(f3r_model_nq(&model)), 0.0);
   (*forces)[F3R_FORCE_PLATFORM] = fb[0];
   (*forces)[F3R_FORCE_PLATFORM + 1] = fb[1];
   (*forces)[F3R_FORCE_PLATFORM + 2] = mb[2];

@@ -9,9 +9,10 @@ namespace flex3rpr {
 CommandInputs::CommandInputs(ros::NodeHandle& pnh, const f3r_model& model, const NodeParams& params,
                              const double* phi_p)
     : model_(model), params_(params), phi_p_(phi_p) {
-  for (auto& h : held_) h.assign(static_cast<size_t>(model.nq), 0.0);
-  scratch_.assign(static_cast<size_t>(model.nq), 0.0);
-  total_.assign(static_cast<size_t>(model.nq), 0.0);
+  const size_t nq = static_cast<size_t>(f3r_model_nq(&model));
+  for (auto& h : held_) h.assign(nq, 0.0);
+  scratch_.assign(nq, 0.0);
+  total_.assign(nq, 0.0);
   // Deep queues (~command_queue_size, 1000 by default): a controller at 10 kHz must not lose
   // commands (a lost invalid one would also go uncounted) while the node is descheduled.
   const uint32_t kCommandQueue = static_cast<uint32_t>(params.command_queue_size);

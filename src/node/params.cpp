@@ -178,7 +178,12 @@ bool LoadOverridden(NodeParams* p, double accuracy, const std::vector<SceneOverr
   for (const SceneOverride& o : overrides) texts.push_back(o.text.c_str());
   const f3r_scene_options options = {accuracy, texts.data(), static_cast<int>(texts.size())};
   f3r_error err{};
-  if (f3r_scene_load_with(p->scene_path.c_str(), &options, &p->scene, &err) == F3R_OK) return true;
+  f3r_scene loaded;
+  if (f3r_scene_load_with(p->scene_path.c_str(), &options, &loaded, &err) == F3R_OK) {
+    f3r_scene_free(&p->scene);  // a second load (~end_stops) replaces the first, tables and all
+    p->scene = loaded;
+    return true;
+  }
   const std::string message = err.message;
   for (const SceneOverride& o : overrides) {
     const std::string prefix = "--set " + o.text + ": ";

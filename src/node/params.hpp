@@ -30,14 +30,19 @@ FrameNames MakeFrameNames(const std::string& prefix, const std::string& world,
 std::string NormalisePrefix(const std::string& prefix);
 
 struct NodeParams {
-  std::string scene_path;          // ~scene, default: the package's rest.yaml
-  f3r_scene scene;                 // loaded and overridden
-  f3r_solver_settings settings;    // ~formulation, ~integrator, ~rtol, ~atol
-  f3r_accuracy_choice accuracy{};  // ~accuracy or the scene's: what the knob chose, and why
-  double publish_rate = 1000.0;    // Hz of simulated time
-  int beam_points = 11;            // stations per link
-  double realtime_factor = 1.0;    // 1 paces to the wall clock, 0 runs as fast as possible
-  std::string tf_prefix;           // prepended to every frame but the world frame ("robot1/")
+  NodeParams() = default;
+  NodeParams(const NodeParams&) = delete;  // the scene owns its input tables
+  NodeParams& operator=(const NodeParams&) = delete;
+  ~NodeParams() { f3r_scene_free(&scene); }
+
+  std::string scene_path;                 // ~scene, default: the package's rest.yaml
+  f3r_scene scene = f3r_default_scene();  // loaded and overridden
+  f3r_solver_settings settings;           // ~formulation, ~integrator, ~rtol, ~atol
+  f3r_accuracy_choice accuracy{};         // ~accuracy or the scene's: what the knob chose, and why
+  double publish_rate = 1000.0;           // Hz of simulated time
+  int beam_points = 11;                   // stations per link
+  double realtime_factor = 1.0;           // 1 paces to the wall clock, 0 runs as fast as possible
+  std::string tf_prefix;  // prepended to every frame but the world frame ("robot1/")
   std::string world_frame = "world";
   std::string base_frame = "base";  // default: tf_prefix + "base"
   FrameNames frames;

@@ -70,8 +70,9 @@ bool SimNode::Init() {
   ROS_INFO(
       "flex3rpr_node: scene %s, nq %d, %s, rtol %g, publishing at %g Hz of simulated time, "
       "real-time factor %g, %s stamps%s, frames under %s",
-      params_.scene_path.c_str(), model_->nq, f3r_formulation_name(params_.settings.formulation),
-      params_.settings.rtol, params_.publish_rate, params_.realtime_factor,
+      params_.scene_path.c_str(), f3r_model_nq(model_.get()),
+      f3r_formulation_name(params_.settings.formulation), params_.settings.rtol,
+      params_.publish_rate, params_.realtime_factor,
       params_.sim_stamps ? "simulated" : "wall-clock", params_.publish_clock ? " with /clock" : "",
       params_.frames.base.c_str());
   if (params_.lockstep)
@@ -102,11 +103,12 @@ void SimNode::ReportPace() {
 }
 
 void SimNode::CheckStroke(const f3r_outputs& out) {
-  const double lo = model_->stroke_min, hi = model_->stroke_max;
+  const f3r_geometry g = f3r_model_geometry(model_.get());
+  const double lo = g.stroke_min, hi = g.stroke_max;
   for (int i = 0; i < 3; ++i) {
     const double rho = out.q[F3R_Q_RHO + i];
     // End stops hold rho to the stroke up to the event location's tolerance.
-    const double slack = model_->end_stops ? 1e-6 : 0.0;
+    const double slack = g.end_stops ? 1e-6 : 0.0;
     const bool outside = rho < lo - slack || rho > hi + slack;
     bool& flag = info_.outside_stroke[static_cast<size_t>(i)];
     if (outside && !flag)

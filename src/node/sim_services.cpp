@@ -60,13 +60,13 @@ void SimNode::StepWithCommandCall(const StepWithCommand::Request& req,
     res->platform_pose[static_cast<size_t>(k)] = out.q[F3R_Q_X + k];
     res->platform_twist[static_cast<size_t>(k)] = out.v[F3R_Q_X + k];
   }
-  res->modal.assign(out.q + F3R_Q_MODAL, out.q + model_->nq);
-  res->modal_rate.assign(out.v + F3R_Q_MODAL, out.v + model_->nq);
+  res->modal.assign(out.q + F3R_Q_MODAL, out.q + f3r_model_nq(model_.get()));
+  res->modal_rate.assign(out.v + F3R_Q_MODAL, out.v + f3r_model_nq(model_.get()));
 }
 
 void SimNode::SetStateCall(const SetState::Request& req, SetState::Response* res) {
   res->success = false;
-  const size_t nmodal = static_cast<size_t>(model_->nq - F3R_Q_MODAL);
+  const size_t nmodal = static_cast<size_t>(f3r_model_nq(model_.get()) - F3R_Q_MODAL);
   for (const auto* field : {&req.modal, &req.modal_rate}) {
     if (!field->empty() && field->size() != nmodal) {
       res->message = std::string(field == &req.modal ? "modal" : "modal_rate") + ": " +
@@ -115,13 +115,14 @@ void SimNode::LineariseCall(Linearise::Response* res) {
   // The model of the present pose at rest: the node's scene (its mode counts as the model chose
   // them) with the present platform pose as its initial one, no velocity, no deflection.
   const f3r_outputs& out = *f3r_sim_outputs(sim_.get());
-  std::unique_ptr<f3r_scene> scene(new f3r_scene(model_->scene));
+  // A view of the model's scene (its tables stay the model's, scene.h), which the new model copies.
+  std::unique_ptr<f3r_scene> scene(new f3r_scene(*f3r_model_scene(model_.get())));
   for (int k = 0; k < 3; ++k) {
     scene->platform_pose0[k] = out.q[F3R_Q_X + k];
     scene->platform_velocity0[k] = 0.0;
   }
   for (int i = 0; i < 3; ++i) {
-    scene->links[i].modes = model_->link[i].modes;
+    scene->links[i].modes = f3r_model_link(model_.get(), i)->modes;
     for (int j = 0; j < F3R_MAX_MODES; ++j)
       scene->links[i].eta0[j] = scene->links[i].eta_rate0[j] = 0.0;
   }

@@ -76,10 +76,10 @@ void StateOutputs::PrepareMessages() {
   odom_.header.frame_id = frames_.base;
   odom_.child_frame_id = frames_.platform;
 
-  const int nmodal = model_.nq - F3R_Q_MODAL;
+  const int nmodal = f3r_model_nq(&model_) - F3R_Q_MODAL;
   for (int i = 0; i < 3; ++i) {
-    beam_.model[i] = f3r_link_model_name(model_.link[i].model);
-    beam_.modes[i] = static_cast<uint32_t>(model_.link[i].modes);
+    beam_.model[i] = f3r_link_model_name(f3r_model_link(&model_, i)->model);
+    beam_.modes[i] = static_cast<uint32_t>(f3r_model_link(&model_, i)->modes);
   }
   beam_.modal.assign(static_cast<size_t>(nmodal), 0.0);
   beam_.modal_rate.assign(static_cast<size_t>(nmodal), 0.0);
@@ -109,6 +109,7 @@ void StateOutputs::PrepareMessages() {
 // beam tips, the beams' clamped roots (station 0 is the piston, whatever the deflection) and
 // the platform joints.
 void StateOutputs::SendStaticFrames() {
+  const f3r_geometry g = f3r_model_geometry(&model_);
   std::vector<geometry_msgs::TransformStamped> statics;
   if (frames_.base != frames_.world) {
     auto base = Frame(frames_.world, frames_.base);  // ~base_pose
@@ -117,12 +118,12 @@ void StateOutputs::SendStaticFrames() {
   }
   for (int i = 0; i < 3; ++i) {
     auto tip = Frame(frames_.piston[i], frames_.tip_nominal[i]);
-    tip.transform.translation.x = model_.link_length;
+    tip.transform.translation.x = g.link_length;
     statics.push_back(tip);
     statics.push_back(Frame(frames_.piston[i], frames_.beam[i][0]));
     auto c = Frame(frames_.platform, frames_.platform_c[i]);
-    c.transform.translation.x = model_.platform_radius * std::cos(model_.platform_angle[i]);
-    c.transform.translation.y = model_.platform_radius * std::sin(model_.platform_angle[i]);
+    c.transform.translation.x = g.platform_radius * std::cos(g.platform_angle[i]);
+    c.transform.translation.y = g.platform_radius * std::sin(g.platform_angle[i]);
     statics.push_back(c);
   }
   for (auto& s : statics) s.header.stamp = ros::Time(0.0);
@@ -144,10 +145,10 @@ void StateOutputs::PrepareTransforms() {
 
 void StateOutputs::FillTransforms(const f3r_outputs& out, const ros::Time& stamp) {
   const double* q = out.q;
+  const f3r_geometry g = f3r_model_geometry(&model_);
   size_t n = 0;
   for (int i = 0; i < 3; ++i) {
-    SetPlanar(&tf_.transforms[n++], model_.base_joint[i][0], model_.base_joint[i][1],
-              q[F3R_Q_THETA + i]);
+    SetPlanar(&tf_.transforms[n++], g.base_joint[i][0], g.base_joint[i][1], q[F3R_Q_THETA + i]);
     SetPlanar(&tf_.transforms[n++], q[F3R_Q_RHO + i], 0.0, 0.0);
   }
   SetPlanar(&tf_.transforms[n++], q[F3R_Q_X], q[F3R_Q_Y], q[F3R_Q_PHI]);

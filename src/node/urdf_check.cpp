@@ -23,6 +23,7 @@ std::string CheckUrdf(const std::string& xml, const f3r_model& model, const Fram
                       double tol) {
   urdf::ModelInterfaceSharedPtr urdf = urdf::parseURDF(xml);
   if (!urdf) return "robot_description is not a valid URDF";
+  const f3r_geometry g = f3r_model_geometry(&model);
   for (int i = 0; i < 3; ++i) {
     const std::string n = std::to_string(i + 1);
     const auto revolute = urdf->getJoint("leg_" + n + "_revolute");
@@ -34,26 +35,25 @@ std::string CheckUrdf(const std::string& xml, const f3r_model& model, const Fram
              n + "_tip_nominal_joint or platform_c" + n +
              "_joint (scripts/make_urdf.py writes them)";
     const auto& a = revolute->parent_to_joint_origin_transform.position;
-    if (std::fabs(a.x - model.base_joint[i][0]) > tol)
-      return Mismatch(revolute->name, "origin x (A_i)", a.x, model.base_joint[i][0]);
-    if (std::fabs(a.y - model.base_joint[i][1]) > tol)
-      return Mismatch(revolute->name, "origin y (A_i)", a.y, model.base_joint[i][1]);
+    if (std::fabs(a.x - g.base_joint[i][0]) > tol)
+      return Mismatch(revolute->name, "origin x (A_i)", a.x, g.base_joint[i][0]);
+    if (std::fabs(a.y - g.base_joint[i][1]) > tol)
+      return Mismatch(revolute->name, "origin y (A_i)", a.y, g.base_joint[i][1]);
     if (!prismatic->limits)
       return "robot_description: joint " + prismatic->name + " has no limit (the scene's stroke)";
-    if (std::fabs(prismatic->limits->lower - model.stroke_min) > tol)
+    if (std::fabs(prismatic->limits->lower - g.stroke_min) > tol)
       return Mismatch(prismatic->name, "lower limit (geometry.stroke_min)",
-                      prismatic->limits->lower, model.stroke_min);
-    if (std::fabs(prismatic->limits->upper - model.stroke_max) > tol)
+                      prismatic->limits->lower, g.stroke_min);
+    if (std::fabs(prismatic->limits->upper - g.stroke_max) > tol)
       return Mismatch(prismatic->name, "upper limit (geometry.stroke_max)",
-                      prismatic->limits->upper, model.stroke_max);
+                      prismatic->limits->upper, g.stroke_max);
     const double l = tip->parent_to_joint_origin_transform.position.x;
-    if (std::fabs(l - model.link_length) > tol)
-      return Mismatch(tip->name, "origin x (link length l)", l, model.link_length);
+    if (std::fabs(l - g.link_length) > tol)
+      return Mismatch(tip->name, "origin x (link length l)", l, g.link_length);
     const auto& c = pc->parent_to_joint_origin_transform.position;
     const double r = std::hypot(c.x, c.y);
-    if (std::fabs(r - model.platform_radius) > tol)
-      return Mismatch(pc->name, "distance from the platform centre (r_PC)", r,
-                      model.platform_radius);
+    if (std::fabs(r - g.platform_radius) > tol)
+      return Mismatch(pc->name, "distance from the platform centre (r_PC)", r, g.platform_radius);
   }
   // Every frame the node publishes is a link of the URDF, so that RobotModel shows all of it:
   // the names carry ~tf_prefix, and the beam stations ~beam_points.

@@ -64,14 +64,15 @@ int LLVMFuzzerTestOneInput(const unsigned char* data, size_t size) {
   if (f3r_model_create(&scene, &model, &err) == F3R_OK) {
     int modes = 0;
     for (int i = 0; i < 3; ++i) {
-      if (model->link[i].modes < 0 || model->link[i].modes > F3R_MAX_MODES)
+      if (f3r_model_link(model, i)->modes < 0 || f3r_model_link(model, i)->modes > F3R_MAX_MODES)
         fail("a link's mode count out of range", NULL);
-      modes += model->link[i].modes;
+      modes += f3r_model_link(model, i)->modes;
     }
-    if (model->nq != 9 + modes || model->nq > F3R_MAX_Q) fail("nq is not 9 + sum of modes", NULL);
+    if (f3r_model_nq(model) != 9 + modes || f3r_model_nq(model) > F3R_MAX_Q)
+      fail("nq is not 9 + sum of modes", NULL);
     double q[F3R_MAX_Q], v[F3R_MAX_Q];
     if (f3r_model_initial_state(model, q, v) == F3R_OK) {
-      for (int n = 0; n < model->nq; ++n)
+      for (int n = 0; n < f3r_model_nq(model); ++n)
         if (!isfinite(q[n]) || !isfinite(v[n])) fail("a non-finite initial state", NULL);
     }
     f3r_model_destroy(model);
@@ -80,5 +81,6 @@ int LLVMFuzzerTestOneInput(const unsigned char* data, size_t size) {
   } else if (err.message[0] == '\0') {
     fail("f3r_model_create failed without a message", &err);
   }
+  f3r_scene_free(&scene);
   return 0;
 }

@@ -57,11 +57,11 @@ static double solver_error_of(const f3r_scene* s, const char* kind) {
 }
 
 /* What the scene leaves open (links' mode counts, exact kinematics, the solver) and which
- * solver relations apply to it; s becomes the working copy. */
+ * solver relations apply to it; s becomes the working copy, a view sharing scene's tables. */
 static void open_choice(const f3r_scene* scene, double request, int commanded, f3r_scene* s,
                         choice_run* run) {
   *run = (choice_run){.scene = scene, .s = s, .request = request};
-  f3r_scene_copy(s, scene);
+  *s = *scene;
   for (int i = 0; i < 3; ++i) {
     if (!f3r_is_flexible(scene, i)) continue;
     run->any_flexible = 1;
@@ -344,8 +344,7 @@ f3r_status f3r_accuracy_resolve(f3r_scene* scene, int commanded, f3r_accuracy_ch
       tolerance = fmax(tolerance, scene->links[i].auto_tolerance);
     }
   if (!chosen) return F3R_OK;
-  f3r_scene s;
-  f3r_scene_copy(&s, scene);
+  f3r_scene s = *scene; /* a view: the tables are scene's */
   for (int i = 0; i < 3; ++i)
     if (chosen >> i & 1) s.links[i].modes = 1;
   const f3r_status st = f3r_accuracy_modes(&s, chosen, -tolerance, c->modes, &c->model_error,

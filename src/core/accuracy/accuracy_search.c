@@ -22,12 +22,10 @@ static int lowest_modes(const f3r_scene* s, int i) { /* the initial state's high
 }
 
 /* The scene with fixed mode counts, no accuracy request: a model the caller must destroy. The
- * copy leaves the input tables' room untouched (f3r_scene_copy), so the knob's dozens of models a
- * choice cost no 150 kB scene each. */
+ * working scene is a view of base (its tables shared, scene.h), and the model copies them. */
 f3r_status f3r_model_with_modes(const f3r_scene* base, const int modes[3], int exact_kinematics,
                                 f3r_model** model, f3r_error* err) {
-  f3r_scene s;
-  f3r_scene_copy(&s, base);
+  f3r_scene s = *base;
   s.accuracy = 0.0;
   s.exact_kinematics = exact_kinematics;
   for (int i = 0; i < 3; ++i) s.links[i].modes = f3r_is_flexible(&s, i) ? modes[i] : 0;

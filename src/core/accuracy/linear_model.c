@@ -8,6 +8,7 @@
 #include "dense.h"
 #include "flex3rpr/linear.h"
 #include "flex3rpr/residual.h"
+#include "model_layout.h"
 
 void f3r_linear_destroy(f3r_linear_model* lin) {
   if (!lin) return;
@@ -91,31 +92,27 @@ done:
   return st;
 }
 
-/* Into m: the model with its applied forces taken as held forces (no scripted inputs, no actuator
- * lag: the lag is applied to them already). The inputs' tables and the breakpoints, 170 of a
- * model's 230 kB, are left out: with no input and no breakpoint nothing reads them, and a
- * linear model makes two such copies. */
-static void held_forces_model(const f3r_model* model, f3r_model* m) {
-  const size_t inputs = offsetof(f3r_model, scene.inputs),
-               inputs_end = inputs + sizeof model->scene.inputs;
-  const size_t points = offsetof(f3r_model, breakpoints),
-               points_end = points + sizeof model->breakpoints;
-  memcpy(m, model, inputs);
-  memcpy((char*)m + inputs_end, (const char*)model + inputs_end, points - inputs_end);
-  memcpy((char*)m + points_end, (const char*)model + points_end, sizeof *m - points_end);
-  for (int k = 0; k < F3R_RIGID_FORCES; ++k) /* all but the tables: kind F3R_INPUT_NONE */
-    memset(&m->scene.inputs[k], 0, offsetof(f3r_input, table_time));
+/* The model with its applied forces taken as held forces (no scripted inputs, no actuator lag:
+ * the lag is applied to them already), or NULL when out of memory. A view: the struct alone, on
+ * the heap, its arrays still model's (which outlives it); free() it. */
+static f3r_model* held_forces_model(const f3r_model* model) {
+  f3r_model* m = malloc(sizeof *m);
+  if (!m) return NULL;
+  *m = *model;
+  for (int k = 0; k < F3R_RIGID_FORCES; ++k) /* kind F3R_INPUT_NONE, no table */
+    m->scene.inputs[k] = (f3r_input){.kind = F3R_INPUT_NONE};
   m->n_lag = 0;
   m->n_breakpoints = 0;
+  return m;
 }
 
 f3r_status f3r_linearise(const f3r_model* model, f3r_linear_model** out, f3r_error* err) {
   *out = NULL;
-  f3r_model m; /* without the scripted inputs and the actuator lag */
-  held_forces_model(model, &m);
-  const int n = m.n_independent, ny = f3r_state_size(&m, F3R_FORMULATION_MINIMAL);
+  f3r_model* m = held_forces_model(model); /* without the scripted inputs and actuator lag */
+  if (!m) return f3r_error_set(err, F3R_ERR_MEMORY, "linearisation: out of memory");
+  const int n = m->n_independent, ny = f3r_state_size(m, F3R_FORMULATION_MINIMAL);
   f3r_linear_model* lin = calloc(1, sizeof *lin);
-  f3r_workspace* ws = f3r_workspace_create(&m);
+  f3r_workspace* ws = f3r_workspace_create(m);
   double* y = calloc((size_t)ny, sizeof(double));
   double* yp = calloc((size_t)ny, sizeof(double));
   double* res = calloc((size_t)ny, sizeof(double));
@@ -141,14 +138,12 @@ f3r_status f3r_linearise(const f3r_model* model, f3r_linear_model** out, f3r_err
     st = f3r_error_set(err, F3R_ERR_MEMORY, "linearisation: out of memory");
     goto done;
   }
-  for (int k = 0; k < 3; ++k) y[k] = m.scene.platform_pose0[k];
+  for (int k = 0; k < 3; ++k) y[k] = m->scene.platform_pose0[k];
   /* Rows n..2n of the residual are the reduced equations B^T (M a + h + k - Q): dF/dz at cj = 0
    * is K, dF/du is D, and the cj = 1 Jacobian less the cj = 0 one on the u columns is M. */
-  if ((st =
-           f3r_residual_jacobian(&m, F3R_FORMULATION_MINIMAL, 0.0, 0.0, y, yp, NULL, J0, ny, ws)) ||
-      (st =
-           f3r_residual_jacobian(&m, F3R_FORMULATION_MINIMAL, 0.0, 1.0, y, yp, NULL, J1, ny, ws)) ||
-      (st = f3r_residual(&m, F3R_FORMULATION_MINIMAL, 0.0, y, yp, NULL, res0, ws))) {
+  if ((st = f3r_residual_jacobian(m, F3R_FORMULATION_MINIMAL, 0.0, 0.0, y, yp, NULL, J0, ny, ws)) ||
+      (st = f3r_residual_jacobian(m, F3R_FORMULATION_MINIMAL, 0.0, 1.0, y, yp, NULL, J1, ny, ws)) ||
+      (st = f3r_residual(m, F3R_FORMULATION_MINIMAL, 0.0, y, yp, NULL, res0, ws))) {
     st = f3r_error_set(err, st, "linearisation: the initial pose cannot be linearised");
     goto done;
   }
@@ -169,7 +164,7 @@ f3r_status f3r_linearise(const f3r_model* model, f3r_linear_model** out, f3r_err
   /* The residual is affine in the applied forces: a unit held force less none is -U's column. */
   for (int f = 0; f < F3R_RIGID_FORCES; ++f) {
     held[f] = 1.0;
-    st = f3r_residual(&m, F3R_FORMULATION_MINIMAL, 0.0, y, yp, held, res, ws);
+    st = f3r_residual(m, F3R_FORMULATION_MINIMAL, 0.0, y, yp, held, res, ws);
     held[f] = 0.0;
     if (st != F3R_OK) {
       st = f3r_error_set(err, st, "linearisation: the initial pose cannot be linearised");
@@ -180,7 +175,7 @@ f3r_status f3r_linearise(const f3r_model* model, f3r_linear_model** out, f3r_err
   st = modes(lin, err);
 done:
   f3r_workspace_destroy(ws);
-  free(y), free(yp), free(res), free(res0), free(J0), free(J1);
+  free(y), free(yp), free(res), free(res0), free(J0), free(J1), free(m);
   if (st == F3R_OK)
     *out = lin;
   else
@@ -318,20 +313,18 @@ static f3r_status second_order_remainder(const f3r_linear_model* lin, const f3r_
                                          const double* z, const double* zd, const double* zdd,
                                          double* e, int* unreachable, f3r_error* err) {
   const int n = lin->n;
-  f3r_model m;
-  held_forces_model(model, &m);
-  f3r_model* o = other ? malloc(sizeof *o) : NULL; /* a model is large for the stack */
-  if (o) held_forces_model(other, o);
-  const int ny = f3r_state_size(&m, F3R_FORMULATION_MINIMAL);
-  f3r_workspace* ws = f3r_workspace_create(&m);
+  f3r_model* m = held_forces_model(model);
+  f3r_model* o = other ? held_forces_model(other) : NULL;
+  const int ny = m ? f3r_state_size(m, F3R_FORMULATION_MINIMAL) : 0;
+  f3r_workspace* ws = m ? f3r_workspace_create(m) : NULL;
   double* y = calloc((size_t)ny, sizeof(double));
   double* yp = calloc((size_t)ny, sizeof(double));
   double* res = calloc((size_t)ny, sizeof(double));
   double* res_other = calloc((size_t)ny, sizeof(double));
   double held[F3R_MAX_Q] = {0};
-  if (!ws || !y || !yp || !res || !res_other || (other && !o)) {
+  if (!m || !ws || !y || !yp || !res || !res_other || (other && !o)) {
     f3r_workspace_destroy(ws);
-    free(y), free(yp), free(res), free(res_other), free(o);
+    free(y), free(yp), free(res), free(res_other), free(o), free(m);
     return f3r_error_set(err, F3R_ERR_MEMORY, "linear response: out of memory");
   }
   *unreachable = 0;
@@ -345,7 +338,7 @@ static f3r_status second_order_remainder(const f3r_linear_model* lin, const f3r_
       yp[n + a] = zddk[a];
     }
     memcpy(held, u + (size_t)k * F3R_RIGID_FORCES, F3R_RIGID_FORCES * sizeof(double));
-    if (f3r_residual(&m, F3R_FORMULATION_MINIMAL, 0.0, y, yp, held, res, ws) != F3R_OK ||
+    if (f3r_residual(m, F3R_FORMULATION_MINIMAL, 0.0, y, yp, held, res, ws) != F3R_OK ||
         (o &&
          f3r_residual(o, F3R_FORMULATION_MINIMAL, 0.0, y, yp, held, res_other, ws) != F3R_OK)) {
       memset(ek, 0, (size_t)n * sizeof(double));
@@ -366,7 +359,7 @@ static f3r_status second_order_remainder(const f3r_linear_model* lin, const f3r_
     }
   }
   f3r_workspace_destroy(ws);
-  free(y), free(yp), free(res), free(res_other), free(o);
+  free(y), free(yp), free(res), free(res_other), free(o), free(m);
   return F3R_OK;
 }
 

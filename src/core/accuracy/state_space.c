@@ -7,6 +7,7 @@
 
 #include "accuracy_parts.h"
 #include "dense.h"
+#include "model_layout.h"
 
 void f3r_state_space_destroy(f3r_state_space* ss) { free(ss); }
 

@@ -7,6 +7,7 @@
 
 #include "flex3rpr/beam_modes.h"
 #include "flex3rpr/model.h"
+#include "model_layout.h"
 #include "effects.h"
 #include "data.h"
 
@@ -17,9 +18,14 @@ static int compare_doubles(const void* a, const void* b) {
   return (x > y) - (x < y);
 }
 
+/* Room for every input's breakpoints: a table's times, or at most two shape ends. */
+static int breakpoint_room(const f3r_scene* scene) {
+  return (int)f3r_scene_table_doubles(scene) / 2 + 2 * F3R_RIGID_FORCES;
+}
+
 static void collect_breakpoints(f3r_model* m) {
   int n = 0;
-  const int max = (int)(sizeof m->breakpoints / sizeof m->breakpoints[0]);
+  const int max = breakpoint_room(&m->scene);
   for (int k = 0; k < F3R_RIGID_FORCES; ++k)
     n += f3r_input_breakpoints(&m->scene.inputs[k], m->breakpoints + n, max - n);
   qsort(m->breakpoints, (size_t)n, sizeof(double), compare_doubles);
@@ -87,7 +93,7 @@ static f3r_status check_modes_resolved(const f3r_scene* scene, f3r_error* err) {
 
 /* The coordinate layout (each link's modal coordinates after the 9 rigid ones: m->nq) and each
  * flexible link's modal constants, stiffnesses and clamped frequencies. */
-static f3r_status fill_links(f3r_model* m, f3r_error* err) {
+static f3r_status fill_links(f3r_model* m, double* room, f3r_error* err) {
   const f3r_scene* scene = &m->scene;
   const double l = m->link_length;
   int next = 9;
@@ -99,6 +105,9 @@ static f3r_status fill_links(f3r_model* m, f3r_error* err) {
     lp->eta_index = next;
     next += lp->modes;
     if (!lp->modes) continue;
+    double** arrays[] = {&lp->alpha, &lp->mean,      &lp->first_moment,
+                         &lp->tip,   &lp->stiffness, &lp->omega_clamped};
+    for (int a = 0; a < 6; ++a, room += lp->modes) *arrays[a] = room;
     if (f3r_beam_mode_constants((f3r_beam_end)lp->model, lp->modes, lp->alpha, lp->mean,
                                 lp->first_moment, lp->tip))
       return f3r_error_set(err, F3R_ERR_SCENE, "links[%d].modes: %d is out of range 1..%d", i,
@@ -135,27 +144,29 @@ static f3r_status close_initial_pose(f3r_model* m, f3r_error* err) {
   return F3R_OK;
 }
 
-f3r_status f3r_model_create(const f3r_scene* source, f3r_model** out, f3r_error* err) {
-  if (!source || !out)
-    return f3r_error_set(err, F3R_ERR_ARGUMENT, "f3r_model_create: NULL argument");
-  *out = NULL;
-  f3r_model* m = malloc(sizeof *m);
+/* The doubles after the struct: the scene's tables, the breakpoints, six modal constants per
+ * mode and the modal damping (nq). */
+static size_t buffer_doubles(const f3r_scene* scene) {
+  int modes = 0;
+  for (int i = 0; i < 3; ++i)
+    if (scene->links[i].model != F3R_LINK_RIGID) modes += scene->links[i].modes;
+  return f3r_scene_table_doubles(scene) + (size_t)breakpoint_room(scene) + 6 * (size_t)modes +
+         (size_t)(F3R_Q_MODAL + modes);
+}
+
+/* Everything a model holds in one calloc'd block: the struct, then its arrays in the order of
+ * buffer_doubles. */
+static f3r_status build(const f3r_scene* source, f3r_model** out, f3r_error* err) {
+  f3r_model* m = calloc(1, sizeof *m + buffer_doubles(source) * sizeof(double));
   if (!m) return f3r_error_set(err, F3R_ERR_MEMORY, "f3r_model_create: out of memory");
-  /* The scene first, then everything after it cleared but the breakpoints' room (written up to
-   * n_breakpoints): the same as calloc and a copy for everything read, without writing the
-   * tables' and the breakpoints' unused 220 kB. */
-  f3r_scene_copy(&m->scene, source);
-  const size_t points = offsetof(f3r_model, breakpoints),
-               points_end = points + sizeof m->breakpoints;
-  memset((char*)m + sizeof m->scene, 0, points - sizeof m->scene);
-  memset((char*)m + points_end, 0, sizeof *m - points_end);
-  /* the model's own copy is what it is built from, and what the messages quote: free m after */
-  f3r_status st = f3r_scene_validate(&m->scene, err);
-  if (st == F3R_OK) {
-    fill_bodies(m);
-    st = check_modes_resolved(&m->scene, err);
-  }
-  if (st == F3R_OK) st = fill_links(m, err);
+  double* room = (double*)(m + 1);
+  f3r_scene_copy_into(&m->scene, source, room);
+  room += f3r_scene_table_doubles(source);
+  m->breakpoints = room;
+  room += breakpoint_room(source);
+  fill_bodies(m);
+  f3r_status st = fill_links(m, room, err);
+  m->modal_damping = room + 6 * (m->nq - F3R_Q_MODAL);
   if (st == F3R_OK) {
     collect_breakpoints(m);
     f3r_model_compile_effects(m);
@@ -170,7 +181,42 @@ f3r_status f3r_model_create(const f3r_scene* source, f3r_model** out, f3r_error*
   return F3R_OK;
 }
 
+f3r_status f3r_model_create(const f3r_scene* source, f3r_model** out, f3r_error* err) {
+  if (!source || !out)
+    return f3r_error_set(err, F3R_ERR_ARGUMENT, "f3r_model_create: NULL argument");
+  *out = NULL;
+  /* the source is checked first: the buffer's size follows from its tables and mode counts */
+  f3r_status st = f3r_scene_validate(source, err);
+  if (st == F3R_OK) st = check_modes_resolved(source, err);
+  if (st != F3R_OK) return st;
+  return build(source, out, err);
+}
+
 void f3r_model_destroy(f3r_model* model) { free(model); }
+
+f3r_geometry f3r_model_geometry(const f3r_model* m) {
+  f3r_geometry g = {.platform_radius = m->platform_radius,
+                    .link_length = m->link_length,
+                    .link_mass = m->link_mass,
+                    .cylinder_mass = m->cylinder_mass,
+                    .cylinder_length = m->cylinder_length,
+                    .platform_mass = m->platform_mass,
+                    .platform_inertia = m->platform_inertia,
+                    .end_stops = m->end_stops,
+                    .stroke_min = m->stroke_min,
+                    .stroke_max = m->stroke_max};
+  memcpy(g.base_joint, m->base_joint, sizeof g.base_joint);
+  memcpy(g.platform_angle, m->platform_angle, sizeof g.platform_angle);
+  return g;
+}
+
+int f3r_model_nq(const f3r_model* m) { return m->nq; }
+
+int f3r_model_lag_states(const f3r_model* m) { return m->n_lag; }
+
+const f3r_link_params* f3r_model_link(const f3r_model* m, int link) { return &m->link[link]; }
+
+const f3r_scene* f3r_model_scene(const f3r_model* m) { return &m->scene; }
 
 double f3r_model_tip_deflection(const f3r_model* m, const double* q, int link) {
   const f3r_link_params* lp = &m->link[link];

@@ -2,6 +2,7 @@
 #include <math.h>
 #include <stddef.h>
 #include <stdio.h>
+#include <stdlib.h>
 #include <string.h>
 
 #include "flex3rpr/scene.h"
@@ -119,20 +120,82 @@ int f3r_input_breakpoints(const f3r_input* in, double* times, int max) {
   return n;
 }
 
-void f3r_scene_copy(f3r_scene* dst, const f3r_scene* src) {
-  const size_t inputs = offsetof(f3r_scene, inputs), inputs_end = inputs + sizeof src->inputs;
-  memcpy(dst, src, inputs);
-  memcpy((char*)dst + inputs_end, (const char*)src + inputs_end, sizeof *dst - inputs_end);
+/* A table's entries, or 0 for an input without one (or a size out of range). */
+static size_t table_entries(const f3r_input* in) {
+  const int ok = in->table_time && in->table_value && in->table_size > 0;
+  return ok ? (size_t)in->table_size : 0;
+}
+
+void f3r_scene_free(f3r_scene* scene) {
+  if (!scene) return;
   for (int k = 0; k < F3R_RIGID_FORCES; ++k) {
-    const f3r_input* from = &src->inputs[k];
-    f3r_input* to = &dst->inputs[k];
-    memcpy(to, from, offsetof(f3r_input, table_time));
-    const int used = from->table_size < 0               ? 0
-                     : from->table_size > F3R_MAX_TABLE ? F3R_MAX_TABLE
-                                                        : from->table_size;
-    memcpy(to->table_time, from->table_time, (size_t)used * sizeof(double));
-    memcpy(to->table_value, from->table_value, (size_t)used * sizeof(double));
+    f3r_input* in = &scene->inputs[k];
+    free(in->table_time); /* the block of both lists */
+    in->table_time = in->table_value = NULL;
+    in->table_size = 0;
+    if (in->kind == F3R_INPUT_TABLE) in->kind = F3R_INPUT_NONE;
   }
+}
+
+size_t f3r_scene_table_doubles(const f3r_scene* src) {
+  size_t n = 0;
+  for (int k = 0; k < F3R_RIGID_FORCES; ++k) n += 2 * table_entries(&src->inputs[k]);
+  return n;
+}
+
+/* Points in's table at storage (2 * n doubles) and copies from's entries there. */
+static void place_table(f3r_input* in, const f3r_input* from, double* storage, size_t n) {
+  in->table_time = storage;
+  in->table_value = storage + n;
+  memcpy(in->table_time, from->table_time, n * sizeof(double));
+  memcpy(in->table_value, from->table_value, n * sizeof(double));
+}
+
+void f3r_scene_copy_into(f3r_scene* dst, const f3r_scene* src, double* storage) {
+  *dst = *src;
+  for (int k = 0; k < F3R_RIGID_FORCES; ++k) {
+    const size_t n = table_entries(&src->inputs[k]);
+    dst->inputs[k].table_time = dst->inputs[k].table_value = NULL;
+    if (!n) continue;
+    place_table(&dst->inputs[k], &src->inputs[k], storage, n);
+    storage += 2 * n;
+  }
+}
+
+f3r_status f3r_scene_copy(f3r_scene* dst, const f3r_scene* src, f3r_error* err) {
+  if (!dst || !src) return f3r_error_set(err, F3R_ERR_ARGUMENT, "f3r_scene_copy: NULL argument");
+  *dst = *src;
+  for (int k = 0; k < F3R_RIGID_FORCES; ++k)
+    dst->inputs[k].table_time = dst->inputs[k].table_value = NULL; /* src's, until copied */
+  for (int k = 0; k < F3R_RIGID_FORCES; ++k) {
+    const size_t n = table_entries(&src->inputs[k]);
+    if (!n) continue;
+    double* block = malloc(2 * n * sizeof(double));
+    if (!block) {
+      f3r_scene_free(dst);
+      return f3r_error_set(err, F3R_ERR_MEMORY, "f3r_scene_copy: out of memory");
+    }
+    place_table(&dst->inputs[k], &src->inputs[k], block, n);
+  }
+  return F3R_OK;
+}
+
+f3r_status f3r_input_set_table(f3r_input* in, const double* time, const double* value, int size,
+                               int hold, f3r_error* err) {
+  if (!in || !time || !value)
+    return f3r_error_set(err, F3R_ERR_ARGUMENT, "f3r_input_set_table: NULL argument");
+  if (size < 2 || size > F3R_MAX_TABLE)
+    return f3r_error_set(err, F3R_ERR_ARGUMENT, "f3r_input_set_table: %d entries, allowed 2..%d",
+                         size, F3R_MAX_TABLE);
+  double* block = malloc(2 * (size_t)size * sizeof(double));
+  if (!block) return f3r_error_set(err, F3R_ERR_MEMORY, "f3r_input_set_table: out of memory");
+  const f3r_input from = {.table_time = (double*)time, .table_value = (double*)value};
+  free(in->table_time);
+  place_table(in, &from, block, (size_t)size);
+  in->table_size = size;
+  in->table_hold = hold;
+  in->kind = F3R_INPUT_TABLE;
+  return F3R_OK;
 }
 
 #define CHECK_RANGE(field, value, lo, hi)                                                     \
@@ -200,6 +263,9 @@ static f3r_status validate_input_shape(const f3r_input* in, const char* name, f3
       if (in->table_size < 2 || in->table_size > F3R_MAX_TABLE)
         return f3r_scene_error(err, list, NULL, "%d points, allowed 2..%d", in->table_size,
                                F3R_MAX_TABLE);
+      if (!in->table_time || !in->table_value)
+        return f3r_scene_error(err, list, NULL, "%d points but no lists (f3r_input_set_table)",
+                               in->table_size);
       for (int k = 0; k < in->table_size; ++k) {
         const int bad_time = !isfinite(in->table_time[k]);
         if (bad_time || !isfinite(in->table_value[k])) {

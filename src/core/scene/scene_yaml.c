@@ -88,9 +88,23 @@ static f3r_status read_shape(loader* L, const yaml_node_t* map, const char* name
   return f3r_yaml_numbers(L, map, name, fields, count);
 }
 
+/* A table's list of numbers, 2..F3R_MAX_TABLE of them; *len is its length. */
+static f3r_status table_list(loader* L, const yaml_node_t* value, const char* field, int* len) {
+  if (value->type != YAML_SEQUENCE_NODE)
+    return f3r_yaml_fail(L, value, field, "expected a list of numbers");
+  *len = (int)(value->data.sequence.items.top - value->data.sequence.items.start);
+  if (*len < 2 || *len > F3R_MAX_TABLE)
+    return f3r_yaml_fail(L, value, field, "has %d values, allowed 2..%d", *len, F3R_MAX_TABLE);
+  return F3R_OK;
+}
+
+/* The lists are read straight into the table's block of exactly their size, which the input
+ * then owns (f3r_scene_free). */
 static f3r_status read_table(loader* L, const yaml_node_t* map, const char* name, f3r_input* in) {
   f3r_status st = f3r_yaml_mapping(L, map, name);
   if (st != F3R_OK) return st;
+  const yaml_node_t *times = NULL, *values = NULL;
+  char time_field[128] = "", value_field[128] = "";
   int n_time = -1, n_value = -1;
   FOR_EACH_PAIR(L, map, key, value) {
     char field[128];
@@ -105,24 +119,25 @@ static f3r_status read_table(loader* L, const yaml_node_t* map, const char* name
         return f3r_yaml_fail(L, value, field, "'%s' is not allowed (linear or hold)", v ? v : "?");
       continue;
     }
-    double* target = !strcmp(key, "time")    ? in->table_time
-                     : !strcmp(key, "value") ? in->table_value
-                                             : NULL;
-    if (!target)
+    const int is_time = !strcmp(key, "time");
+    if (!is_time && strcmp(key, "value"))
       return f3r_yaml_fail(L, value, field, "unknown key (allowed: time, value, interpolation)");
-    if (value->type != YAML_SEQUENCE_NODE)
-      return f3r_yaml_fail(L, value, field, "expected a list of numbers");
-    const int len = (int)(value->data.sequence.items.top - value->data.sequence.items.start);
-    if (len < 2 || len > F3R_MAX_TABLE)
-      return f3r_yaml_fail(L, value, field, "has %d values, allowed 2..%d", len, F3R_MAX_TABLE);
-    if ((st = f3r_yaml_vector(L, value, field, target, len)) != F3R_OK) return st;
-    *(target == in->table_time ? &n_time : &n_value) = len;
+    if ((st = table_list(L, value, field, is_time ? &n_time : &n_value)) != F3R_OK) return st;
+    *(is_time ? &times : &values) = value;
+    snprintf(is_time ? time_field : value_field, 128, "%s", field);
   }
   if (n_time < 0 || n_value < 0)
     return f3r_yaml_fail(L, map, name, "needs both time and value lists");
   if (n_time != n_value)
     return f3r_yaml_fail(L, map, name, "time has %d values but value has %d", n_time, n_value);
+  double* block = malloc(2 * (size_t)n_time * sizeof(double));
+  if (!block) return f3r_error_set(L->err, F3R_ERR_MEMORY, "%s: out of memory", L->path);
+  free(in->table_time); /* a table read before, under an override */
+  in->table_time = block;
+  in->table_value = block + n_time;
   in->table_size = n_time;
+  if ((st = f3r_yaml_vector(L, times, time_field, in->table_time, n_time)) != F3R_OK) return st;
+  if ((st = f3r_yaml_vector(L, values, value_field, in->table_value, n_value)) != F3R_OK) return st;
   f3r_yaml_remember(L, name, map);
   return F3R_OK;
 }
@@ -487,7 +502,10 @@ f3r_status f3r_scene_load_with(const char* path, const f3r_scene_options* option
     st = f3r_scene_validate(&parsed, err);
     if (st != F3R_OK) st = locate_validation_error(L, err);
   }
-  if (st == F3R_OK) *scene = parsed;
+  if (st == F3R_OK)
+    *scene = parsed; /* the tables go with it */
+  else
+    f3r_scene_free(&parsed);
   yaml_document_delete(&L->doc);
   yaml_parser_delete(&parser);
   fclose(file);

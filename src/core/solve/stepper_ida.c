@@ -10,6 +10,7 @@
 
 #include "linsol_schur.h"
 #include "stepper.h"
+#include "model_layout.h"
 
 /* The algebraic unknowns (lambda, mu) are not in the error test, but their weights enter IDA's
  * Newton convergence test. In an index-2 system they are only determined to about
