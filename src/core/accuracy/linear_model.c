@@ -5,22 +5,30 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "accuracy_parts.h"
 #include "dense.h"
 #include "flex3rpr/linear.h"
 #include "flex3rpr/residual.h"
 #include "model_layout.h"
 
-void f3r_linear_destroy(f3r_linear_model* lin) {
-  if (!lin) return;
-  free(lin->mass);
-  free(lin->damping);
-  free(lin->stiffness);
-  free(lin->input);
-  free(lin->static_force);
-  free(lin->shapes);
-  free(lin->omega2);
-  free(lin->modal_damping);
-  free(lin);
+void f3r_linear_destroy(f3r_linear_model* lin) { free(lin); }
+
+/* One allocation: the struct, then its arrays (n minimal coordinates), zeroed. */
+static f3r_linear_model* linear_alloc(int n) {
+  const size_t nn = (size_t)n * n, head = (sizeof(f3r_linear_model) + 7) / sizeof(double);
+  double* block = calloc(head + 4 * nn + (size_t)n * (F3R_RIGID_FORCES + 3), sizeof(double));
+  f3r_linear_model* lin = (f3r_linear_model*)block;
+  if (!lin) return NULL;
+  lin->n = n;
+  lin->mass = block + head;
+  lin->damping = lin->mass + nn;
+  lin->stiffness = lin->damping + nn;
+  lin->shapes = lin->stiffness + nn;
+  lin->input = lin->shapes + nn;
+  lin->static_force = lin->input + (size_t)n * F3R_RIGID_FORCES;
+  lin->omega2 = lin->static_force + n;
+  lin->modal_damping = lin->omega2 + n;
+  return lin;
 }
 
 /* Phi and omega^2 of K Phi = M Phi diag(omega^2): M = L L^T, C = L^-1 K L^-T = V diag V^T,
@@ -37,12 +45,7 @@ static f3r_status modes(f3r_linear_model* lin, f3r_error* err) {
     st = f3r_error_set(err, F3R_ERR_MEMORY, "linearisation: out of memory");
     goto done;
   }
-  memcpy(L, lin->mass, (size_t)n * n * sizeof(double));
-  if (f3r_cholesky_factor(L, n)) {
-    st = f3r_error_set(err, F3R_ERR_SINGULAR,
-                       "linearisation: the reduced mass matrix is not positive definite");
-    goto done;
-  }
+  if ((st = f3r_linear_mass_factor(lin, L, "linearisation", err)) != F3R_OK) goto done;
   memcpy(C, lin->stiffness, (size_t)n * n * sizeof(double));
   for (int pass = 0; pass < 2; ++pass) { /* C <- L^-1 C, then transpose: twice gives L^-1 K L^-T */
     for (int j = 0; j < n; ++j)
@@ -111,7 +114,7 @@ f3r_status f3r_linearise(const f3r_model* model, f3r_linear_model** out, f3r_err
   f3r_model* m = held_forces_model(model); /* without the scripted inputs and actuator lag */
   if (!m) return f3r_error_set(err, F3R_ERR_MEMORY, "linearisation: out of memory");
   const int n = m->n_independent, ny = f3r_state_size(m, F3R_FORMULATION_MINIMAL);
-  f3r_linear_model* lin = calloc(1, sizeof *lin);
+  f3r_linear_model* lin = linear_alloc(n);
   f3r_workspace* ws = f3r_workspace_create(m);
   double* y = calloc((size_t)ny, sizeof(double));
   double* yp = calloc((size_t)ny, sizeof(double));
@@ -121,20 +124,7 @@ f3r_status f3r_linearise(const f3r_model* model, f3r_linear_model** out, f3r_err
   double* J1 = calloc((size_t)ny * ny, sizeof(double));
   double held[F3R_MAX_Q] = {0};
   f3r_status st = F3R_OK;
-  if (lin) {
-    lin->n = n;
-    lin->mass = calloc((size_t)n * n, sizeof(double));
-    lin->damping = calloc((size_t)n * n, sizeof(double));
-    lin->stiffness = calloc((size_t)n * n, sizeof(double));
-    lin->input = calloc((size_t)n * F3R_RIGID_FORCES, sizeof(double));
-    lin->static_force = calloc((size_t)n, sizeof(double));
-    lin->shapes = calloc((size_t)n * n, sizeof(double));
-    lin->omega2 = calloc((size_t)n, sizeof(double));
-    lin->modal_damping = calloc((size_t)n, sizeof(double));
-  }
-  if (!lin || !ws || !y || !yp || !res || !res0 || !J0 || !J1 || !lin->mass || !lin->damping ||
-      !lin->stiffness || !lin->input || !lin->static_force || !lin->shapes || !lin->omega2 ||
-      !lin->modal_damping) {
+  if (!lin || !ws || !y || !yp || !res || !res0 || !J0 || !J1) {
     st = f3r_error_set(err, F3R_ERR_MEMORY, "linearisation: out of memory");
     goto done;
   }
