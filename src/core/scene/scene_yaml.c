@@ -157,20 +157,22 @@ static f3r_status read_input(loader* L, const yaml_node_t* map, const char* name
     snprintf(field, sizeof field, "%s.%s", name, key);
     if (!strcmp(key, "step")) {
       in->kind = F3R_INPUT_STEP;
-      const number_field f[] = {{"time", &in->t0}, {"before", &in->before}, {"after", &in->after}};
+      const number_field f[] = {F3R_NUMBER("time", &in->t0), F3R_NUMBER("before", &in->before),
+                                F3R_NUMBER("after", &in->after)};
       return read_shape(L, value, field, f, 3);
     }
     if (!strcmp(key, "ramp")) {
       in->kind = F3R_INPUT_RAMP;
-      const number_field f[] = {
-          {"start", &in->t0}, {"end", &in->t1}, {"from", &in->before}, {"to", &in->after}};
+      const number_field f[] = {F3R_NUMBER("start", &in->t0), F3R_NUMBER("end", &in->t1),
+                                F3R_NUMBER("from", &in->before), F3R_NUMBER("to", &in->after)};
       return read_shape(L, value, field, f, 4);
     }
     if (!strcmp(key, "chirp")) {
       in->kind = F3R_INPUT_CHIRP;
-      const number_field f[] = {{"offset", &in->offset},      {"amplitude", &in->amplitude},
-                                {"start_frequency", &in->f0}, {"end_frequency", &in->f1},
-                                {"start", &in->t0},           {"end", &in->t1}};
+      const number_field f[] = {
+          F3R_NUMBER("offset", &in->offset),      F3R_NUMBER("amplitude", &in->amplitude),
+          F3R_NUMBER("start_frequency", &in->f0), F3R_NUMBER("end_frequency", &in->f1),
+          F3R_NUMBER("start", &in->t0),           F3R_NUMBER("end", &in->t1)};
       return read_shape(L, value, field, f, 6);
     }
     if (!strcmp(key, "table")) {
@@ -225,6 +227,19 @@ static f3r_status read_inputs(loader* L, const yaml_node_t* map) {
   return F3R_OK;
 }
 
+/* A solver setting named from one of the core's enum tables (names.c): parsed says whether the
+ * table knew the name; allowed lists the names. */
+static f3r_status named_setting(loader* L, const yaml_node_t* value, const char* field, int parsed,
+                                const char* allowed, unsigned explicit_bit) {
+  if (!parsed) {
+    const char* v = f3r_yaml_scalar(value);
+    return f3r_yaml_fail(L, value, field, "'%s' is not one of %s", v ? v : "?", allowed);
+  }
+  L->scene->explicit_settings |= explicit_bit;
+  f3r_yaml_remember(L, field, value);
+  return F3R_OK;
+}
+
 static f3r_status read_solver(loader* L, const yaml_node_t* map) {
   f3r_status st = f3r_yaml_mapping(L, map, "solver");
   if (st != F3R_OK) return st;
@@ -232,24 +247,15 @@ static f3r_status read_solver(loader* L, const yaml_node_t* map) {
   FOR_EACH_PAIR(L, map, key, value) {
     char name[96];
     snprintf(name, sizeof name, "solver.%s", key);
+    const char* v = f3r_yaml_scalar(value);
+    char allowed[64];
     if (!strcmp(key, "formulation")) {
-      const char* v = f3r_yaml_scalar(value);
-      char allowed[64];
-      if (f3r_formulation_from_name(v, &s->formulation) != 0)
-        return f3r_yaml_fail(L, value, name, "'%s' is not one of %s", v ? v : "?",
-                             f3r_formulation_names(allowed, sizeof allowed));
-      s->explicit_settings |= F3R_EXPLICIT_FORMULATION;
-      f3r_yaml_remember(L, name, value);
+      st = named_setting(L, value, name, f3r_formulation_from_name(v, &s->formulation) == 0,
+                         f3r_formulation_names(allowed, sizeof allowed), F3R_EXPLICIT_FORMULATION);
     } else if (!strcmp(key, "integrator")) {
-      const char* v = f3r_yaml_scalar(value);
-      char allowed[64];
-      if (f3r_integrator_from_name(v, &s->integrator) != 0)
-        return f3r_yaml_fail(L, value, name, "'%s' is not one of %s", v ? v : "?",
-                             f3r_integrator_names(allowed, sizeof allowed));
-      s->explicit_settings |= F3R_EXPLICIT_INTEGRATOR;
-      f3r_yaml_remember(L, name, value);
+      st = named_setting(L, value, name, f3r_integrator_from_name(v, &s->integrator) == 0,
+                         f3r_integrator_names(allowed, sizeof allowed), F3R_EXPLICIT_INTEGRATOR);
     } else if (!strcmp(key, "table")) {
-      const char* v = f3r_yaml_scalar(value);
       if (!v || !*v || strlen(v) >= sizeof s->table)
         return f3r_yaml_fail(L, value, name, "needs a Butcher table's name (at most %d characters)",
                              (int)sizeof s->table - 1);
@@ -310,15 +316,17 @@ static f3r_status read_effects(loader* L, const yaml_node_t* map) {
     } else if (!strcmp(ekey, "gravity")) {
       st = f3r_yaml_vector(L, evalue, name, s->gravity, 3);
     } else if (!strcmp(ekey, "payload")) {
-      const number_field f[] = {{"mass", &s->payload_mass}, {"inertia", &s->payload_inertia}};
+      const number_field f[] = {F3R_NUMBER("mass", &s->payload_mass),
+                                F3R_NUMBER("inertia", &s->payload_inertia)};
       st = f3r_yaml_numbers(L, evalue, name, f, 2);
     } else if (!strcmp(ekey, "end_stops")) {
-      const number_field f[] = {
-          {"min", &s->stroke_min}, {"max", &s->stroke_max}, {"restitution", &s->restitution}};
+      const number_field f[] = {F3R_NUMBER("min", &s->stroke_min),
+                                F3R_NUMBER("max", &s->stroke_max),
+                                F3R_NUMBER("restitution", &s->restitution)};
       s->end_stops = 1;
       st = f3r_yaml_numbers(L, evalue, name, f, 3);
     } else if (!strcmp(ekey, "actuator_lag")) {
-      const number_field f[] = {{"time_constant", &s->actuator_lag}};
+      const number_field f[] = {F3R_NUMBER("time_constant", &s->actuator_lag)};
       st = f3r_yaml_numbers(L, evalue, name, f, 1);
     } else if (!strcmp(ekey, "joint_friction")) {
       st = read_joint_friction(L, evalue, name);
@@ -335,92 +343,88 @@ static f3r_status read_effects(loader* L, const yaml_node_t* map) {
 
 static f3r_status read_initial(loader* L, const yaml_node_t* map) {
   f3r_scene* s = L->scene;
-  f3r_status st = f3r_yaml_mapping(L, map, "initial");
-  if (st != F3R_OK) return st;
-  FOR_EACH_PAIR(L, map, ikey, ivalue) {
-    char name[96];
-    snprintf(name, sizeof name, "initial.%s", ikey);
-    if (!strcmp(ikey, "platform_pose"))
-      st = f3r_yaml_vector(L, ivalue, name, s->platform_pose0, 3);
-    else if (!strcmp(ikey, "platform_velocity"))
-      st = f3r_yaml_vector(L, ivalue, name, s->platform_velocity0, 3);
-    else
-      return f3r_yaml_fail(L, ivalue, name,
-                           "unknown key (allowed: platform_pose, platform_velocity)");
-    if (st != F3R_OK) return st;
-  }
-  return F3R_OK;
+  const number_field f[] = {F3R_VECTOR("platform_pose", s->platform_pose0, 3),
+                            F3R_VECTOR("platform_velocity", s->platform_velocity0, 3)};
+  return f3r_yaml_numbers(L, map, "initial", f, 2);
 }
 
 static f3r_status read_run(loader* L, const yaml_node_t* map) {
   f3r_scene* s = L->scene;
-  f3r_status st = f3r_yaml_mapping(L, map, "run");
-  if (st != F3R_OK) return st;
-  FOR_EACH_PAIR(L, map, rkey, rvalue) {
-    char name[96];
-    snprintf(name, sizeof name, "run.%s", rkey);
-    if (!strcmp(rkey, "duration"))
-      st = f3r_yaml_number(L, rvalue, name, &s->duration);
-    else if (!strcmp(rkey, "output_step"))
-      st = f3r_yaml_number(L, rvalue, name, &s->output_step);
-    else if (!strcmp(rkey, "beam_points"))
-      st = f3r_yaml_int(L, rvalue, name, &s->beam_points);
-    else
-      return f3r_yaml_fail(L, rvalue, name,
-                           "unknown key (allowed: duration, output_step, beam_points)");
-    if (st != F3R_OK) return st;
-  }
-  return F3R_OK;
+  const number_field f[] = {F3R_NUMBER("duration", &s->duration),
+                            F3R_NUMBER("output_step", &s->output_step),
+                            F3R_INTEGER("beam_points", &s->beam_points)};
+  return f3r_yaml_numbers(L, map, "run", f, 3);
 }
 
-static f3r_status read_root(loader* L, const yaml_node_t* root) {
+static f3r_status read_geometry(loader* L, const yaml_node_t* map) {
   f3r_scene* s = L->scene;
+  const number_field f[] = {
+      F3R_NUMBER("base_side", &s->base_side), F3R_NUMBER("platform_side", &s->platform_side),
+      F3R_NUMBER("stroke_min", &s->stroke_min), F3R_NUMBER("stroke_max", &s->stroke_max)};
+  return f3r_yaml_numbers(L, map, "geometry", f, 4);
+}
+
+static f3r_status read_platform(loader* L, const yaml_node_t* map) {
+  f3r_scene* s = L->scene;
+  const number_field f[] = {F3R_NUMBER("mass", &s->platform_mass),
+                            F3R_NUMBER("inertia", &s->platform_inertia)};
+  return f3r_yaml_numbers(L, map, "platform", f, 2);
+}
+
+static f3r_status read_link_material(loader* L, const yaml_node_t* map) {
+  f3r_scene* s = L->scene;
+  const number_field f[] = {F3R_NUMBER("length", &s->link_length),
+                            F3R_NUMBER("diameter", &s->link_diameter),
+                            F3R_NUMBER("density", &s->link_density),
+                            F3R_NUMBER("youngs_modulus", &s->link_youngs_modulus)};
+  return f3r_yaml_numbers(L, map, "link", f, 4);
+}
+
+static f3r_status read_cylinder(loader* L, const yaml_node_t* map) {
+  f3r_scene* s = L->scene;
+  const number_field f[] = {F3R_NUMBER("length", &s->cylinder_length),
+                            F3R_NUMBER("inner_diameter", &s->cylinder_inner_diameter),
+                            F3R_NUMBER("outer_diameter", &s->cylinder_outer_diameter),
+                            F3R_NUMBER("density", &s->cylinder_density)};
+  return f3r_yaml_numbers(L, map, "cylinder", f, 4);
+}
+
+static f3r_status read_accuracy(loader* L, const yaml_node_t* map) {
+  const number_field f[] = {F3R_NUMBER("end_effector", &L->scene->accuracy)};
+  return f3r_yaml_numbers(L, map, "accuracy", f, 1);
+}
+
+/* The scene file's sections, in the order the documentation lists them. */
+static const struct {
+  const char* name;
+  f3r_status (*read)(loader* L, const yaml_node_t* node);
+} sections[] = {{"geometry", read_geometry},
+                {"platform", read_platform},
+                {"link", read_link_material},
+                {"cylinder", read_cylinder},
+                {"links", read_links},
+                {"effects", read_effects},
+                {"initial", read_initial},
+                {"inputs", read_inputs},
+                {"solver", read_solver},
+                {"accuracy", read_accuracy},
+                {"run", read_run}};
+
+static f3r_status read_root(loader* L, const yaml_node_t* root) {
   f3r_status st = f3r_yaml_mapping(L, root, "scene");
   if (st != F3R_OK) return st;
+  const int count = (int)(sizeof sections / sizeof sections[0]);
   FOR_EACH_PAIR(L, root, key, value) {
-    if (!strcmp(key, "geometry")) {
-      const number_field f[] = {{"base_side", &s->base_side},
-                                {"platform_side", &s->platform_side},
-                                {"stroke_min", &s->stroke_min},
-                                {"stroke_max", &s->stroke_max}};
-      st = f3r_yaml_numbers(L, value, "geometry", f, 4);
-    } else if (!strcmp(key, "platform")) {
-      const number_field f[] = {{"mass", &s->platform_mass}, {"inertia", &s->platform_inertia}};
-      st = f3r_yaml_numbers(L, value, "platform", f, 2);
-    } else if (!strcmp(key, "link")) {
-      const number_field f[] = {{"length", &s->link_length},
-                                {"diameter", &s->link_diameter},
-                                {"density", &s->link_density},
-                                {"youngs_modulus", &s->link_youngs_modulus}};
-      st = f3r_yaml_numbers(L, value, "link", f, 4);
-    } else if (!strcmp(key, "cylinder")) {
-      const number_field f[] = {{"length", &s->cylinder_length},
-                                {"inner_diameter", &s->cylinder_inner_diameter},
-                                {"outer_diameter", &s->cylinder_outer_diameter},
-                                {"density", &s->cylinder_density}};
-      st = f3r_yaml_numbers(L, value, "cylinder", f, 4);
-    } else if (!strcmp(key, "links")) {
-      st = read_links(L, value);
-    } else if (!strcmp(key, "effects")) {
-      st = read_effects(L, value);
-    } else if (!strcmp(key, "initial")) {
-      st = read_initial(L, value);
-    } else if (!strcmp(key, "inputs")) {
-      st = read_inputs(L, value);
-    } else if (!strcmp(key, "solver")) {
-      st = read_solver(L, value);
-    } else if (!strcmp(key, "accuracy")) {
-      const number_field f[] = {{"end_effector", &s->accuracy}};
-      st = f3r_yaml_numbers(L, value, "accuracy", f, 1);
-    } else if (!strcmp(key, "run")) {
-      st = read_run(L, value);
-    } else {
-      return f3r_yaml_fail(
-          L, value, key,
-          "unknown section (allowed: geometry, platform, link, cylinder, links, effects, "
-          "initial, inputs, solver, accuracy, run)");
+    int k = 0;
+    while (k < count && strcmp(key, sections[k].name)) ++k;
+    if (k == count) {
+      char allowed[160] = "";
+      for (int j = 0; j < count; ++j)
+        snprintf(allowed + strlen(allowed), sizeof allowed - strlen(allowed), "%s%s", j ? ", " : "",
+                 sections[j].name);
+      return f3r_yaml_fail(L, value, key, "unknown section (allowed: %s)", allowed);
     }
-    if (st != F3R_OK) return st;
+    if ((st = sections[k].read(L, value)) != F3R_OK) return st;
   }
   return F3R_OK;
 }

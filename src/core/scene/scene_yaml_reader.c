@@ -144,7 +144,11 @@ f3r_status f3r_yaml_numbers(loader* L, const yaml_node_t* map, const char* secti
     for (int k = 0; k < count && !found; ++k)
       if (!strcmp(key, fields[k].key)) {
         found = 1;
-        if ((st = f3r_yaml_number(L, value, name, fields[k].target)) != F3R_OK) return st;
+        const number_field* f = &fields[k];
+        st = f->int_target  ? f3r_yaml_int(L, value, name, f->int_target)
+             : f->count > 1 ? f3r_yaml_vector(L, value, name, f->target, f->count)
+                            : f3r_yaml_number(L, value, name, f->target);
+        if (st != F3R_OK) return st;
       }
     if (!found) {
       char allowed[256] = "";

@@ -33,10 +33,20 @@ typedef struct {
   int* last_node;
 } loader;
 
+/* One key of a section: a number into target (count 0 or 1), a vector of count numbers into
+ * target[0..count), or an integer into int_target when that is set. */
 typedef struct {
   const char* key;
   double* target;
+  int count;
+  int* int_target;
 } number_field;
+#define F3R_NUMBER(key, target) \
+  { key, target, 1, NULL }
+#define F3R_VECTOR(key, target, count) \
+  { key, target, count, NULL }
+#define F3R_INTEGER(key, target) \
+  { key, NULL, 0, target }
 
 /* Iterates the pairs of a mapping node; KEY is the key string, VALUE the value node. */
 #define FOR_EACH_PAIR(L, map, KEY, VALUE)                                                    \
@@ -66,7 +76,7 @@ f3r_status f3r_yaml_bool(loader* L, const yaml_node_t* n, const char* field, int
 f3r_status f3r_yaml_vector(loader* L, const yaml_node_t* n, const char* field, double* out,
                            int count);
 f3r_status f3r_yaml_mapping(loader* L, const yaml_node_t* n, const char* field);
-/* Reads a mapping whose keys are all numbers from `fields`. */
+/* Reads a mapping whose keys are all from `fields` (numbers, vectors, integers). */
 f3r_status f3r_yaml_numbers(loader* L, const yaml_node_t* map, const char* section,
                             const number_field* fields, int count);
 
