@@ -6,7 +6,7 @@
 #include <functional>
 #include <random>
 
-#include "flex3rpr/stages.h"
+#include "stages.h"
 extern "C" {
 #include "data.h"  // f3r_fwd_leg_strokes: the event roots' closure
 }

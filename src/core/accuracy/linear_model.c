@@ -7,7 +7,7 @@
 
 #include "dense.h"
 #include "flex3rpr/linear.h"
-#include "flex3rpr/residual.h"
+#include "residual.h"
 
 void f3r_linear_destroy(f3r_linear_model* lin) {
   if (!lin) return;

@@ -11,7 +11,7 @@
 #ifndef FLEX3RPR_DATA_H
 #define FLEX3RPR_DATA_H
 
-#include "flex3rpr/stages.h"
+#include "stages.h"
 
 /* Legs whose beam root comes closer than this fraction of l to A_i are degenerate: there the
  * constraint Jacobian loses rank (det of the leg's 2x2 block is rho + l), and the loop closure

@@ -1,7 +1,7 @@
 /* The redundant-coordinate residuals and their exact Jacobians, in named blocks read from one
  * forward pass (data.h): the stabilised index-2 (Gear-Gupta-Leimkuhler) form `dae` and the plain
  * index-3 form `index3` (no mu, no velocity constraint) that the paper's MEBDFI integrates.
- * Layouts and equations: include/flex3rpr/residual.h. */
+ * Layouts and equations: residual.h. */
 #include "dense.h"
 #include "workspace.h"
 

@@ -1,5 +1,5 @@
 /* The minimal-coordinate residual: independent z = (X_p, Y_p, phi_p, eta), with rho and theta
- * from the closed-form loop closure. Layout and equations: include/flex3rpr/residual.h.
+ * from the closed-form loop closure. Layout and equations: residual.h.
  *
  * Per link, the dependent block of G is G_d = [e, L n - w e], det = L = rho + l, so
  *   G_d x = V     gives  theta = (n.V)/L,  rho = e.V + w theta,

@@ -3,7 +3,7 @@
 #define FLEX3RPR_WORKSPACE_H
 
 #include "data.h"
-#include "flex3rpr/residual.h"
+#include "residual.h"
 
 struct f3r_workspace {
   int nq, nz, ny;

@@ -6,7 +6,8 @@
 #include <string.h>
 
 #include "flex3rpr/sim.h"
-#include "flex3rpr/stages.h"
+#include "residual.h"
+#include "stages.h"
 #include "stepper.h"
 #include "workspace.h"
 

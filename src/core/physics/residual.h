@@ -1,5 +1,6 @@
 /* The model as a residual F(t, y, y') = 0 in one of three formulations, with its Jacobian
- * dF/dy + cj dF/dy'. Public so that any DAE or ODE solver can integrate the same model.
+ * dF/dy + cj dF/dy'. Private to the core, the tests, the benchmark and the peer library
+ * (flex3rpr_core_private), so that any DAE or ODE solver there can integrate the same model.
  *
  * dae (stabilised index 2, Gear-Gupta-Leimkuhler), ny = 2 nq + 13:
  *   y = [q (nq) | v (nq) | lambda (6) | mu (6) | W (1)]
@@ -41,8 +42,6 @@ typedef struct f3r_workspace f3r_workspace;
 
 f3r_workspace* f3r_workspace_create(const f3r_model* model);
 void f3r_workspace_destroy(f3r_workspace* ws);
-
-int f3r_state_size(const f3r_model* model, f3r_formulation form);
 
 /* sin/cos pairs the forward pass has evaluated through this workspace since its creation: a
  * counter for tests and the benchmark (one evaluation's share is the difference of two reads). */

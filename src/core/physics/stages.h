@@ -1,5 +1,6 @@
 /* The stages the equations of motion are built from, in the redundant coordinates q of model.h.
- * Public so that another solver or formulation can assemble the same model from them.
+ * Private (flex3rpr_core_private): the tests, the benchmark and the peer library assemble the
+ * same model from them.
  *
  * Equations of motion (paper eq. 18-19, derived from eqs. 8-17, ../shared/MODEL.md):
  *   M(q) a + h(q, v) + k(q) = Q(t, q, v) + G(q)^T lambda,     g(q) = 0
@@ -20,8 +21,6 @@
 #ifdef __cplusplus
 extern "C" {
 #endif
-
-#define F3R_NCON 6 /* constraints: (x, y) of the loop of each link */
 
 /* --- inertia ------------------------------------------------------------------------------- */
 /* scale * M(q) (nq x nq) added into A. */
