@@ -101,6 +101,33 @@ static void inputs_add(const f3r_model* m, double t, const double* q, const doub
 
 const f3r_force_effect f3r_inputs_effect = {"inputs", inputs_add, 0, 0};
 
+/* --- the list: every caller's one loop over the enabled effects -------------------------------- */
+
+void f3r_effects_add_forces(const f3r_model* m, const f3r_data* d, double* Q) {
+  for (int e = 0; e < m->n_effects; ++e) m->effects[e]->add(m, d->t, d->q, d->v, d, Q);
+}
+
+void f3r_effects_add_derivatives(const f3r_model* m, const f3r_data* d, double scale, double* dQ_dq,
+                                 double* dQ_dv, int ld) {
+  for (int e = 0; e < m->n_effects; ++e) {
+    const f3r_force_effect* effect = m->effects[e];
+    if (dQ_dq && effect->add_dq) effect->add_dq(m, d->q, d->v, d, scale, dQ_dq, ld);
+    if (dQ_dv && effect->add_dv) effect->add_dv(m, d->q, d->v, scale, dQ_dv, ld);
+  }
+}
+
+void f3r_add_generalized_forces_dq(const f3r_model* m, const double* q, const double* v,
+                                   double scale, double* A, int ld) {
+  f3r_data d;
+  f3r_effects_add_derivatives(m, f3r_forward_at(m, q, v, F3R_FWD_POSITION, &d), scale, A, NULL, ld);
+}
+
+void f3r_add_generalized_forces_dv(const f3r_model* m, const double* q, const double* v,
+                                   double scale, double* A, int ld) {
+  f3r_data d = {.q = q, .v = v}; /* no effect's dQ/dv needs a stage */
+  f3r_effects_add_derivatives(m, &d, scale, NULL, A, ld);
+}
+
 void f3r_model_compile_effects(f3r_model* m) {
   const f3r_scene* s = &m->scene;
   for (int i = 0; i < 3; ++i) {

@@ -14,18 +14,21 @@
 
 static void dependent_accelerations(const f3r_model* m, f3r_data* d);
 
-/* The position and velocity stages from the minimal state, then the full accelerations: the
- * loop closure fills rho, rho', theta' (not theta: nothing in the residual needs the angle
- * itself), and a_d = G_d^{-1} (-G_z a_z - gamma). */
-static f3r_status expand(const f3r_model* m, const double* y, const double* yp, f3r_workspace* ws) {
+/* The forward pass at the minimal state y, then the full accelerations: the closed stages fill
+ * rho, rho', theta' (not theta: nothing in the residual needs the angle itself), and
+ * a_d = G_d^{-1} (-G_z a_z - gamma). */
+static f3r_status expand(const f3r_model* m, double t, const double* y, const double* yp,
+                         const double* held, f3r_workspace* ws) {
   const int nz = m->n_independent;
   f3r_data* d = &ws->data;
-  double *q = ws->q, *v = ws->v;
-  memcpy(q + F3R_Q_INDEPENDENT, y, (size_t)nz * sizeof(double));
-  memcpy(v + F3R_Q_INDEPENDENT, y + nz, (size_t)nz * sizeof(double));
-  const f3r_status st = f3r_fwd_position_closed(m, q, d);
+  d->t = t;
+  d->z = y;
+  d->u = y + nz;
+  d->held = held;
+  d->lag = m->n_lag ? y + f3r_lag_index(m, F3R_FORMULATION_MINIMAL) : 0;
+  const f3r_status st =
+      f3r_forward(m, d, F3R_FWD_POSITION_CLOSED | F3R_FWD_VELOCITY_CLOSED | F3R_FWD_FORCES);
   if (st != F3R_OK) return st;
-  f3r_fwd_velocity_closed(m, q, v, d);
   memcpy(d->a + F3R_Q_INDEPENDENT, yp + nz, (size_t)nz * sizeof(double));
   dependent_accelerations(m, d);
   return F3R_OK;
@@ -60,11 +63,10 @@ void f3r_minimal_multipliers(const f3r_model* m, const double* yp, f3r_data* d) 
 f3r_status f3r_minimal_residual(const f3r_model* m, double t, const double* y, const double* yp,
                                 const double* held, double* res, f3r_workspace* ws) {
   const int nz = m->n_independent;
-  const f3r_status st = expand(m, y, yp, ws);
+  const f3r_status st = expand(m, t, y, yp, held, ws);
   if (st != F3R_OK) return st;
   f3r_data* d = &ws->data;
   const int lag_at = f3r_lag_index(m, F3R_FORMULATION_MINIMAL), w_at = lag_at + m->n_lag;
-  f3r_fwd_forces(m, t, held, ws->q, ws->v, m->n_lag ? y + lag_at : 0, d);
   loop_forces(m, d);
   const double* R = d->R;
   f3r_data_constraint_transpose_times(m, d, d->lambda, ws->tmp);
@@ -320,14 +322,11 @@ static jacobian_products jacobian_products_in(f3r_workspace* ws, int nq, int nz)
 static void force_derivatives(const f3r_model* m, f3r_workspace* ws, const jacobian_products* p) {
   const int nq = m->nq;
   const f3r_data* d = &ws->data;
-  const double *q = ws->q, *v = ws->v, *a = d->a;
+  const double *q = d->q, *v = d->v, *a = d->a;
   double *Z = p->Z, *H = p->H, *Qq = p->Qq, *Qv = p->Qv;
   memset(ws->jac_work, 0, (2 * (size_t)nq * nq + 18 * (size_t)nq) * sizeof(double));
   memset(ws->dQ, 0, 2 * (size_t)nq * nq * sizeof(double));
-  for (int e = 0; e < m->n_effects; ++e) {
-    if (m->effects[e]->add_dq) m->effects[e]->add_dq(m, q, v, d, 1.0, Qq, nq);
-    if (m->effects[e]->add_dv) m->effects[e]->add_dv(m, q, v, 1.0, Qv, nq);
-  }
+  f3r_effects_add_derivatives(m, d, 1.0, Qq, Qv, nq);
   f3r_add_mass_times_dq(m, q, a, 1.0, Z, nq);
   f3r_add_velocity_forces_dq(m, q, v, 1.0, Z, nq);
   f3r_add_elastic_forces_dq(m, 1.0, Z, nq);
@@ -402,7 +401,7 @@ static void add_force_blocks(const f3r_model* m, const f3r_data* d, const jacobi
 static void add_rate_and_lag_blocks(const f3r_model* m, f3r_workspace* ws, double cj,
                                     const double* Bd, int w_at, double* J, int ld) {
   const int nz = m->n_independent, lag_at = 2 * nz;
-  const double* v = ws->v;
+  const double* v = ws->data.v;
   for (int j = 0; j < nz; ++j) {
     F3R_AT(J, ld, j, j) += cj;
     F3R_AT(J, ld, j, nz + j) -= 1.0;
@@ -421,7 +420,7 @@ static void add_rate_and_lag_blocks(const f3r_model* m, f3r_workspace* ws, doubl
 static void add_work_row(const f3r_model* m, const f3r_workspace* ws, double cj,
                          const jacobian_products* p, int w_at, double* J, int ld) {
   const int nq = m->nq, nz = m->n_independent;
-  const double *v = ws->v, *Qq = p->Qq, *Qv = p->Qv, *Bd = p->Bd, *Vz = p->Vz;
+  const double *v = ws->data.v, *Qq = p->Qq, *Qv = p->Qv, *Bd = p->Bd, *Vz = p->Vz;
   double wq[F3R_MAX_Q], wv[F3R_MAX_Q]; /* v^T dQ/dq and v^T dQ/dv + Q^T, as rows */
   for (int c = 0; c < nq; ++c) {
     double sq = 0.0, sv = ws->data.Q[c];

@@ -7,10 +7,7 @@
 
 struct f3r_workspace {
   int nq, nz, ny;
-  f3r_data data; /* the last evaluation's forward pass */
-  /* its full coordinates, the minimal formulation's expansion; theta_i are not filled there
-   * (the stages need only the legs' directions, in data): f3r_state_to_full gives them */
-  double q[F3R_MAX_Q], v[F3R_MAX_Q];
+  f3r_data data; /* the last evaluation's forward pass: its inputs and stages */
   double tmp[F3R_MAX_Q];
   double* solve_work;  /* f3r_solve_accelerations_work_size */
   double* y_perturbed; /* ny: the zero rate of the explicit right-hand side */
