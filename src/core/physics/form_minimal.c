@@ -12,68 +12,105 @@
 #include "dense.h"
 #include "workspace.h"
 
-static void dependent_accelerations(const f3r_model* m, f3r_data* d);
-
-/* The forward pass at the minimal state y, then the full accelerations: the closed stages fill
- * rho, rho', theta' (not theta: nothing in the residual needs the angle itself), and
- * a_d = G_d^{-1} (-G_z a_z - gamma). */
-static f3r_status expand(const f3r_model* m, double t, const double* y, const double* yp,
-                         const double* held, f3r_workspace* ws) {
-  const int nz = m->n_independent;
-  f3r_data* d = &ws->data;
+/* The forward pass at the minimal state y: the closed stages fill rho, rho', theta' (not theta:
+ * nothing in the residual needs the angle itself). */
+static f3r_status forward(const f3r_model* m, double t, const double* y, const double* held,
+                          f3r_data* d) {
   d->t = t;
   d->z = y;
-  d->u = y + nz;
+  d->u = y + m->n_independent;
   d->held = held;
   d->lag = m->n_lag ? y + f3r_lag_index(m, F3R_FORMULATION_MINIMAL) : 0;
-  const f3r_status st =
-      f3r_forward(m, d, F3R_FWD_POSITION_CLOSED | F3R_FWD_VELOCITY_CLOSED | F3R_FWD_FORCES);
-  if (st != F3R_OK) return st;
-  memcpy(d->a + F3R_Q_INDEPENDENT, yp + nz, (size_t)nz * sizeof(double));
-  dependent_accelerations(m, d);
-  return F3R_OK;
+  return f3r_forward(m, d, F3R_FWD_POSITION_CLOSED | F3R_FWD_VELOCITY_CLOSED | F3R_FWD_FORCES);
 }
 
-/* The dependent accelerations a_d = G_d^{-1} (-G_z a_z - gamma), with a_z given in d->a. */
-static void dependent_accelerations(const f3r_model* m, f3r_data* d) {
+/* Link i's dependent accelerations a_d = G_d^{-1} (-G_z a_z - gamma), with a_z in d->a; G_z a_z
+ * summed as f3r_data_constraint_times sums it (its zero terms of a_d drop out exactly). */
+static void link_accelerations(const f3r_model* m, int i, f3r_data* d) {
+  const f3r_link_data* k = &d->link[i];
+  const f3r_link_params* lp = &m->link[i];
   double* a = d->a;
-  for (int n = 0; n < F3R_Q_INDEPENDENT; ++n) a[n] = 0.0;
-  double rhs[F3R_NCON];
-  f3r_data_constraint_times(m, d, a, rhs); /* G_z a_z */
-  for (int c = 0; c < F3R_NCON; ++c) rhs[c] = -rhs[c] - d->gamma[c];
-  f3r_data_solve_dependent(d, rhs, a);
+  double gx = 0.0 - a[F3R_Q_X], gy = 0.0 - a[F3R_Q_Y];
+  gx += k->g_phi[0] * a[F3R_Q_PHI];
+  gy += k->g_phi[1] * a[F3R_Q_PHI];
+  if (lp->model == F3R_LINK_FIXED_FREE)
+    for (int j = 0; j < lp->modes; ++j) {
+      gx += (-lp->tip[j] * k->s) * a[lp->eta_index + j];
+      gy += (lp->tip[j] * k->c) * a[lp->eta_index + j];
+    }
+  const double vx = -gx - d->gamma[2 * i], vy = -gy - d->gamma[2 * i + 1];
+  a[F3R_Q_THETA + i] = (-k->s * vx + k->c * vy) / k->len;
+  a[i] = (k->c * vx + k->s * vy) + k->w * a[F3R_Q_THETA + i];
 }
 
-/* R = M a + h + k - Q; its dependent rows give the loop forces lambda = G_d^{-T} R_d, its
- * independent rows less G_z^T lambda are the reduced equations B^T R. */
-static void loop_forces(const f3r_model* m, f3r_data* d) {
+/* Link i's rows of R = M a + h + k - Q (as f3r_data_mass_times and the force stage give them),
+ * its loop force lambda_i = G_d^{-T} R_d and, into res_eta, its modal rows of the reduced
+ * equations R_eta - (G^T lambda)_eta. */
+static void link_loop_forces(const f3r_model* m, int i, f3r_data* d, double* res_eta) {
+  const f3r_link_data* k = &d->link[i];
+  const f3r_link_params* lp = &m->link[i];
+  const double mass = m->link_mass, *a = d->a;
+  const int r = i, t = F3R_Q_THETA + i, base = lp->eta_index;
   double* R = d->R;
-  f3r_data_mass_times(m, d, d->a, R);
-  for (int n = 0; n < m->nq; ++n) R[n] += d->h[n] + d->k[n] - d->Q[n];
-  f3r_data_solve_dependent_transpose(d, R, d->lambda);
+  double coupled = 0.0;
+  for (int j = 0; j < lp->modes; ++j) {
+    const int n = base + j;
+    coupled += k->m_theta_eta[j] * a[n];
+    R[n] = k->m_theta_eta[j] * a[t] + mass * a[n] + (d->h[n] + d->k[n] - d->Q[n]);
+  }
+  R[r] = mass * a[r] + k->m_rho_theta * a[t] + (d->h[r] + d->k[r] - d->Q[r]);
+  R[t] = k->m_rho_theta * a[r] + k->m_theta_theta * a[t] + coupled + (d->h[t] + d->k[t] - d->Q[t]);
+  const double along = R[r], across = (R[t] + k->w * R[r]) / k->len;
+  const double lx = along * k->c - across * k->s, ly = along * k->s + across * k->c;
+  d->lambda[2 * i] = lx;
+  d->lambda[2 * i + 1] = ly;
+  if (!res_eta) return;
+  const int tip = lp->model == F3R_LINK_FIXED_FREE;
+  for (int j = 0; j < lp->modes; ++j) {
+    double gt_lambda = 0.0;
+    if (tip) gt_lambda += (-lp->tip[j] * k->s) * lx, gt_lambda += (lp->tip[j] * k->c) * ly;
+    res_eta[j] = R[base + j] - gt_lambda;
+  }
+}
+
+/* The accelerations a (a_z given in a_z), R = M a + h + k - Q, the loop forces lambda and, when
+ * res_u is not NULL, the reduced equations B^T R = R_z - G_z^T lambda, one pass per link. */
+static void reduced_equations(const f3r_model* m, f3r_data* d, const double* a_z, double* res_u) {
+  const int nz = m->n_independent;
+  double* a = d->a;
+  for (int j = 0; j < nz; ++j) a[F3R_Q_INDEPENDENT + j] = a_z[j];
+  double pose[3] = {0.0, 0.0,
+                    0.0}; /* G_P^T lambda, summed as f3r_data_constraint_transpose_times */
+  for (int i = 0; i < 3; ++i) {
+    link_accelerations(m, i, d);
+    link_loop_forces(m, i, d, res_u ? res_u + m->link[i].eta_index - F3R_Q_INDEPENDENT : NULL);
+    const double lx = d->lambda[2 * i], ly = d->lambda[2 * i + 1];
+    pose[0] += -1.0 * lx;
+    pose[1] += -1.0 * ly;
+    pose[2] += d->link[i].g_phi[0] * lx;
+    pose[2] += d->link[i].g_phi[1] * ly;
+  }
+  const double inertia[3] = {m->platform_mass, m->platform_mass, m->platform_inertia};
+  for (int c = 0; c < 3; ++c) {
+    const int n = F3R_Q_INDEPENDENT + c;
+    d->R[n] = inertia[c] * a[n] + (d->h[n] + d->k[n] - d->Q[n]);
+    if (res_u) res_u[c] = d->R[n] - pose[c];
+  }
 }
 
 void f3r_minimal_multipliers(const f3r_model* m, const double* yp, f3r_data* d) {
-  memcpy(d->a + F3R_Q_INDEPENDENT, yp + m->n_independent,
-         (size_t)m->n_independent * sizeof(double));
-  dependent_accelerations(m, d);
-  loop_forces(m, d);
+  reduced_equations(m, d, yp + m->n_independent, NULL);
 }
 
 f3r_status f3r_minimal_residual(const f3r_model* m, double t, const double* y, const double* yp,
                                 const double* held, double* res, f3r_workspace* ws) {
   const int nz = m->n_independent;
-  const f3r_status st = expand(m, t, y, yp, held, ws);
-  if (st != F3R_OK) return st;
   f3r_data* d = &ws->data;
+  const f3r_status st = forward(m, t, y, held, d);
+  if (st != F3R_OK) return st;
   const int lag_at = f3r_lag_index(m, F3R_FORMULATION_MINIMAL), w_at = lag_at + m->n_lag;
-  loop_forces(m, d);
-  const double* R = d->R;
-  f3r_data_constraint_transpose_times(m, d, d->lambda, ws->tmp);
-  for (int j = 0; j < nz; ++j) {
-    res[j] = yp[j] - y[nz + j];
-    res[nz + j] = R[F3R_Q_INDEPENDENT + j] - ws->tmp[F3R_Q_INDEPENDENT + j];
-  }
+  reduced_equations(m, d, yp + nz, res + nz);
+  for (int j = 0; j < nz; ++j) res[j] = yp[j] - y[nz + j];
   for (int i = 0; i < m->n_lag; ++i)
     res[lag_at + i] = m->lag_time_constant * yp[lag_at + i] - (d->commanded[i] - y[lag_at + i]);
   res[w_at] = yp[w_at] - d->power;
@@ -262,15 +299,62 @@ static void times_B(const double* X, int rows, const double* Bd, int nz, double*
     }
 }
 
-/* J(rows0.., cols0..) += scale B^T Y for Y (nq x nz). */
-static void add_B_transpose_times(const double* Bd, const double* Y, int nq, int nz, double scale,
-                                  double* J, int ld) {
-  for (int j = 0; j < nz; ++j)
-    for (int i = 0; i < nz; ++i) {
-      double sum = Y[F3R_Q_INDEPENDENT + i + nq * j];
-      for (int c = 0; c < F3R_Q_LEG_JOINTS; ++c) sum += Bd[c + 6 * i] * Y[c + nq * j];
+/* The nq x nq products Z and H (and the effects' dQ/dq, dQ/dv) couple each link's coordinates
+ * (rho_i, theta_i, eta_i) only among themselves, and the platform's among themselves (the terms
+ * of dynamics.c, constraints.c and effects.c; test_residual_jacobian checks the result against
+ * finite differences). So column rho_i or theta_i of X reaches link i's rows only, and
+ * o += X(:, legs) b adds, row by row in the dense sum's order, only the terms that can be
+ * nonzero (a skipped term is an exact zero). */
+static void add_leg_columns(const f3r_model* m, const double* X, const double* b, double* o) {
+  const int nq = m->nq;
+  for (int c = 0; c < F3R_Q_LEG_JOINTS; ++c) {
+    if (b[c] == 0.0) continue;
+    const int i = c % 3, base = m->link[i].eta_index;
+    const double* x = X + (size_t)nq * c;
+    o[i] += x[i] * b[c];
+    o[F3R_Q_THETA + i] += x[F3R_Q_THETA + i] * b[c];
+    for (int j = 0; j < m->link[i].modes; ++j) o[base + j] += x[base + j] * b[c];
+  }
+}
+
+/* out (nq x nz) = X B for X (nq x nq) of that structure. */
+static void times_B_links(const f3r_model* m, const double* X, const double* Bd, double* out) {
+  const int nq = m->nq;
+  for (int j = 0; j < m->n_independent; ++j) {
+    double* o = out + (size_t)nq * j;
+    memcpy(o, X + (size_t)nq * (F3R_Q_INDEPENDENT + j), (size_t)nq * sizeof(double));
+    add_leg_columns(m, X, Bd + 6 * j, o);
+  }
+}
+
+/* J(rows0.., cols0..) += scale B^T Y for Y (nq x nz). Column z_i of Bd is nonzero on every leg
+ * for the pose and on its own link's leg only for a modal coordinate. */
+static void add_B_transpose_times(const f3r_model* m, const double* Bd, const double* Y,
+                                  double scale, double* J, int ld) {
+  const int nq = m->nq, nz = m->n_independent;
+  for (int j = 0; j < nz; ++j) {
+    const double* y = Y + (size_t)nq * j;
+    for (int i = 0; i < 3; ++i) {
+      double sum = y[F3R_Q_INDEPENDENT + i];
+      for (int c = 0; c < F3R_Q_LEG_JOINTS; ++c) sum += Bd[c + 6 * i] * y[c];
       F3R_AT(J, ld, i, j) += scale * sum;
     }
+    for (int l = 0; l < 3; ++l)
+      for (int e = 0; e < m->link[l].modes; ++e) {
+        const int i = m->link[l].eta_index - F3R_Q_INDEPENDENT + e;
+        double sum = y[F3R_Q_INDEPENDENT + i];
+        sum += Bd[l + 6 * i] * y[l];
+        sum += Bd[F3R_Q_THETA + l + 6 * i] * y[F3R_Q_THETA + l];
+        F3R_AT(J, ld, i, j) += scale * sum;
+      }
+  }
+}
+
+/* 1 when an effect has derivatives: only then are dQ/dq and dQ/dv formed. */
+static int effect_derivatives(const f3r_model* m) {
+  for (int e = 0; e < m->n_effects; ++e)
+    if (m->effects[e]->add_dq || m->effects[e]->add_dv) return 1;
+  return 0;
 }
 
 /* The legs' rows of -G_d^{-1} X for each of the nz columns of X (6 x nz), into out (6 x nz). */
@@ -325,14 +409,18 @@ static void force_derivatives(const f3r_model* m, f3r_workspace* ws, const jacob
   const double *q = d->q, *v = d->v, *a = d->a;
   double *Z = p->Z, *H = p->H, *Qq = p->Qq, *Qv = p->Qv;
   memset(ws->jac_work, 0, (2 * (size_t)nq * nq + 18 * (size_t)nq) * sizeof(double));
-  memset(ws->dQ, 0, 2 * (size_t)nq * nq * sizeof(double));
-  f3r_effects_add_derivatives(m, d, 1.0, Qq, Qv, nq);
+  const int effects = effect_derivatives(m);
+  if (effects) {
+    memset(ws->dQ, 0, 2 * (size_t)nq * nq * sizeof(double));
+    f3r_effects_add_derivatives(m, d, 1.0, Qq, Qv, nq);
+  }
   f3r_add_mass_times_dq(m, q, a, 1.0, Z, nq);
   f3r_add_velocity_forces_dq(m, q, v, 1.0, Z, nq);
   f3r_add_elastic_forces_dq(m, 1.0, Z, nq);
   f3r_data_add_constraint_transpose_times_dq(m, d, d->lambda, -1.0, Z, nq);
   f3r_data_add_velocity_forces_dv(m, d, q, 1.0, H, nq);
-  for (size_t k = 0; k < (size_t)nq * nq; ++k) Z[k] -= Qq[k], H[k] -= Qv[k];
+  if (effects)
+    for (size_t k = 0; k < (size_t)nq * nq; ++k) Z[k] -= Qq[k], H[k] -= Qv[k];
   f3r_data_add_constraint_times_dq(m, d, v, 1.0, p->Gvq, 6);
   f3r_data_add_constraint_times_dq(m, d, a, 1.0, p->Caq, 6);
   f3r_data_add_constraint_bias_dq(m, d, v, 1.0, p->Caq, 6);
@@ -379,21 +467,20 @@ static void add_force_blocks(const f3r_model* m, const f3r_data* d, const jacobi
   const int nq = m->nq, nz = m->n_independent;
   const double *H = p->H, *Bd = p->Bd, *Vz = p->Vz;
   double* T = p->T;
-  times_B(p->Z, nq, Bd, nz, T);
+  times_B_links(m, p->Z, Bd, T);
   double Mx[F3R_MAX_Q];
   for (int j = 0; j < nz; ++j) {
-    for (int r = 0; r < nq; ++r)
-      for (int c = 0; c < F3R_Q_LEG_JOINTS; ++c) T[r + nq * j] += H[r + nq * c] * Vz[c + nq * j];
+    add_leg_columns(m, H, Vz + (size_t)nq * j, T + (size_t)nq * j);
     f3r_data_mass_times(m, d, p->Az + (size_t)nq * j, Mx);
     for (int r = 0; r < nq; ++r) T[r + nq * j] += Mx[r];
   }
-  add_B_transpose_times(Bd, T, nq, nz, 1.0, &F3R_AT(J, ld, nz, 0), ld);
-  times_B(H, nq, Bd, nz, T);
+  add_B_transpose_times(m, Bd, T, 1.0, &F3R_AT(J, ld, nz, 0), ld);
+  times_B_links(m, H, Bd, T);
   for (int j = 0; j < nz; ++j) {
     f3r_data_mass_times(m, d, p->Au + (size_t)nq * j, Mx);
     for (int r = 0; r < nq; ++r) T[r + nq * j] += Mx[r];
   }
-  add_B_transpose_times(Bd, T, nq, nz, 1.0, &F3R_AT(J, ld, nz, nz), ld);
+  add_B_transpose_times(m, Bd, T, 1.0, &F3R_AT(J, ld, nz, nz), ld);
 }
 
 /* cj dF/dy' for z (identity), u (B^T M B) and the lag states (tau, with their own 1), and
@@ -421,10 +508,12 @@ static void add_work_row(const f3r_model* m, const f3r_workspace* ws, double cj,
                          const jacobian_products* p, int w_at, double* J, int ld) {
   const int nq = m->nq, nz = m->n_independent;
   const double *v = ws->data.v, *Qq = p->Qq, *Qv = p->Qv, *Bd = p->Bd, *Vz = p->Vz;
-  double wq[F3R_MAX_Q], wv[F3R_MAX_Q]; /* v^T dQ/dq and v^T dQ/dv + Q^T, as rows */
+  double wq[F3R_MAX_Q], wv[F3R_MAX_Q];       /* v^T dQ/dq and v^T dQ/dv + Q^T, as rows */
+  const int effects = effect_derivatives(m); /* without, dQ/dq and dQ/dv are zero */
   for (int c = 0; c < nq; ++c) {
     double sq = 0.0, sv = ws->data.Q[c];
-    for (int r = 0; r < nq; ++r) sq += v[r] * Qq[r + nq * c], sv += v[r] * Qv[r + nq * c];
+    if (effects)
+      for (int r = 0; r < nq; ++r) sq += v[r] * Qq[r + nq * c], sv += v[r] * Qv[r + nq * c];
     wq[c] = sq, wv[c] = sv;
   }
   for (int j = 0; j < nz; ++j) {
