@@ -288,15 +288,38 @@ f3r_status f3r_minimal_rhs_arrow(const f3r_model* m, double t, const double* y, 
   return minimal_rhs(m, t, y, held, ydot, ws, 0);
 }
 
-/* out (rows x nz) = X B for X (rows x nq, leading dimension rows): B is the identity on z below
- * its dependent rows Bd (6 x nz), so (X B)(:, j) = X(:, z_j) + X(:, legs) Bd(:, j). */
-static void times_B(const double* X, int rows, const double* Bd, int nz, double* out) {
+/* out (6 x nz) = X B for X (6 x nq) of the constraints' derivatives: B is the identity on z
+ * below its dependent rows Bd (6 x nz), so (X B)(:, j) = X(:, z_j) + X(:, legs) Bd(:, j), and
+ * the rows of link i reach only its own legs' columns rho_i, theta_i (the other legs' terms of
+ * the dense sum are exact zeros). */
+static void times_B_constraints(const double* X, const double* Bd, int nz, double* out) {
   for (int j = 0; j < nz; ++j)
-    for (int r = 0; r < rows; ++r) {
-      double sum = X[r + rows * (F3R_Q_INDEPENDENT + j)];
-      for (int c = 0; c < F3R_Q_LEG_JOINTS; ++c) sum += X[r + rows * c] * Bd[c + 6 * j];
-      out[r + rows * j] = sum;
+    for (int i = 0; i < 3; ++i)
+      for (int r = 2 * i; r < 2 * i + 2; ++r) {
+        double sum = X[r + 6 * (F3R_Q_INDEPENDENT + j)];
+        sum += X[r + 6 * i] * Bd[i + 6 * j];
+        sum += X[r + 6 * (F3R_Q_THETA + i)] * Bd[F3R_Q_THETA + i + 6 * j];
+        out[r + 6 * j] = sum;
+      }
+}
+
+/* T(:, j) += M x_j for the nz columns x_j of X (nq x nz) that are nonzero on the legs only (as
+ * f3r_data_mass_times gives it: the skipped terms are exact zeros). */
+static void add_mass_times_legs(const f3r_model* m, const f3r_data* d, const double* X, double* T) {
+  const int nq = m->nq;
+  const double mass = m->link_mass;
+  for (int j = 0; j < m->n_independent; ++j) {
+    const double* x = X + (size_t)nq * j;
+    double* t = T + (size_t)nq * j;
+    for (int i = 0; i < 3; ++i) {
+      const f3r_link_data* k = &d->link[i];
+      const double xr = x[i], xt = x[F3R_Q_THETA + i];
+      t[i] += mass * xr + k->m_rho_theta * xt;
+      t[F3R_Q_THETA + i] += k->m_rho_theta * xr + k->m_theta_theta * xt;
+      for (int e = 0; e < m->link[i].modes; ++e)
+        t[m->link[i].eta_index + e] += k->m_theta_eta[e] * xt;
     }
+  }
 }
 
 /* The nq x nq products Z and H (and the effects' dQ/dq, dQ/dv) couple each link's coordinates
@@ -445,17 +468,19 @@ static void set_leg_rows(const double* S6, int nq, int nz, double* out) {
 static void dependent_rates(const f3r_data* d, int nq, int nz, const jacobian_products* p) {
   const double *Bd = p->Bd, *gv = p->gv, *Vz = p->Vz;
   double* S6 = p->S6;
-  memset(p->Vz, 0, 3 * (size_t)nq * nz * sizeof(double));
-  times_B(p->Gvq, 6, Bd, nz, S6);
+  times_B_constraints(p->Gvq, Bd, nz, S6);
   minus_dependent_solve(d, S6, nz, S6);
   set_leg_rows(S6, nq, nz, p->Vz);
-  times_B(gv, 6, Bd, nz, S6);
+  times_B_constraints(gv, Bd, nz, S6);
   minus_dependent_solve(d, S6, nz, S6);
   set_leg_rows(S6, nq, nz, p->Au);
-  times_B(p->Caq, 6, Bd, nz, S6);
-  for (int j = 0; j < nz; ++j) /* + dgamma/dv V_z */
-    for (int r = 0; r < 6; ++r)
-      for (int c = 0; c < F3R_Q_LEG_JOINTS; ++c) S6[r + 6 * j] += gv[r + 6 * c] * Vz[c + nq * j];
+  times_B_constraints(p->Caq, Bd, nz, S6);
+  for (int j = 0; j < nz; ++j) /* + dgamma/dv V_z: link i's rows reach its own legs only */
+    for (int r = 0; r < 6; ++r) {
+      const int i = r / 2;
+      S6[r + 6 * j] += gv[r + 6 * i] * Vz[i + nq * j];
+      S6[r + 6 * j] += gv[r + 6 * (F3R_Q_THETA + i)] * Vz[F3R_Q_THETA + i + nq * j];
+    }
   minus_dependent_solve(d, S6, nz, S6);
   set_leg_rows(S6, nq, nz, p->Az);
 }
@@ -468,18 +493,11 @@ static void add_force_blocks(const f3r_model* m, const f3r_data* d, const jacobi
   const double *H = p->H, *Bd = p->Bd, *Vz = p->Vz;
   double* T = p->T;
   times_B_links(m, p->Z, Bd, T);
-  double Mx[F3R_MAX_Q];
-  for (int j = 0; j < nz; ++j) {
-    add_leg_columns(m, H, Vz + (size_t)nq * j, T + (size_t)nq * j);
-    f3r_data_mass_times(m, d, p->Az + (size_t)nq * j, Mx);
-    for (int r = 0; r < nq; ++r) T[r + nq * j] += Mx[r];
-  }
+  for (int j = 0; j < nz; ++j) add_leg_columns(m, H, Vz + (size_t)nq * j, T + (size_t)nq * j);
+  add_mass_times_legs(m, d, p->Az, T);
   add_B_transpose_times(m, Bd, T, 1.0, &F3R_AT(J, ld, nz, 0), ld);
   times_B_links(m, H, Bd, T);
-  for (int j = 0; j < nz; ++j) {
-    f3r_data_mass_times(m, d, p->Au + (size_t)nq * j, Mx);
-    for (int r = 0; r < nq; ++r) T[r + nq * j] += Mx[r];
-  }
+  add_mass_times_legs(m, d, p->Au, T);
   add_B_transpose_times(m, Bd, T, 1.0, &F3R_AT(J, ld, nz, nz), ld);
 }
 
