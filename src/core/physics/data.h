@@ -104,6 +104,8 @@ void f3r_fwd_leg_angles(const f3r_model* m, const f3r_data* d, double* q);
 /* The mass blocks of link i at stroke rho; its part of h (the velocity stage of link i in d). */
 void f3r_link_mass_blocks(const f3r_model* m, int i, f3r_link_data* k, double rho);
 void f3r_link_velocity_forces(const f3r_model* m, int i, f3r_data* d);
+/* k of link i's coordinates (rho_i, theta_i: zero; eta_i) into k (nq). */
+void f3r_link_elastic_forces(const f3r_model* m, int i, const double* q, double* k);
 /* G's direction-dependent blocks of link i and its g rows (zero when `closed`: the closure
  * satisfies them); its gamma rows (the velocity stage of link i in d). */
 void f3r_link_constraints(const f3r_model* m, int i, f3r_data* d, int closed);

@@ -194,13 +194,16 @@ void f3r_add_velocity_forces_dv(const f3r_model* m, const double* q, const doubl
   f3r_data_add_velocity_forces_dv(m, &d, q, scale, A, ld);
 }
 
+void f3r_link_elastic_forces(const f3r_model* m, int i, const double* q, double* k) {
+  const f3r_link_params* lp = &m->link[i];
+  k[i] = k[F3R_Q_THETA + i] = 0.0;
+  for (int j = 0; j < lp->modes; ++j)
+    k[lp->eta_index + j] = lp->stiffness[j] * q[lp->eta_index + j];
+}
+
 void f3r_elastic_forces(const f3r_model* m, const double* q, double* k) {
-  for (int n = 0; n < F3R_Q_MODAL; ++n) k[n] = 0.0;
-  for (int i = 0; i < 3; ++i) {
-    const f3r_link_params* lp = &m->link[i];
-    for (int j = 0; j < lp->modes; ++j)
-      k[lp->eta_index + j] = lp->stiffness[j] * q[lp->eta_index + j];
-  }
+  for (int n = F3R_Q_X; n < F3R_Q_MODAL; ++n) k[n] = 0.0;
+  for (int i = 0; i < 3; ++i) f3r_link_elastic_forces(m, i, q, k);
 }
 
 void f3r_add_elastic_forces_dq(const f3r_model* m, double scale, double* A, int ld) {

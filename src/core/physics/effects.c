@@ -96,7 +96,8 @@ const f3r_force_effect f3r_damping_effect = {"damping", damping_add, 0, damping_
 static void inputs_add(const f3r_model* m, double t, const double* q, const double* v,
                        const f3r_data* d, double* Q) {
   (void)q, (void)v, (void)d;
-  for (int n = 0; n < F3R_RIGID_FORCES; ++n) Q[n] += f3r_input_value(&m->scene.inputs[n], t);
+  for (int n = 0; n < F3R_RIGID_FORCES; ++n) /* an input that is off adds nothing */
+    if (m->scene.inputs[n].kind != F3R_INPUT_NONE) Q[n] += f3r_input_value(&m->scene.inputs[n], t);
 }
 
 const f3r_force_effect f3r_inputs_effect = {"inputs", inputs_add, 0, 0};

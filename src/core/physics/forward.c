@@ -121,13 +121,30 @@ static void link_velocity(const f3r_model* m, int i, int closed, f3r_data* d) {
   f3r_link_constraint_bias(m, i, d);
 }
 
-/* Force stage: k, Q (the caller's held forces, the effects, the actuator lag), the commanded
- * leg forces and the power Q . v. */
+/* Link i's share of the force stage: its elastic forces and the caller's held forces on its
+ * coordinates, which the effects then add to. */
+static void link_forces(const f3r_model* m, int i, f3r_data* d) {
+  const f3r_link_params* lp = &m->link[i];
+  const double* held = d->held;
+  f3r_link_elastic_forces(m, i, d->q, d->k);
+  const int t = F3R_Q_THETA + i;
+  d->Q[i] = held ? held[i] : 0.0;
+  d->Q[t] = held ? held[t] : 0.0;
+  for (int j = 0; j < lp->modes; ++j) {
+    const int n = lp->eta_index + j;
+    d->Q[n] = held ? held[n] : 0.0;
+  }
+}
+
+/* The force stage after the links': the platform's share, the effects, the actuator lag (the
+ * commanded leg forces) and the power Q . v. */
 static void forces(const f3r_model* m, f3r_data* d) {
   const int nq = m->nq;
   const double *held = d->held, *v = d->v;
-  f3r_elastic_forces(m, d->q, d->k);
-  for (int n = 0; n < nq; ++n) d->Q[n] = held ? held[n] : 0.0;
+  for (int n = F3R_Q_X; n < F3R_Q_MODAL; ++n) {
+    d->k[n] = 0.0;
+    d->Q[n] = held ? held[n] : 0.0;
+  }
   f3r_effects_add_forces(m, d, d->Q);
   if (m->n_lag)
     for (int i = 0; i < 3; ++i) {
@@ -159,7 +176,7 @@ f3r_status f3r_forward(const f3r_model* m, f3r_data* d, unsigned what) {
   const int velocity = closed_v || (what & F3R_FWD_VELOCITY);
   open_closed_stages(m, what, d);
   if (closed_q || (what & F3R_FWD_POSITION)) platform_joints(m, d->q[F3R_Q_PHI], d);
-  for (int i = 0; i < 3; ++i) { /* one pass per link: its position, then its velocity */
+  for (int i = 0; i < 3; ++i) { /* one pass per link: its position, velocity and forces */
     if (closed_q) {
       const f3r_status st = link_position_closed(m, i, d);
       if (st != F3R_OK) return st;
@@ -167,6 +184,7 @@ f3r_status f3r_forward(const f3r_model* m, f3r_data* d, unsigned what) {
       link_position(m, i, d);
     }
     if (velocity) link_velocity(m, i, closed_v, d);
+    if (what & F3R_FWD_FORCES) link_forces(m, i, d);
   }
   if (velocity) d->h[F3R_Q_X] = d->h[F3R_Q_Y] = d->h[F3R_Q_PHI] = 0.0;
   if (what & F3R_FWD_FORCES) forces(m, d);
