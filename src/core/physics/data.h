@@ -115,6 +115,8 @@ void f3r_data_energies(const f3r_model* m, f3r_data* d);
 /* Q (nq) += the effects' forces at t, q, v and the position stage in d; scale dQ/dq into dQ_dq
  * and scale dQ/dv into dQ_dv (leading dimension ld; either NULL to skip) (effects.c). */
 void f3r_effects_add_forces(const f3r_model* m, const f3r_data* d, double* Q);
+/* 1 when an effect has derivatives: only then do the Jacobians form dQ/dq and dQ/dv. */
+int f3r_effects_have_derivatives(const f3r_model* m);
 void f3r_effects_add_derivatives(const f3r_model* m, const f3r_data* d, double scale, double* dQ_dq,
                                  double* dQ_dv, int ld);
 

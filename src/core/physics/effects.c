@@ -108,6 +108,12 @@ void f3r_effects_add_forces(const f3r_model* m, const f3r_data* d, double* Q) {
   for (int e = 0; e < m->n_effects; ++e) m->effects[e]->add(m, d->t, d->q, d->v, d, Q);
 }
 
+int f3r_effects_have_derivatives(const f3r_model* m) {
+  for (int e = 0; e < m->n_effects; ++e)
+    if (m->effects[e]->add_dq || m->effects[e]->add_dv) return 1;
+  return 0;
+}
+
 void f3r_effects_add_derivatives(const f3r_model* m, const f3r_data* d, double scale, double* dQ_dq,
                                  double* dQ_dv, int ld) {
   for (int e = 0; e < m->n_effects; ++e) {

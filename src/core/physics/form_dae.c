@@ -98,7 +98,7 @@ f3r_status f3r_dae_jacobian(const f3r_model* m, f3r_formulation form, double t, 
     F3R_AT(J, ld, row_v + i, row_lag + i) -= 1.0;
     F3R_AT(J, ld, row_w, row_lag + i) -= v[i];
   }
-  if (m->n_effects) {
+  if (f3r_effects_have_derivatives(m)) {
     double* dq = ws->dQ;
     double* dv = ws->dQ + (size_t)nq * (size_t)nq;
     for (size_t z = 0; z < 2 * (size_t)nq * (size_t)nq; ++z) ws->dQ[z] = 0.0;

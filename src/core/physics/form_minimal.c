@@ -373,13 +373,6 @@ static void add_B_transpose_times(const f3r_model* m, const double* Bd, const do
   }
 }
 
-/* 1 when an effect has derivatives: only then are dQ/dq and dQ/dv formed. */
-static int effect_derivatives(const f3r_model* m) {
-  for (int e = 0; e < m->n_effects; ++e)
-    if (m->effects[e]->add_dq || m->effects[e]->add_dv) return 1;
-  return 0;
-}
-
 /* The legs' rows of -G_d^{-1} X for each of the nz columns of X (6 x nz), into out (6 x nz). */
 static void minus_dependent_solve(const f3r_data* d, const double* X, int nz, double* out) {
   double x[F3R_Q_LEG_JOINTS];
@@ -432,7 +425,7 @@ static void force_derivatives(const f3r_model* m, f3r_workspace* ws, const jacob
   const double *q = d->q, *v = d->v, *a = d->a;
   double *Z = p->Z, *H = p->H, *Qq = p->Qq, *Qv = p->Qv;
   memset(ws->jac_work, 0, (2 * (size_t)nq * nq + 18 * (size_t)nq) * sizeof(double));
-  const int effects = effect_derivatives(m);
+  const int effects = f3r_effects_have_derivatives(m);
   if (effects) {
     memset(ws->dQ, 0, 2 * (size_t)nq * nq * sizeof(double));
     f3r_effects_add_derivatives(m, d, 1.0, Qq, Qv, nq);
@@ -526,8 +519,8 @@ static void add_work_row(const f3r_model* m, const f3r_workspace* ws, double cj,
                          const jacobian_products* p, int w_at, double* J, int ld) {
   const int nq = m->nq, nz = m->n_independent;
   const double *v = ws->data.v, *Qq = p->Qq, *Qv = p->Qv, *Bd = p->Bd, *Vz = p->Vz;
-  double wq[F3R_MAX_Q], wv[F3R_MAX_Q];       /* v^T dQ/dq and v^T dQ/dv + Q^T, as rows */
-  const int effects = effect_derivatives(m); /* without, dQ/dq and dQ/dv are zero */
+  double wq[F3R_MAX_Q], wv[F3R_MAX_Q];                 /* v^T dQ/dq and v^T dQ/dv + Q^T, as rows */
+  const int effects = f3r_effects_have_derivatives(m); /* without, dQ/dq and dQ/dv are zero */
   for (int c = 0; c < nq; ++c) {
     double sq = 0.0, sv = ws->data.Q[c];
     if (effects)
