@@ -79,10 +79,10 @@ static void reduced_equations(const f3r_model* m, f3r_data* d, const double* a_z
   const int nz = m->n_independent;
   double* a = d->a;
   for (int j = 0; j < nz; ++j) a[F3R_Q_INDEPENDENT + j] = a_z[j];
-  double pose[3] = {0.0, 0.0,
-                    0.0}; /* G_P^T lambda, summed as f3r_data_constraint_transpose_times */
+  double pose[3] = {0.0, 0.0, 0.0}; /* G_P^T lambda, summed as constraint_transpose_times */
+  /* two passes: the three links' divisions then run side by side */
+  for (int i = 0; i < 3; ++i) link_accelerations(m, i, d);
   for (int i = 0; i < 3; ++i) {
-    link_accelerations(m, i, d);
     link_loop_forces(m, i, d, res_u ? res_u + m->link[i].eta_index - F3R_Q_INDEPENDENT : NULL);
     const double lx = d->lambda[2 * i], ly = d->lambda[2 * i + 1];
     pose[0] += -1.0 * lx;
