@@ -305,13 +305,15 @@ static void times_B_constraints(const double* X, const double* Bd, int nz, doubl
 
 /* T(:, j) += M x_j for the nz columns x_j of X (nq x nz) that are nonzero on the legs only (as
  * f3r_data_mass_times gives it: the skipped terms are exact zeros). */
-static void add_mass_times_legs(const f3r_model* m, const f3r_data* d, const double* X, double* T) {
+static void add_mass_times_legs(const f3r_model* m, const int* owner, const f3r_data* d,
+                                const double* X, double* T) {
   const int nq = m->nq;
   const double mass = m->link_mass;
   for (int j = 0; j < m->n_independent; ++j) {
     const double* x = X + (size_t)nq * j;
     double* t = T + (size_t)nq * j;
     for (int i = 0; i < 3; ++i) {
+      if (owner[j] >= 0 && i != owner[j]) continue; /* x is zero on the other links' legs */
       const f3r_link_data* k = &d->link[i];
       const double xr = x[i], xt = x[F3R_Q_THETA + i];
       t[i] += mass * xr + k->m_rho_theta * xt;
@@ -340,29 +342,58 @@ static void add_leg_columns(const f3r_model* m, const double* X, const double* b
   }
 }
 
-/* out (nq x nz) = X B for X (nq x nq) of that structure. */
-static void times_B_links(const f3r_model* m, const double* X, const double* Bd, double* out) {
+/* owner[j]: the link whose modal coordinate z_j is, or -1 for the pose. A product's column of a
+ * modal coordinate of link l is nonzero on link l's rows only (its B column moves only link l's
+ * legs), so only those rows of it are formed and read. */
+static void column_owners(const f3r_model* m, int* owner) {
+  for (int j = 0; j < 3; ++j) owner[j] = -1;
+  for (int l = 0; l < 3; ++l)
+    for (int e = 0; e < m->link[l].modes; ++e)
+      owner[m->link[l].eta_index - F3R_Q_INDEPENDENT + e] = l;
+}
+
+/* out (nq x nz) = X B for X (nq x nq) of that structure; a modal column on its link's rows. */
+static void times_B_links(const f3r_model* m, const int* owner, const double* X, const double* Bd,
+                          double* out) {
   const int nq = m->nq;
   for (int j = 0; j < m->n_independent; ++j) {
     double* o = out + (size_t)nq * j;
-    memcpy(o, X + (size_t)nq * (F3R_Q_INDEPENDENT + j), (size_t)nq * sizeof(double));
+    const double* x = X + (size_t)nq * (F3R_Q_INDEPENDENT + j);
+    const int l = owner[j];
+    if (l < 0) {
+      memcpy(o, x, (size_t)nq * sizeof(double));
+    } else {
+      o[l] = x[l];
+      o[F3R_Q_THETA + l] = x[F3R_Q_THETA + l];
+      for (int e = 0; e < m->link[l].modes; ++e)
+        o[m->link[l].eta_index + e] = x[m->link[l].eta_index + e];
+    }
     add_leg_columns(m, X, Bd + 6 * j, o);
   }
 }
 
-/* J(rows0.., cols0..) += scale B^T Y for Y (nq x nz). Column z_i of Bd is nonzero on every leg
- * for the pose and on its own link's leg only for a modal coordinate. */
-static void add_B_transpose_times(const f3r_model* m, const double* Bd, const double* Y,
-                                  double scale, double* J, int ld) {
+/* J(rows0.., cols0..) += scale B^T Y for Y (nq x nz) as times_B_links forms it. Column z_i of Bd
+ * is nonzero on every leg for the pose and on its own link's legs only for a modal coordinate;
+ * the rows of two different links' modal coordinates stay zero. */
+static void add_B_transpose_times(const f3r_model* m, const int* owner, const double* Bd,
+                                  const double* Y, double scale, double* J, int ld) {
   const int nq = m->nq, nz = m->n_independent;
   for (int j = 0; j < nz; ++j) {
     const double* y = Y + (size_t)nq * j;
+    const int lj = owner[j];
     for (int i = 0; i < 3; ++i) {
-      double sum = y[F3R_Q_INDEPENDENT + i];
-      for (int c = 0; c < F3R_Q_LEG_JOINTS; ++c) sum += Bd[c + 6 * i] * y[c];
+      double sum;
+      if (lj < 0) {
+        sum = y[F3R_Q_INDEPENDENT + i];
+        for (int c = 0; c < F3R_Q_LEG_JOINTS; ++c) sum += Bd[c + 6 * i] * y[c];
+      } else { /* y is zero on the pose and the other links' legs */
+        sum = 0.0 + Bd[lj + 6 * i] * y[lj];
+        sum += Bd[F3R_Q_THETA + lj + 6 * i] * y[F3R_Q_THETA + lj];
+      }
       F3R_AT(J, ld, i, j) += scale * sum;
     }
-    for (int l = 0; l < 3; ++l)
+    for (int l = 0; l < 3; ++l) {
+      if (lj >= 0 && l != lj) continue;
       for (int e = 0; e < m->link[l].modes; ++e) {
         const int i = m->link[l].eta_index - F3R_Q_INDEPENDENT + e;
         double sum = y[F3R_Q_INDEPENDENT + i];
@@ -370,6 +401,7 @@ static void add_B_transpose_times(const f3r_model* m, const double* Bd, const do
         sum += Bd[F3R_Q_THETA + l + 6 * i] * y[F3R_Q_THETA + l];
         F3R_AT(J, ld, i, j) += scale * sum;
       }
+    }
   }
 }
 
@@ -485,13 +517,15 @@ static void add_force_blocks(const f3r_model* m, const f3r_data* d, const jacobi
   const int nq = m->nq, nz = m->n_independent;
   const double *H = p->H, *Bd = p->Bd, *Vz = p->Vz;
   double* T = p->T;
-  times_B_links(m, p->Z, Bd, T);
+  int owner[F3R_MAX_Q];
+  column_owners(m, owner);
+  times_B_links(m, owner, p->Z, Bd, T);
   for (int j = 0; j < nz; ++j) add_leg_columns(m, H, Vz + (size_t)nq * j, T + (size_t)nq * j);
-  add_mass_times_legs(m, d, p->Az, T);
-  add_B_transpose_times(m, Bd, T, 1.0, &F3R_AT(J, ld, nz, 0), ld);
-  times_B_links(m, H, Bd, T);
-  add_mass_times_legs(m, d, p->Au, T);
-  add_B_transpose_times(m, Bd, T, 1.0, &F3R_AT(J, ld, nz, nz), ld);
+  add_mass_times_legs(m, owner, d, p->Az, T);
+  add_B_transpose_times(m, owner, Bd, T, 1.0, &F3R_AT(J, ld, nz, 0), ld);
+  times_B_links(m, owner, H, Bd, T);
+  add_mass_times_legs(m, owner, d, p->Au, T);
+  add_B_transpose_times(m, owner, Bd, T, 1.0, &F3R_AT(J, ld, nz, nz), ld);
 }
 
 /* cj dF/dy' for z (identity), u (B^T M B) and the lag states (tau, with their own 1), and
