@@ -202,22 +202,17 @@ void f3r_data_add_constraint_bias_dv(const f3r_model* m, const f3r_data* d, cons
   }
 }
 
-void f3r_data_solve_dependent(const f3r_data* d, const double* V, double* x) {
-  for (int i = 0; i < 3; ++i) {
-    const f3r_link_data* k = &d->link[i];
-    const double vn = -k->s * V[2 * i] + k->c * V[2 * i + 1];
-    const double ve = k->c * V[2 * i] + k->s * V[2 * i + 1];
-    x[F3R_Q_THETA + i] = vn / k->len;
-    x[i] = ve + k->w * x[F3R_Q_THETA + i];
-  }
-}
-
-void f3r_data_solve_dependent_transpose(const f3r_data* d, const double* R, double* lambda) {
-  for (int i = 0; i < 3; ++i) {
-    const f3r_link_data* k = &d->link[i];
-    const double along = R[i], across = (R[F3R_Q_THETA + i] + k->w * R[i]) / k->len;
-    lambda[2 * i] = along * k->c - across * k->s;
-    lambda[2 * i + 1] = along * k->s + across * k->c;
+void f3r_data_solve_dependent(const f3r_data* d, const double* V, int ncols, double scale,
+                              double* x) {
+  for (int j = 0; j < ncols; ++j) {
+    const double* v = V + 6 * j;
+    double rho[3], theta[3]; /* all read before x, which may be V, is written */
+    for (int i = 0; i < 3; ++i)
+      f3r_link_solve_dependent(&d->link[i], v[2 * i], v[2 * i + 1], &rho[i], &theta[i]);
+    for (int i = 0; i < 3; ++i) {
+      x[i + 6 * j] = scale * rho[i];
+      x[F3R_Q_THETA + i + 6 * j] = scale * theta[i];
+    }
   }
 }
 

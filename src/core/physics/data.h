@@ -141,12 +141,27 @@ void f3r_data_add_constraint_bias_dq(const f3r_model* m, const f3r_data* d, cons
                                      double scale, double* A, int ld);
 void f3r_data_add_constraint_bias_dv(const f3r_model* m, const f3r_data* d, const double* v,
                                      double scale, double* A, int ld);
-/* Per link, the dependent block G_d = [e, L n - w e] of the constraint Jacobian (det L):
- *   x = G_d^{-1} V  (x's rho and theta entries from V's (x, y) per link),
- *   x = G_d^{-T} R  (the loop force (x, y) per link from R's rho and theta entries). */
-void f3r_data_solve_dependent(const f3r_data* d, const double* V, double* x);
+/* Link k's dependent block G_d = [e, L n - w e] of the constraint Jacobian (det L):
+ *   (rho, theta) = G_d^{-1} (vx, vy):  theta = (n . V) / L,  rho = e . V + w theta;
+ *   (lx, ly) = G_d^{-T} (r_rho, r_theta) = r_rho e + ((r_theta + w r_rho) / L) n. */
+static inline void f3r_link_solve_dependent(const f3r_link_data* k, double vx, double vy,
+                                            double* rho, double* theta) {
+  const double c = k->c, s = k->s, w = k->w, len = k->len; /* read before rho, theta are written */
+  const double th = (-s * vx + c * vy) / len;
+  *rho = (c * vx + s * vy) + w * th;
+  *theta = th;
+}
+static inline void f3r_link_solve_dependent_transpose(const f3r_link_data* k, double r_rho,
+                                                      double r_theta, double* lx, double* ly) {
+  const double c = k->c, s = k->s, along = r_rho, across = (r_theta + k->w * r_rho) / k->len;
+  *lx = along * c - across * s;
+  *ly = along * s + across * c;
+}
+/* x = scale G_d^{-1} V per link for the ncols columns of V (6 x ncols, (x, y) per link): x's rho
+ * and theta rows (6 x ncols; x may be V). */
+void f3r_data_solve_dependent(const f3r_data* d, const double* V, int ncols, double scale,
+                              double* x);
 /* f3r_model_actuation_condition at q from the position stage's platform joints (model.c). */
 double f3r_data_actuation_condition(const f3r_model* m, const f3r_data* d, const double* q);
-void f3r_data_solve_dependent_transpose(const f3r_data* d, const double* R, double* lambda);
 
 #endif

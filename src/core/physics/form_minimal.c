@@ -38,9 +38,8 @@ static void link_accelerations(const f3r_model* m, int i, f3r_data* d) {
       gx += (-lp->tip[j] * k->s) * a[lp->eta_index + j];
       gy += (lp->tip[j] * k->c) * a[lp->eta_index + j];
     }
-  const double vx = -gx - d->gamma[2 * i], vy = -gy - d->gamma[2 * i + 1];
-  a[F3R_Q_THETA + i] = (-k->s * vx + k->c * vy) / k->len;
-  a[i] = (k->c * vx + k->s * vy) + k->w * a[F3R_Q_THETA + i];
+  f3r_link_solve_dependent(k, -gx - d->gamma[2 * i], -gy - d->gamma[2 * i + 1], &a[i],
+                           &a[F3R_Q_THETA + i]);
 }
 
 /* Link i's rows of R = M a + h + k - Q (as f3r_data_mass_times and the force stage give them),
@@ -60,10 +59,8 @@ static void link_loop_forces(const f3r_model* m, int i, f3r_data* d, double* res
   }
   R[r] = mass * a[r] + k->m_rho_theta * a[t] + (d->h[r] + d->k[r] - d->Q[r]);
   R[t] = k->m_rho_theta * a[r] + k->m_theta_theta * a[t] + coupled + (d->h[t] + d->k[t] - d->Q[t]);
-  const double along = R[r], across = (R[t] + k->w * R[r]) / k->len;
-  const double lx = along * k->c - across * k->s, ly = along * k->s + across * k->c;
-  d->lambda[2 * i] = lx;
-  d->lambda[2 * i + 1] = ly;
+  f3r_link_solve_dependent_transpose(k, R[r], R[t], &d->lambda[2 * i], &d->lambda[2 * i + 1]);
+  const double lx = d->lambda[2 * i], ly = d->lambda[2 * i + 1];
   if (!res_eta) return;
   const int tip = lp->model == F3R_LINK_FIXED_FREE;
   for (int j = 0; j < lp->modes; ++j) {
@@ -333,12 +330,13 @@ static void add_mass_times_legs(const f3r_model* m, const int* owner, const f3r_
 static void add_leg_columns(const f3r_model* m, const double* X, const double* b, double* o) {
   const int nq = m->nq;
   for (int c = 0; c < F3R_Q_LEG_JOINTS; ++c) {
-    if (b[c] == 0.0) continue;
+    const double bc = b[c]; /* held: o may alias nothing it reads, but the compiler can't know */
+    if (bc == 0.0) continue;
     const int i = c % 3, base = m->link[i].eta_index;
     const double* x = X + (size_t)nq * c;
-    o[i] += x[i] * b[c];
-    o[F3R_Q_THETA + i] += x[F3R_Q_THETA + i] * b[c];
-    for (int j = 0; j < m->link[i].modes; ++j) o[base + j] += x[base + j] * b[c];
+    o[i] += x[i] * bc;
+    o[F3R_Q_THETA + i] += x[F3R_Q_THETA + i] * bc;
+    for (int j = 0; j < m->link[i].modes; ++j) o[base + j] += x[base + j] * bc;
   }
 }
 
@@ -407,11 +405,7 @@ static void add_B_transpose_times(const f3r_model* m, const int* owner, const do
 
 /* The legs' rows of -G_d^{-1} X for each of the nz columns of X (6 x nz), into out (6 x nz). */
 static void minus_dependent_solve(const f3r_data* d, const double* X, int nz, double* out) {
-  double x[F3R_Q_LEG_JOINTS];
-  for (int j = 0; j < nz; ++j) {
-    f3r_data_solve_dependent(d, X + 6 * j, x);
-    for (int c = 0; c < F3R_Q_LEG_JOINTS; ++c) out[c + 6 * j] = -x[c];
-  }
+  f3r_data_solve_dependent(d, X, nz, -1.0, out);
 }
 
 /* The Jacobian's products, column-major, in ws->jac_work (cleared per evaluation) and ws->dQ. */
