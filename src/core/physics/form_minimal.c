@@ -233,19 +233,21 @@ static f3r_status arrow_solve(const f3r_model* m, f3r_workspace* ws, double* b) 
   return F3R_OK;
 }
 
-/* y' of the minimal formulation. F_u is linear in u': F_u(u') = F_u(0) + K u'; likewise the
- * lag and W rows. dense: solve with K assembled whole and Cholesky (the benchmark's comparison)
- * instead of its arrow structure. */
+/* y' of the minimal formulation. F_u is linear in u': F_u(u') = F_u(0) + K u', F_u(0) from
+ * the forward pass and reduced_equations at u' = 0 (the residual's z rows are not needed);
+ * likewise the lag and W rows. dense: solve with K assembled whole and Cholesky (the
+ * benchmark's comparison) instead of its arrow structure. */
 static f3r_status minimal_rhs(const f3r_model* m, double t, const double* y, const double* held,
                               double* ydot, f3r_workspace* ws, int dense) {
+  static const double no_rate[F3R_MAX_Q]; /* u' = 0: the residual rows F_u(0) */
   const int nz = m->n_independent, ny = f3r_state_size(m, F3R_FORMULATION_MINIMAL);
-  double* zero_rate = ws->y_perturbed;
-  memset(zero_rate, 0, (size_t)ny * sizeof(double));
-  f3r_status st = f3r_minimal_residual(m, t, y, zero_rate, held, ws->res_base, ws);
+  f3r_data* d = &ws->data;
+  f3r_status st = forward(m, t, y, held, d);
   if (st != F3R_OK) return st;
-  reduced_mass_blocks(m, ws);
   double* rate = ydot + nz;
-  for (int i = 0; i < nz; ++i) rate[i] = -ws->res_base[nz + i];
+  reduced_equations(m, d, no_rate, rate);
+  for (int i = 0; i < nz; ++i) rate[i] = -rate[i];
+  reduced_mass_blocks(m, ws);
   if (dense) {
     double* K = ws->solve_work; /* nz x nz fits in the (nq + 6)^2 of the acceleration solver */
     memset(K, 0, (size_t)nz * (size_t)nz * sizeof(double));
@@ -258,9 +260,11 @@ static f3r_status minimal_rhs(const f3r_model* m, double t, const double* y, con
   }
   for (int i = 0; i < nz; ++i) ydot[i] = y[nz + i];
   const int lag_at = 2 * nz;
-  for (int i = 0; i < m->n_lag; ++i)
-    ydot[lag_at + i] = -ws->res_base[lag_at + i] / m->lag_time_constant;
-  ydot[ny - 1] = -ws->res_base[ny - 1]; /* F_W(W' = 0) = -Q.v */
+  for (int i = 0; i < m->n_lag; ++i) { /* F_lag(F_a' = 0), as the residual forms it */
+    const double res = m->lag_time_constant * 0.0 - (d->commanded[i] - y[lag_at + i]);
+    ydot[lag_at + i] = -res / m->lag_time_constant;
+  }
+  ydot[ny - 1] = -(0.0 - d->power); /* F_W(W' = 0) = -Q.v */
   return F3R_OK;
 }
 
