@@ -447,6 +447,23 @@ static jacobian_products jacobian_products_in(f3r_workspace* ws, int nq, int nz)
   return p;
 }
 
+/* Z and H are nonzero only in the links' blocks and at (phi_p, phi_p) (add_leg_columns): only
+ * those are cleared per evaluation; the rest was cleared when the workspace was created, and
+ * nothing writes it (the effects' dQ is zero there too). */
+static void clear_link_blocks(const f3r_model* m, double* X) {
+  const int nq = m->nq;
+  for (int i = 0; i < 3; ++i) {
+    const f3r_link_params* lp = &m->link[i];
+    int rows[2 + F3R_MAX_MODES], n = 0;
+    rows[n++] = i;
+    rows[n++] = F3R_Q_THETA + i;
+    for (int e = 0; e < lp->modes; ++e) rows[n++] = lp->eta_index + e;
+    for (int c = 0; c < n; ++c)
+      for (int r = 0; r < n; ++r) X[rows[r] + (size_t)nq * rows[c]] = 0.0;
+  }
+  X[F3R_Q_PHI + (size_t)nq * F3R_Q_PHI] = 0.0;
+}
+
 /* Z, H, dQ/dq, dQ/dv and the constraints' derivatives at the state the residual left in ws,
  * with the loop forces lambda held. */
 static void force_derivatives(const f3r_model* m, f3r_workspace* ws, const jacobian_products* p) {
@@ -454,7 +471,9 @@ static void force_derivatives(const f3r_model* m, f3r_workspace* ws, const jacob
   const f3r_data* d = &ws->data;
   const double *q = d->q, *v = d->v, *a = d->a;
   double *Z = p->Z, *H = p->H, *Qq = p->Qq, *Qv = p->Qv;
-  memset(ws->jac_work, 0, (2 * (size_t)nq * nq + 18 * (size_t)nq) * sizeof(double));
+  clear_link_blocks(m, Z);
+  clear_link_blocks(m, H);
+  memset(p->Gvq, 0, 18 * (size_t)nq * sizeof(double)); /* Gvq, Caq, gv */
   const int effects = f3r_effects_have_derivatives(m);
   if (effects) {
     memset(ws->dQ, 0, 2 * (size_t)nq * nq * sizeof(double));
