@@ -4,7 +4,7 @@
 
 #include <set>
 
-#include "flex3rpr/stages.h"
+#include "stages.h"
 #include "independent_lagrangian.h"
 #include "test_support.h"
 

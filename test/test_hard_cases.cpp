@@ -9,7 +9,7 @@
 
 #include "flex3rpr/beam_modes.h"
 #include "flex3rpr/modal.h"
-#include "flex3rpr/stages.h"
+#include "stages.h"
 #include "test_support.h"
 
 namespace {

@@ -2,7 +2,7 @@
 // public residual, at states along a real trajectory.
 #include <gtest/gtest.h>
 
-#include "flex3rpr/stages.h"
+#include "stages.h"
 #include "test_support.h"
 
 namespace {

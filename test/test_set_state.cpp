@@ -5,7 +5,7 @@
 
 #include <cstring>
 
-#include "flex3rpr/stages.h"
+#include "stages.h"
 #include "test_support.h"
 
 namespace {

@@ -6,7 +6,7 @@
 #include <map>
 
 #include "flex3rpr/modal.h"
-#include "flex3rpr/stages.h"
+#include "stages.h"
 #include "test_support.h"
 
 namespace {

@@ -6,9 +6,9 @@
 #include <functional>
 #include <random>
 
-#include "flex3rpr/stages.h"
+#include "stages.h"
 extern "C" {
-#include "data.h"  // f3r_fwd_leg_strokes: the event roots' closure
+#include "data.h"  // f3r_forward, f3r_fwd_leg_strokes: the event roots' closure
 }
 #include "independent_lagrangian.h"
 #include "test_support.h"
@@ -281,6 +281,58 @@ TEST(Stages, LegStrokesAloneEqualTheFullClosure) {
     onto[F3R_Q_Y] = m->base_joint[0][1] - m->platform_radius * m->platform_direction[0][1];
     EXPECT_EQ(f3r_fwd_leg_strokes(m.get(), onto.data(), rho), F3R_ERR_SINGULAR);
     EXPECT_EQ(f3r_model_close_loops(m.get(), onto.data()), F3R_ERR_SINGULAR);
+  }
+}
+
+// The sequencer: the minimal formulation's closed stages at (z, u) and the full stages at the
+// (q, v) they close to give the same forward pass (g vanishing), and one call with every stage
+// gives what the public (q, v) functions give one by one.
+TEST(Stages, ForwardClosedStagesEqualTheFullStages) {
+  std::mt19937 rng(11);
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  for (const LinkCase& c : kCases) {
+    f3r_scene scene = SceneWithLinks(c.a, c.ra, c.b, c.rb, c.c, c.rc, true);
+    scene.inputs[F3R_FORCE_RHO].kind = F3R_INPUT_CONSTANT; /* a force stage with an input */
+    scene.inputs[F3R_FORCE_RHO].offset = 3.0;
+    auto m = MakeModel(scene);
+    const int nq = m->nq, nz = m->n_independent;
+    for (int trial = 0; trial < 20; ++trial) {
+      std::vector<double> z(nz), zd(nz), held(nq);
+      z[0] = 0.03 * u(rng), z[1] = 0.03 * u(rng), z[2] = 0.3 * u(rng);
+      for (int j = 3; j < nz; ++j) z[j] = 1e-3 * u(rng);
+      for (int j = 0; j < nz; ++j) zd[j] = 0.5 * u(rng);
+      for (int n = 0; n < nq; ++n) held[n] = u(rng);
+      auto closed = std::make_unique<f3r_data>();
+      closed->t = 0.1, closed->z = z.data(), closed->u = zd.data(), closed->held = held.data();
+      ASSERT_EQ(f3r_forward(m.get(), closed.get(),
+                            F3R_FWD_POSITION_CLOSED | F3R_FWD_VELOCITY_CLOSED | F3R_FWD_FORCES |
+                                F3R_FWD_ENERGY),
+                F3R_OK);
+      std::vector<double> q(closed->q, closed->q + nq), v(closed->v, closed->v + nq);
+      f3r_fwd_leg_angles(m.get(), closed.get(), q.data());
+      auto full = std::make_unique<f3r_data>();
+      full->t = 0.1, full->q = q.data(), full->v = v.data(), full->held = held.data();
+      ASSERT_EQ(f3r_forward(m.get(), full.get(),
+                            F3R_FWD_POSITION | F3R_FWD_VELOCITY | F3R_FWD_FORCES | F3R_FWD_ENERGY),
+                F3R_OK);
+      for (int k = 0; k < F3R_NCON; ++k) {
+        EXPECT_NEAR(full->g[k], 0.0, 1e-13) << c.name;
+        EXPECT_NEAR(full->gamma[k], closed->gamma[k], 1e-9) << c.name;
+      }
+      std::vector<double> h(nq), Q(nq);
+      f3r_velocity_forces(m.get(), q.data(), v.data(), h.data());
+      f3r_applied_forces(m.get(), 0.1, held.data(), q.data(), v.data(), nullptr, Q.data(), nullptr);
+      for (int n = 0; n < nq; ++n) {
+        EXPECT_EQ(full->h[n], h[n]) << c.name << " h " << n;
+        EXPECT_EQ(full->Q[n], Q[n]) << c.name << " Q " << n;
+        EXPECT_NEAR(closed->h[n], h[n], 1e-9 * (1.0 + std::fabs(h[n]))) << c.name;
+        EXPECT_NEAR(closed->Q[n], Q[n], 1e-9 * (1.0 + std::fabs(Q[n]))) << c.name;
+      }
+      EXPECT_EQ(full->kinetic, f3r_kinetic_energy(m.get(), q.data(), v.data())) << c.name;
+      EXPECT_EQ(full->potential, f3r_potential_energy(m.get(), q.data())) << c.name;
+      EXPECT_NEAR(closed->kinetic, full->kinetic, 1e-12 * (1.0 + full->kinetic)) << c.name;
+      EXPECT_NEAR(closed->power, full->power, 1e-9 * (1.0 + std::fabs(full->power))) << c.name;
+    }
   }
 }
 

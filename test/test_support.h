@@ -7,7 +7,7 @@
 #include <string>
 #include <vector>
 
-#include "flex3rpr/residual.h"
+#include "residual.h"
 #include "flex3rpr/sim.h"
 #include "model_layout.h" /* the tests read the model's fields */
 

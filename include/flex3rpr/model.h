@@ -16,6 +16,7 @@ extern "C" {
 #endif
 
 #define F3R_MAX_Q (9 + 3 * F3R_MAX_MODES)
+#define F3R_NCON 6 /* loop-closure constraints: (x, y) of the loop of each link */
 
 /* A link's modal constants: arrays of `modes` values in the model's buffer, NULL for a rigid
  * link. */
@@ -88,6 +89,9 @@ void f3r_model_beam_point(const f3r_model* model, const double* q, int link, dou
 /* Condition number (2-norm) of the actuation map of leg forces: column i is the unit vector
  * u_i from A_i to C_i and its moment about P, (C_i - P) x u_i / r_PC. Capped at 1e16. */
 double f3r_model_actuation_condition(const f3r_model* model, const double* q);
+
+/* Length of the state vector y of a formulation (the layouts: src/core/physics/residual.h). */
+int f3r_state_size(const f3r_model* model, f3r_formulation form);
 
 /* Tip deflection w_i(l) of link i (m), and its rate for given qdot. */
 double f3r_model_tip_deflection(const f3r_model* model, const double* q, int link);

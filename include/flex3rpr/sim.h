@@ -4,8 +4,7 @@
 #ifndef FLEX3RPR_SIM_H
 #define FLEX3RPR_SIM_H
 
-#include "flex3rpr/residual.h"
-#include "flex3rpr/stages.h"
+#include "flex3rpr/model.h"
 
 #ifdef __cplusplus
 extern "C" {

@@ -16,9 +16,9 @@
 #include <sunmatrix/sunmatrix_dense.h>
 
 #include "linsol_schur.h"
-#include "flex3rpr/residual.h"
-#include "flex3rpr/stages.h"
 #include "model_layout.h"
+#include "residual.h"
+#include "stages.h"
 
 /* weak: absent from cores built before the forward pass */
 extern long f3r_workspace_sincos_pairs(const f3r_workspace* ws) __attribute__((weak));

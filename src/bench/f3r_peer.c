@@ -79,10 +79,10 @@
 #include <string.h>
 
 #include "flex3rpr/model.h"
-#include "flex3rpr/residual.h"
+#include "residual.h"
 #include "flex3rpr/scene.h"
-#include "flex3rpr/stages.h"
 #include "model_layout.h"
+#include "stages.h"
 
 #define F3R_PEER_EXPORT __attribute__((visibility("default")))
 

@@ -4,7 +4,7 @@
 set(layers base scene physics solve accuracy)
 set(public_base status.h coords.h)
 set(public_scene scene.h)
-set(public_physics beam_modes.h model.h stages.h residual.h)
+set(public_physics beam_modes.h model.h)
 set(public_solve sim.h)
 set(public_accuracy accuracy.h linear.h modal.h)
 

@@ -8,8 +8,8 @@
 #include "accuracy_parts.h"
 #include "dense.h"
 #include "flex3rpr/linear.h"
-#include "flex3rpr/residual.h"
 #include "model_layout.h"
+#include "residual.h"
 
 void f3r_linear_destroy(f3r_linear_model* lin) { free(lin); }
 

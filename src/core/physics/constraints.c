@@ -12,6 +12,35 @@
 #include "data.h"
 #include "dense.h"
 
+/* --- the stages' per-link parts (forward.c) ------------------------------------------------- */
+
+void f3r_link_constraints(const f3r_model* m, int i, f3r_data* d, int closed) {
+  f3r_link_data* k = &d->link[i];
+  const double r = m->platform_radius;
+  k->g_theta[0] = -k->len * k->s - k->w * k->c;
+  k->g_theta[1] = k->len * k->c - k->w * k->s;
+  k->g_phi[0] = r * k->sc;
+  k->g_phi[1] = -r * k->cc;
+  if (closed) {
+    d->g[2 * i] = d->g[2 * i + 1] = 0.0;
+    return;
+  }
+  const double* q = d->q;
+  d->g[2 * i] = m->base_joint[i][0] + k->len * k->c - k->w * k->s - q[F3R_Q_X] - r * k->cc;
+  d->g[2 * i + 1] = m->base_joint[i][1] + k->len * k->s + k->w * k->c - q[F3R_Q_Y] - r * k->sc;
+}
+
+/* gamma_i = along e + across n + r_PC phi'^2 e_c (the header's comment). */
+void f3r_link_constraint_bias(const f3r_model* m, int i, f3r_data* d) {
+  const f3r_link_data* k = &d->link[i];
+  const double td = k->theta_dot, phi_dot = d->v[F3R_Q_PHI];
+  const double along = -k->len * td * td - 2.0 * k->w_dot * td; /* e component */
+  const double across = 2.0 * k->rho_dot * td - k->w * td * td; /* n component */
+  const double rp = m->platform_radius * phi_dot * phi_dot;
+  d->gamma[2 * i] = along * k->c - across * k->s + rp * k->cc;
+  d->gamma[2 * i + 1] = along * k->s + across * k->c + rp * k->sc;
+}
+
 /* --- kernels on the position stage ---------------------------------------------------------- */
 
 /* Calls put(row, col, value) for every nonzero of G, so G and G^T share one definition. */
@@ -120,7 +149,7 @@ void f3r_data_add_constraint_times_dq(const f3r_model* m, const f3r_data* d, con
 }
 
 /* gamma_i = along e + across n + r_PC phi'^2 e_c with along = -L th'^2 - 2 w' th' and
- * across = 2 rho' th' - w th'^2 (f3r_fwd_velocity), so, per link,
+ * across = 2 rho' th' - w th'^2 (f3r_link_constraint_bias), so, per link,
  *   d/drho = -th'^2 e,  d/dth = along n - across e,  d/deta_j = -psi_j(1) th'^2 n,
  *   d/dphi_p = r_PC phi'^2 (-sc, cc);
  *   d/drho' = 2 th' n,  d/dth' = (-2 L th' - 2 w') e + (2 rho' - 2 w th') n,
@@ -173,96 +202,80 @@ void f3r_data_add_constraint_bias_dv(const f3r_model* m, const f3r_data* d, cons
   }
 }
 
-void f3r_data_solve_dependent(const f3r_data* d, const double* V, double* x) {
-  for (int i = 0; i < 3; ++i) {
-    const f3r_link_data* k = &d->link[i];
-    const double vn = -k->s * V[2 * i] + k->c * V[2 * i + 1];
-    const double ve = k->c * V[2 * i] + k->s * V[2 * i + 1];
-    x[F3R_Q_THETA + i] = vn / k->len;
-    x[i] = ve + k->w * x[F3R_Q_THETA + i];
+void f3r_data_solve_dependent(const f3r_data* d, const double* V, int ncols, double scale,
+                              double* x) {
+  for (int j = 0; j < ncols; ++j) {
+    const double* v = V + 6 * j;
+    double rho[3], theta[3]; /* all read before x, which may be V, is written */
+    for (int i = 0; i < 3; ++i)
+      f3r_link_solve_dependent(&d->link[i], v[2 * i], v[2 * i + 1], &rho[i], &theta[i]);
+    for (int i = 0; i < 3; ++i) {
+      x[i + 6 * j] = scale * rho[i];
+      x[F3R_Q_THETA + i + 6 * j] = scale * theta[i];
+    }
   }
 }
 
-void f3r_data_solve_dependent_transpose(const f3r_data* d, const double* R, double* lambda) {
-  for (int i = 0; i < 3; ++i) {
-    const f3r_link_data* k = &d->link[i];
-    const double along = R[i], across = (R[F3R_Q_THETA + i] + k->w * R[i]) / k->len;
-    lambda[2 * i] = along * k->c - across * k->s;
-    lambda[2 * i + 1] = along * k->s + across * k->c;
-  }
-}
+/* --- the public (q, v) functions of stages.h: the stages they need, then the kernels --------- */
 
-/* --- the public (q, v) functions of stages.h ------------------------------------------------- */
+enum { AT_Q = F3R_FWD_POSITION, AT_QV = F3R_FWD_POSITION | F3R_FWD_VELOCITY };
 
 void f3r_constraints(const f3r_model* m, const double* q, double* g) {
-  f3r_data d = {.sincos_pairs = 0};
-  f3r_fwd_position(m, q, &d);
-  memcpy(g, d.g, sizeof d.g);
+  f3r_data d;
+  memcpy(g, f3r_forward_at(m, q, NULL, AT_Q, &d)->g, sizeof d.g);
+}
+
+void f3r_constraint_bias(const f3r_model* m, const double* q, const double* v, double* gamma) {
+  f3r_data d;
+  memcpy(gamma, f3r_forward_at(m, q, v, AT_QV, &d)->gamma, sizeof d.gamma);
 }
 
 void f3r_add_constraint_jacobian(const f3r_model* m, const double* q, double scale, double* A,
                                  int ld) {
-  f3r_data d = {.sincos_pairs = 0};
-  f3r_fwd_position(m, q, &d);
-  f3r_data_add_constraint_jacobian(m, &d, scale, A, ld);
+  f3r_data d;
+  f3r_data_add_constraint_jacobian(m, f3r_forward_at(m, q, NULL, AT_Q, &d), scale, A, ld);
 }
 
 void f3r_add_constraint_jacobian_transpose(const f3r_model* m, const double* q, double scale,
                                            double* A, int ld) {
-  f3r_data d = {.sincos_pairs = 0};
-  f3r_fwd_position(m, q, &d);
-  f3r_data_add_constraint_jacobian_transpose(m, &d, scale, A, ld);
+  f3r_data d;
+  f3r_data_add_constraint_jacobian_transpose(m, f3r_forward_at(m, q, NULL, AT_Q, &d), scale, A, ld);
 }
 
 void f3r_constraint_times(const f3r_model* m, const double* q, const double* v, double* out) {
-  f3r_data d = {.sincos_pairs = 0};
-  f3r_fwd_position(m, q, &d);
-  f3r_data_constraint_times(m, &d, v, out);
+  f3r_data d;
+  f3r_data_constraint_times(m, f3r_forward_at(m, q, NULL, AT_Q, &d), v, out);
 }
 
 void f3r_constraint_transpose_times(const f3r_model* m, const double* q, const double* lambda,
                                     double* out) {
-  f3r_data d = {.sincos_pairs = 0};
-  f3r_fwd_position(m, q, &d);
-  f3r_data_constraint_transpose_times(m, &d, lambda, out);
+  f3r_data d;
+  f3r_data_constraint_transpose_times(m, f3r_forward_at(m, q, NULL, AT_Q, &d), lambda, out);
 }
 
 void f3r_add_constraint_transpose_times_dq(const f3r_model* m, const double* q,
                                            const double* lambda, double scale, double* A, int ld) {
-  f3r_data d = {.sincos_pairs = 0};
-  f3r_fwd_position(m, q, &d);
+  f3r_data d;
+  f3r_forward_at(m, q, NULL, AT_Q, &d);
   f3r_data_add_constraint_transpose_times_dq(m, &d, lambda, scale, A, ld);
 }
 
 void f3r_add_constraint_times_dq(const f3r_model* m, const double* q, const double* v, double scale,
                                  double* A, int ld) {
-  f3r_data d = {.sincos_pairs = 0};
-  f3r_fwd_position(m, q, &d);
-  f3r_fwd_velocity(m, q, v, &d);
-  f3r_data_add_constraint_times_dq(m, &d, v, scale, A, ld);
+  f3r_data d;
+  f3r_data_add_constraint_times_dq(m, f3r_forward_at(m, q, v, AT_QV, &d), v, scale, A, ld);
 }
 
 void f3r_add_constraint_bias_dq(const f3r_model* m, const double* q, const double* v, double scale,
                                 double* A, int ld) {
-  f3r_data d = {.sincos_pairs = 0};
-  f3r_fwd_position(m, q, &d);
-  f3r_fwd_velocity(m, q, v, &d);
-  f3r_data_add_constraint_bias_dq(m, &d, v, scale, A, ld);
+  f3r_data d;
+  f3r_data_add_constraint_bias_dq(m, f3r_forward_at(m, q, v, AT_QV, &d), v, scale, A, ld);
 }
 
 void f3r_add_constraint_bias_dv(const f3r_model* m, const double* q, const double* v, double scale,
                                 double* A, int ld) {
-  f3r_data d = {.sincos_pairs = 0};
-  f3r_fwd_position(m, q, &d);
-  f3r_fwd_velocity(m, q, v, &d);
-  f3r_data_add_constraint_bias_dv(m, &d, v, scale, A, ld);
-}
-
-void f3r_constraint_bias(const f3r_model* m, const double* q, const double* v, double* gamma) {
-  f3r_data d = {.sincos_pairs = 0};
-  f3r_fwd_position(m, q, &d);
-  f3r_fwd_velocity(m, q, v, &d);
-  memcpy(gamma, d.gamma, sizeof d.gamma);
+  f3r_data d;
+  f3r_data_add_constraint_bias_dv(m, f3r_forward_at(m, q, v, AT_QV, &d), v, scale, A, ld);
 }
 
 size_t f3r_solve_accelerations_work_size(const f3r_model* m) {
@@ -277,9 +290,8 @@ f3r_status f3r_solve_accelerations(const f3r_model* m, const double* q, const do
   double* b = K + (size_t)n * n;
   int* piv = (int*)(b + n); /* n ints fit in n doubles */
   double* el = b + 2 * n;
-  f3r_data d = {.sincos_pairs = 0};
-  f3r_fwd_position(m, q, &d);
-  f3r_fwd_velocity(m, q, v, &d);
+  f3r_data d;
+  f3r_forward_at(m, q, v, F3R_FWD_POSITION | F3R_FWD_VELOCITY, &d);
   for (size_t z = 0; z < (size_t)n * n; ++z) K[z] = 0.0;
   f3r_data_add_mass_matrix(m, &d, 1.0, K, n);
   f3r_data_add_constraint_jacobian_transpose(m, &d, -1.0, K + (size_t)nq * n,

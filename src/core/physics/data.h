@@ -1,7 +1,8 @@
-/* f3r_data: everything one evaluation of the model computes, grouped by the stage of the
- * forward pass (forward.c) that fills it. A stage reads t, q, v and the fields of the stages
- * before it and writes its own fields once; everything after it reads them. So each leg's
- * trigonometry is evaluated once per evaluation, and a new force term is one stage and one
+/* f3r_data: the inputs of one evaluation of the model and everything it computes, grouped by the
+ * stage of the forward pass (forward.c) that fills it. The caller sets the inputs (as MuJoCo's
+ * mjData holds qpos and qvel) and calls f3r_forward(m, d, what) with the stages it needs; a stage
+ * reads the inputs and the fields of the stages before it and writes its own fields once. So each
+ * leg's trigonometry is evaluated once per evaluation, and a new force term is one stage and one
  * field. Private: the public (q, v) functions of stages.h run the stages they need into a local
  * f3r_data and read it.
  *
@@ -11,14 +12,24 @@
 #ifndef FLEX3RPR_DATA_H
 #define FLEX3RPR_DATA_H
 
-#include "flex3rpr/stages.h"
 #include "model_layout.h"
+#include "stages.h"
 
 /* Legs whose beam root comes closer than this fraction of l to A_i are degenerate: there the
  * constraint Jacobian loses rank (det of the leg's 2x2 block is rho + l), and the loop closure
  * refuses them. A run stops long before, at the collapse guard (events.h,
  * F3R_COLLAPSE_LEG_FRACTION = 0.1); this bound only keeps the closure itself finite. */
 #define F3R_CLOSURE_MIN_LEG_FRACTION 1e-3
+
+/* The stages of the forward pass, a bit set for f3r_forward. */
+enum {
+  F3R_FWD_POSITION = 1 << 0,        /* q -> per link trigonometry, blocks; g */
+  F3R_FWD_POSITION_CLOSED = 1 << 1, /* z -> q_closed by the loop closure (instead of POSITION) */
+  F3R_FWD_VELOCITY = 1 << 2,        /* v -> per link rates; h; gamma */
+  F3R_FWD_VELOCITY_CLOSED = 1 << 3, /* u -> v_closed by G v = 0 (instead of VELOCITY) */
+  F3R_FWD_FORCES = 1 << 4,          /* t, held, lag -> k, Q, commanded, power */
+  F3R_FWD_ENERGY = 1 << 5           /* kinetic and potential energy */
+};
 
 typedef struct {
   /* --- position stage: from q ------------------------------------------------------------- */
@@ -42,9 +53,20 @@ typedef struct {
 } f3r_link_data;
 
 typedef struct f3r_data {
+  /* --- inputs: the caller's, before f3r_forward --------------------------------------------- */
+  double t;           /* s */
+  const double* q;    /* full coordinates (nq); the closed position stage points it at q_closed */
+  const double* v;    /* their rates (nq); the closed velocity stage points it at v_closed */
+  const double* z;    /* the minimal formulation's independent coordinates (nz), closed stages */
+  const double* u;    /* and their rates (nz) */
+  const double* held; /* the caller's generalized forces (nq), or NULL */
+  const double* lag;  /* the actuator lag states (3), or NULL */
+  /* --- the closed stages' full coordinates and rates: z, u and the legs' from the closure; theta_i
+   * are not filled (f3r_fwd_leg_angles gives them) ------------------------------------------ */
+  double q_closed[F3R_MAX_Q], v_closed[F3R_MAX_Q];
   f3r_link_data link[3];
   /* --- position stage ------------------------------------------------------------------------ */
-  double g[F3R_NCON]; /* loop-closure constraints g(q) (m); filled by f3r_fwd_position */
+  double g[F3R_NCON]; /* loop-closure constraints g(q) (m); the position stage */
   /* --- velocity stage ------------------------------------------------------------------------ */
   double h[F3R_MAX_Q];    /* velocity-dependent forces h(q, v) = dM/dt v - dT/dq */
   double gamma[F3R_NCON]; /* (dG/dt) v, so that G a + gamma = 0 */
@@ -53,6 +75,9 @@ typedef struct f3r_data {
   double Q[F3R_MAX_Q]; /* applied generalized forces: held + effects (+ actuator lag) */
   double commanded[3]; /* leg forces commanded to the actuator lag (when n_lag = 3) */
   double power;        /* Q . v (W) */
+  /* --- energy stage -------------------------------------------------------------------------- */
+  double kinetic;   /* T = v^T M v / 2 (J) */
+  double potential; /* V = eta^T K eta / 2 (J) */
   /* --- formulation stage --------------------------------------------------------------------- */
   double a[F3R_MAX_Q];     /* accelerations */
   double R[F3R_MAX_Q];     /* M a + h + k - Q */
@@ -61,29 +86,40 @@ typedef struct f3r_data {
   long sincos_pairs; /* sin/cos pairs evaluated into this data since it was cleared */
 } f3r_data;
 
-/* --- the stages (forward.c) -------------------------------------------------------------------- */
-/* Position stage from the full coordinates q: trigonometry, mass and constraint blocks, g. */
-void f3r_fwd_position(const f3r_model* m, const double* q, f3r_data* d);
-/* Position stage of the minimal formulation: the platform pose and modal coordinates in q are
- * given; the loop closure fills rho_i in q and the legs' directions in d algebraically (no
- * atan2). theta_i in q are left as they are: f3r_fwd_leg_angles fills them when asked. Returns
- * F3R_ERR_SINGULAR when a leg cannot reach its joint. g is not filled (zero by construction). */
-f3r_status f3r_fwd_position_closed(const f3r_model* m, double* q, f3r_data* d);
+/* --- the forward pass (forward.c) ------------------------------------------------------------- */
+/* Runs the stages in `what` (F3R_FWD_*) on the inputs in d, in order. Returns F3R_ERR_SINGULAR
+ * when the closed position stage finds a leg that cannot reach its joint, else F3R_OK. */
+f3r_status f3r_forward(const f3r_model* m, f3r_data* d, unsigned what);
+/* A cleared d with inputs q and v (either may be NULL when no stage asked for reads it), through
+ * the stages in `what`, for the public (q, v) functions of stages.h; returns d. */
+const f3r_data* f3r_forward_at(const f3r_model* m, const double* q, const double* v, unsigned what,
+                               f3r_data* d);
 /* The leg strokes rho_i alone from the platform pose and modal coordinates in q, by the same
- * closure and arithmetic as f3r_fwd_position_closed (the same values to the last bit), without
+ * closure and arithmetic as the closed position stage (the same values to the last bit), without
  * its mass and constraint blocks: what the event roots, evaluated once a step, need. */
 f3r_status f3r_fwd_leg_strokes(const f3r_model* m, const double* q, double rho[3]);
 /* theta_i in q from the closed directions of the position stage, on the model's branch. */
 void f3r_fwd_leg_angles(const f3r_model* m, const f3r_data* d, double* q);
-/* Velocity stage from v (and q's modal coordinates): rates per link, h and gamma. */
-void f3r_fwd_velocity(const f3r_model* m, const double* q, const double* v, f3r_data* d);
-/* Velocity stage of the minimal formulation: the platform and modal rates in v are given; the
- * loop closure fills rho_i' and theta_i' in v (G v = 0), then as f3r_fwd_velocity. */
-void f3r_fwd_velocity_closed(const f3r_model* m, const double* q, double* v, f3r_data* d);
-/* Force stage: k, Q (the caller's held forces, the effects, the actuator lag states lag or
- * NULL), the commanded leg forces and the power Q . v. */
-void f3r_fwd_forces(const f3r_model* m, double t, const double* held, const double* q,
-                    const double* v, const double* lag, f3r_data* d);
+
+/* --- per-link kernels of the stages, beside their derivatives (dynamics.c, constraints.c) ------ */
+/* The mass blocks of link i at stroke rho; its part of h (the velocity stage of link i in d). */
+void f3r_link_mass_blocks(const f3r_model* m, int i, f3r_link_data* k, double rho);
+void f3r_link_velocity_forces(const f3r_model* m, int i, f3r_data* d);
+/* k of link i's coordinates (rho_i, theta_i: zero; eta_i) into k (nq). */
+void f3r_link_elastic_forces(const f3r_model* m, int i, const double* q, double* k);
+/* G's direction-dependent blocks of link i and its g rows (zero when `closed`: the closure
+ * satisfies them); its gamma rows (the velocity stage of link i in d). */
+void f3r_link_constraints(const f3r_model* m, int i, f3r_data* d, int closed);
+void f3r_link_constraint_bias(const f3r_model* m, int i, f3r_data* d);
+/* The energy stage: T and V from the position and velocity stages. */
+void f3r_data_energies(const f3r_model* m, f3r_data* d);
+/* Q (nq) += the effects' forces at t, q, v and the position stage in d; scale dQ/dq into dQ_dq
+ * and scale dQ/dv into dQ_dv (leading dimension ld; either NULL to skip) (effects.c). */
+void f3r_effects_add_forces(const f3r_model* m, const f3r_data* d, double* Q);
+/* 1 when an effect has derivatives: only then do the Jacobians form dQ/dq and dQ/dv. */
+int f3r_effects_have_derivatives(const f3r_model* m);
+void f3r_effects_add_derivatives(const f3r_model* m, const f3r_data* d, double scale, double* dQ_dq,
+                                 double* dQ_dv, int ld);
 
 /* --- kernels on the position stage (dynamics.c, constraints.c) -------------------------------- */
 void f3r_data_mass_times(const f3r_model* m, const f3r_data* d, const double* x, double* out);
@@ -106,12 +142,27 @@ void f3r_data_add_constraint_bias_dq(const f3r_model* m, const f3r_data* d, cons
                                      double scale, double* A, int ld);
 void f3r_data_add_constraint_bias_dv(const f3r_model* m, const f3r_data* d, const double* v,
                                      double scale, double* A, int ld);
-/* Per link, the dependent block G_d = [e, L n - w e] of the constraint Jacobian (det L):
- *   x = G_d^{-1} V  (x's rho and theta entries from V's (x, y) per link),
- *   x = G_d^{-T} R  (the loop force (x, y) per link from R's rho and theta entries). */
-void f3r_data_solve_dependent(const f3r_data* d, const double* V, double* x);
+/* Link k's dependent block G_d = [e, L n - w e] of the constraint Jacobian (det L):
+ *   (rho, theta) = G_d^{-1} (vx, vy):  theta = (n . V) / L,  rho = e . V + w theta;
+ *   (lx, ly) = G_d^{-T} (r_rho, r_theta) = r_rho e + ((r_theta + w r_rho) / L) n. */
+static inline void f3r_link_solve_dependent(const f3r_link_data* k, double vx, double vy,
+                                            double* rho, double* theta) {
+  const double c = k->c, s = k->s, w = k->w, len = k->len; /* read before rho, theta are written */
+  const double th = (-s * vx + c * vy) / len;
+  *rho = (c * vx + s * vy) + w * th;
+  *theta = th;
+}
+static inline void f3r_link_solve_dependent_transpose(const f3r_link_data* k, double r_rho,
+                                                      double r_theta, double* lx, double* ly) {
+  const double c = k->c, s = k->s, along = r_rho, across = (r_theta + k->w * r_rho) / k->len;
+  *lx = along * c - across * s;
+  *ly = along * s + across * c;
+}
+/* x = scale G_d^{-1} V per link for the ncols columns of V (6 x ncols, (x, y) per link): x's rho
+ * and theta rows (6 x ncols; x may be V). */
+void f3r_data_solve_dependent(const f3r_data* d, const double* V, int ncols, double scale,
+                              double* x);
 /* f3r_model_actuation_condition at q from the position stage's platform joints (model.c). */
 double f3r_data_actuation_condition(const f3r_model* m, const f3r_data* d, const double* q);
-void f3r_data_solve_dependent_transpose(const f3r_data* d, const double* R, double* lambda);
 
 #endif

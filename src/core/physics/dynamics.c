@@ -21,6 +21,50 @@
 
 static double exact_flag(const f3r_model* m) { return m->exact_kinematics ? 1.0 : 0.0; }
 
+/* --- the stages' per-link parts (forward.c) ------------------------------------------------- */
+
+void f3r_link_mass_blocks(const f3r_model* m, int i, f3r_link_data* k, double rho) {
+  const f3r_link_params* lp = &m->link[i];
+  const double l = m->link_length, mass = m->link_mass, e = exact_flag(m);
+  k->m_rho_theta = -e * mass * k->mean_defl;
+  k->m_theta_theta =
+      m->cylinder_inertia + mass * (l * l / 3.0 + l * rho + rho * rho) + e * mass * k->eta_sq;
+  for (int j = 0; j < lp->modes; ++j)
+    k->m_theta_eta[j] = mass * (l * lp->first_moment[j] + rho * lp->mean[j]);
+}
+
+void f3r_link_velocity_forces(const f3r_model* m, int i, f3r_data* d) {
+  const f3r_link_params* lp = &m->link[i];
+  const f3r_link_data* k = &d->link[i];
+  const double* q = d->q;
+  const double mass = m->link_mass, e = exact_flag(m);
+  const double rd = k->rho_dot, td = k->theta_dot, arm = m->link_length + 2.0 * q[i];
+  d->h[i] = -0.5 * mass * arm * td * td - (1.0 + e) * mass * td * k->mean_defl_dot;
+  d->h[F3R_Q_THETA + i] = mass * arm * rd * td + (1.0 - e) * mass * rd * k->mean_defl_dot +
+                          2.0 * e * mass * td * k->eta_eta_dot;
+  for (int j = 0; j < lp->modes; ++j)
+    d->h[lp->eta_index + j] =
+        (1.0 + e) * mass * rd * td * lp->mean[j] - e * mass * td * td * q[lp->eta_index + j];
+}
+
+/* T = v^T M v / 2 and V = sum k_j eta_j^2 / 2. */
+void f3r_data_energies(const f3r_model* m, f3r_data* d) {
+  double Mv[F3R_MAX_Q];
+  f3r_data_mass_times(m, d, d->v, Mv);
+  double T = 0.0;
+  for (int n = 0; n < m->nq; ++n) T += 0.5 * d->v[n] * Mv[n];
+  double V = 0.0;
+  for (int i = 0; i < 3; ++i) {
+    const f3r_link_params* lp = &m->link[i];
+    for (int j = 0; j < lp->modes; ++j) {
+      const double eta = d->q[lp->eta_index + j];
+      V += 0.5 * lp->stiffness[j] * eta * eta;
+    }
+  }
+  d->kinetic = T;
+  d->potential = V;
+}
+
 /* --- kernels on the position stage ---------------------------------------------------------- */
 
 void f3r_data_add_mass_matrix(const f3r_model* m, const f3r_data* d, double scale, double* A,
@@ -87,15 +131,13 @@ void f3r_data_add_velocity_forces_dv(const f3r_model* m, const f3r_data* d, cons
 /* --- the public (q, v) functions of stages.h: the stages they need, then the kernels --------- */
 
 void f3r_add_mass_matrix(const f3r_model* m, const double* q, double scale, double* A, int ld) {
-  f3r_data d = {.sincos_pairs = 0};
-  f3r_fwd_position(m, q, &d);
-  f3r_data_add_mass_matrix(m, &d, scale, A, ld);
+  f3r_data d;
+  f3r_data_add_mass_matrix(m, f3r_forward_at(m, q, NULL, F3R_FWD_POSITION, &d), scale, A, ld);
 }
 
 void f3r_mass_times(const f3r_model* m, const double* q, const double* a, double* out) {
-  f3r_data d = {.sincos_pairs = 0};
-  f3r_fwd_position(m, q, &d);
-  f3r_data_mass_times(m, &d, a, out);
+  f3r_data d;
+  f3r_data_mass_times(m, f3r_forward_at(m, q, NULL, F3R_FWD_POSITION, &d), a, out);
 }
 
 /* d(M(q) a)/dq: M depends on rho (J and c_j) and, with exact kinematics, on eta; never on theta. */
@@ -120,10 +162,9 @@ void f3r_add_mass_times_dq(const f3r_model* m, const double* q, const double* a,
 }
 
 void f3r_velocity_forces(const f3r_model* m, const double* q, const double* v, double* h) {
-  f3r_data d = {.sincos_pairs = 0};
-  f3r_fwd_position(m, q, &d);
-  f3r_fwd_velocity(m, q, v, &d);
-  memcpy(h, d.h, (size_t)m->nq * sizeof(double));
+  f3r_data d;
+  memcpy(h, f3r_forward_at(m, q, v, F3R_FWD_POSITION | F3R_FWD_VELOCITY, &d)->h,
+         (size_t)m->nq * sizeof(double));
 }
 
 /* dh/dq: h depends on rho (the arm l + 2 rho) and, with exact kinematics, on eta. */
@@ -148,19 +189,21 @@ void f3r_add_velocity_forces_dq(const f3r_model* m, const double* q, const doubl
 
 void f3r_add_velocity_forces_dv(const f3r_model* m, const double* q, const double* v, double scale,
                                 double* A, int ld) {
-  f3r_data d = {.sincos_pairs = 0};
-  f3r_fwd_position(m, q, &d);
-  f3r_fwd_velocity(m, q, v, &d);
+  f3r_data d;
+  f3r_forward_at(m, q, v, F3R_FWD_POSITION | F3R_FWD_VELOCITY, &d);
   f3r_data_add_velocity_forces_dv(m, &d, q, scale, A, ld);
 }
 
+void f3r_link_elastic_forces(const f3r_model* m, int i, const double* q, double* k) {
+  const f3r_link_params* lp = &m->link[i];
+  k[i] = k[F3R_Q_THETA + i] = 0.0;
+  for (int j = 0; j < lp->modes; ++j)
+    k[lp->eta_index + j] = lp->stiffness[j] * q[lp->eta_index + j];
+}
+
 void f3r_elastic_forces(const f3r_model* m, const double* q, double* k) {
-  for (int n = 0; n < F3R_Q_MODAL; ++n) k[n] = 0.0;
-  for (int i = 0; i < 3; ++i) {
-    const f3r_link_params* lp = &m->link[i];
-    for (int j = 0; j < lp->modes; ++j)
-      k[lp->eta_index + j] = lp->stiffness[j] * q[lp->eta_index + j];
-  }
+  for (int n = F3R_Q_X; n < F3R_Q_MODAL; ++n) k[n] = 0.0;
+  for (int i = 0; i < 3; ++i) f3r_link_elastic_forces(m, i, q, k);
 }
 
 void f3r_add_elastic_forces_dq(const f3r_model* m, double scale, double* A, int ld) {
@@ -175,51 +218,28 @@ void f3r_add_elastic_forces_dq(const f3r_model* m, double scale, double* A, int 
 
 void f3r_generalized_forces(const f3r_model* m, double t, const double* held, const double* q,
                             const double* v, double* Q) {
-  f3r_data d = {.sincos_pairs = 0};
-  f3r_fwd_position(m, q, &d);
+  f3r_data d;
+  f3r_forward_at(m, q, v, F3R_FWD_POSITION, &d);
+  d.t = t;
   for (int n = 0; n < m->nq; ++n) Q[n] = held ? held[n] : 0.0;
-  for (int e = 0; e < m->n_effects; ++e) m->effects[e]->add(m, t, q, v, &d, Q);
+  f3r_effects_add_forces(m, &d, Q);
 }
 
 void f3r_applied_forces(const f3r_model* m, double t, const double* held, const double* q,
                         const double* v, const double* lag, double* Q, double* commanded) {
-  f3r_data d = {.sincos_pairs = 0};
-  f3r_fwd_position(m, q, &d);
-  f3r_fwd_forces(m, t, held, q, v, lag, &d);
+  f3r_data d = {.t = t, .q = q, .v = v, .held = held, .lag = lag};
+  f3r_forward(m, &d, F3R_FWD_POSITION | F3R_FWD_FORCES);
   memcpy(Q, d.Q, (size_t)m->nq * sizeof(double));
   if (commanded && m->n_lag) memcpy(commanded, d.commanded, sizeof d.commanded);
 }
 
-void f3r_add_generalized_forces_dq(const f3r_model* m, const double* q, const double* v,
-                                   double scale, double* A, int ld) {
-  f3r_data d = {.sincos_pairs = 0};
-  f3r_fwd_position(m, q, &d);
-  for (int e = 0; e < m->n_effects; ++e)
-    if (m->effects[e]->add_dq) m->effects[e]->add_dq(m, q, v, &d, scale, A, ld);
-}
-
-void f3r_add_generalized_forces_dv(const f3r_model* m, const double* q, const double* v,
-                                   double scale, double* A, int ld) {
-  for (int e = 0; e < m->n_effects; ++e)
-    if (m->effects[e]->add_dv) m->effects[e]->add_dv(m, q, v, scale, A, ld);
-}
-
 double f3r_kinetic_energy(const f3r_model* m, const double* q, const double* v) {
-  double Mv[F3R_MAX_Q];
-  f3r_mass_times(m, q, v, Mv);
-  double T = 0.0;
-  for (int n = 0; n < m->nq; ++n) T += 0.5 * v[n] * Mv[n];
-  return T;
+  f3r_data d;
+  return f3r_forward_at(m, q, v, F3R_FWD_POSITION | F3R_FWD_ENERGY, &d)->kinetic;
 }
 
 double f3r_potential_energy(const f3r_model* m, const double* q) {
-  double V = 0.0;
-  for (int i = 0; i < 3; ++i) {
-    const f3r_link_params* lp = &m->link[i];
-    for (int j = 0; j < lp->modes; ++j) {
-      const double eta = q[lp->eta_index + j];
-      V += 0.5 * lp->stiffness[j] * eta * eta;
-    }
-  }
-  return V;
+  static const double at_rest[F3R_MAX_Q] = {0};
+  f3r_data d;
+  return f3r_forward_at(m, q, at_rest, F3R_FWD_POSITION | F3R_FWD_ENERGY, &d)->potential;
 }

@@ -96,10 +96,44 @@ const f3r_force_effect f3r_damping_effect = {"damping", damping_add, 0, damping_
 static void inputs_add(const f3r_model* m, double t, const double* q, const double* v,
                        const f3r_data* d, double* Q) {
   (void)q, (void)v, (void)d;
-  for (int n = 0; n < F3R_RIGID_FORCES; ++n) Q[n] += f3r_input_value(&m->scene.inputs[n], t);
+  for (int n = 0; n < F3R_RIGID_FORCES; ++n) /* an input that is off adds nothing */
+    if (m->scene.inputs[n].kind != F3R_INPUT_NONE) Q[n] += f3r_input_value(&m->scene.inputs[n], t);
 }
 
 const f3r_force_effect f3r_inputs_effect = {"inputs", inputs_add, 0, 0};
+
+/* --- the list: every caller's one loop over the enabled effects -------------------------------- */
+
+void f3r_effects_add_forces(const f3r_model* m, const f3r_data* d, double* Q) {
+  for (int e = 0; e < m->n_effects; ++e) m->effects[e]->add(m, d->t, d->q, d->v, d, Q);
+}
+
+int f3r_effects_have_derivatives(const f3r_model* m) {
+  for (int e = 0; e < m->n_effects; ++e)
+    if (m->effects[e]->add_dq || m->effects[e]->add_dv) return 1;
+  return 0;
+}
+
+void f3r_effects_add_derivatives(const f3r_model* m, const f3r_data* d, double scale, double* dQ_dq,
+                                 double* dQ_dv, int ld) {
+  for (int e = 0; e < m->n_effects; ++e) {
+    const f3r_force_effect* effect = m->effects[e];
+    if (dQ_dq && effect->add_dq) effect->add_dq(m, d->q, d->v, d, scale, dQ_dq, ld);
+    if (dQ_dv && effect->add_dv) effect->add_dv(m, d->q, d->v, scale, dQ_dv, ld);
+  }
+}
+
+void f3r_add_generalized_forces_dq(const f3r_model* m, const double* q, const double* v,
+                                   double scale, double* A, int ld) {
+  f3r_data d;
+  f3r_effects_add_derivatives(m, f3r_forward_at(m, q, v, F3R_FWD_POSITION, &d), scale, A, NULL, ld);
+}
+
+void f3r_add_generalized_forces_dv(const f3r_model* m, const double* q, const double* v,
+                                   double scale, double* A, int ld) {
+  f3r_data d = {.q = q, .v = v}; /* no effect's dQ/dv needs a stage */
+  f3r_effects_add_derivatives(m, &d, scale, NULL, A, ld);
+}
 
 void f3r_model_compile_effects(f3r_model* m) {
   const f3r_scene* s = &m->scene;

@@ -1,18 +1,19 @@
 /* The redundant-coordinate residuals and their exact Jacobians, in named blocks read from one
  * forward pass (data.h): the stabilised index-2 (Gear-Gupta-Leimkuhler) form `dae` and the plain
  * index-3 form `index3` (no mu, no velocity constraint) that the paper's MEBDFI integrates.
- * Layouts and equations: include/flex3rpr/residual.h. */
+ * Layouts and equations: residual.h. */
 #include "dense.h"
 #include "workspace.h"
 
 /* The forward pass at the state y: position, velocity and force stages. */
 static void forward(const f3r_model* m, f3r_formulation form, double t, const double* y,
                     const double* held, f3r_data* d) {
-  const int nq = m->nq;
-  const double *q = y, *v = y + nq;
-  f3r_fwd_position(m, q, d);
-  f3r_fwd_velocity(m, q, v, d);
-  f3r_fwd_forces(m, t, held, q, v, m->n_lag ? y + f3r_lag_index(m, form) : 0, d);
+  d->t = t;
+  d->q = y;
+  d->v = y + m->nq;
+  d->held = held;
+  d->lag = m->n_lag ? y + f3r_lag_index(m, form) : 0;
+  f3r_forward(m, d, F3R_FWD_POSITION | F3R_FWD_VELOCITY | F3R_FWD_FORCES);
 }
 
 f3r_status f3r_dae_residual(const f3r_model* m, f3r_formulation form, double t, const double* y,
@@ -97,14 +98,11 @@ f3r_status f3r_dae_jacobian(const f3r_model* m, f3r_formulation form, double t, 
     F3R_AT(J, ld, row_v + i, row_lag + i) -= 1.0;
     F3R_AT(J, ld, row_w, row_lag + i) -= v[i];
   }
-  if (m->n_effects) {
+  if (f3r_effects_have_derivatives(m)) {
     double* dq = ws->dQ;
     double* dv = ws->dQ + (size_t)nq * (size_t)nq;
     for (size_t z = 0; z < 2 * (size_t)nq * (size_t)nq; ++z) ws->dQ[z] = 0.0;
-    for (int e = 0; e < m->n_effects; ++e) {
-      if (m->effects[e]->add_dq) m->effects[e]->add_dq(m, q, v, d, 1.0, dq, nq);
-      if (m->effects[e]->add_dv) m->effects[e]->add_dv(m, q, v, 1.0, dv, nq);
-    }
+    f3r_effects_add_derivatives(m, d, 1.0, dq, dv, nq);
     for (int j = 0; j < nq; ++j) {
       double wq = 0.0, wv = 0.0;
       for (int i = 0; i < nq; ++i) {

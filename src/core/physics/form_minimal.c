@@ -1,5 +1,5 @@
 /* The minimal-coordinate residual: independent z = (X_p, Y_p, phi_p, eta), with rho and theta
- * from the closed-form loop closure. Layout and equations: include/flex3rpr/residual.h.
+ * from the closed-form loop closure. Layout and equations: residual.h.
  *
  * Per link, the dependent block of G is G_d = [e, L n - w e], det = L = rho + l, so
  *   G_d x = V     gives  theta = (n.V)/L,  rho = e.V + w theta,
@@ -12,66 +12,102 @@
 #include "dense.h"
 #include "workspace.h"
 
-static void dependent_accelerations(const f3r_model* m, f3r_data* d);
-
-/* The position and velocity stages from the minimal state, then the full accelerations: the
- * loop closure fills rho, rho', theta' (not theta: nothing in the residual needs the angle
- * itself), and a_d = G_d^{-1} (-G_z a_z - gamma). */
-static f3r_status expand(const f3r_model* m, const double* y, const double* yp, f3r_workspace* ws) {
-  const int nz = m->n_independent;
-  f3r_data* d = &ws->data;
-  double *q = ws->q, *v = ws->v;
-  memcpy(q + F3R_Q_INDEPENDENT, y, (size_t)nz * sizeof(double));
-  memcpy(v + F3R_Q_INDEPENDENT, y + nz, (size_t)nz * sizeof(double));
-  const f3r_status st = f3r_fwd_position_closed(m, q, d);
-  if (st != F3R_OK) return st;
-  f3r_fwd_velocity_closed(m, q, v, d);
-  memcpy(d->a + F3R_Q_INDEPENDENT, yp + nz, (size_t)nz * sizeof(double));
-  dependent_accelerations(m, d);
-  return F3R_OK;
+/* The forward pass at the minimal state y: the closed stages fill rho, rho', theta' (not theta:
+ * nothing in the residual needs the angle itself). */
+static f3r_status forward(const f3r_model* m, double t, const double* y, const double* held,
+                          f3r_data* d) {
+  d->t = t;
+  d->z = y;
+  d->u = y + m->n_independent;
+  d->held = held;
+  d->lag = m->n_lag ? y + f3r_lag_index(m, F3R_FORMULATION_MINIMAL) : 0;
+  return f3r_forward(m, d, F3R_FWD_POSITION_CLOSED | F3R_FWD_VELOCITY_CLOSED | F3R_FWD_FORCES);
 }
 
-/* The dependent accelerations a_d = G_d^{-1} (-G_z a_z - gamma), with a_z given in d->a. */
-static void dependent_accelerations(const f3r_model* m, f3r_data* d) {
+/* Link i's dependent accelerations a_d = G_d^{-1} (-G_z a_z - gamma), with a_z in d->a; G_z a_z
+ * summed as f3r_data_constraint_times sums it (its zero terms of a_d drop out exactly). */
+static void link_accelerations(const f3r_model* m, int i, f3r_data* d) {
+  const f3r_link_data* k = &d->link[i];
+  const f3r_link_params* lp = &m->link[i];
   double* a = d->a;
-  for (int n = 0; n < F3R_Q_INDEPENDENT; ++n) a[n] = 0.0;
-  double rhs[F3R_NCON];
-  f3r_data_constraint_times(m, d, a, rhs); /* G_z a_z */
-  for (int c = 0; c < F3R_NCON; ++c) rhs[c] = -rhs[c] - d->gamma[c];
-  f3r_data_solve_dependent(d, rhs, a);
+  double gx = 0.0 - a[F3R_Q_X], gy = 0.0 - a[F3R_Q_Y];
+  gx += k->g_phi[0] * a[F3R_Q_PHI];
+  gy += k->g_phi[1] * a[F3R_Q_PHI];
+  if (lp->model == F3R_LINK_FIXED_FREE)
+    for (int j = 0; j < lp->modes; ++j) {
+      gx += (-lp->tip[j] * k->s) * a[lp->eta_index + j];
+      gy += (lp->tip[j] * k->c) * a[lp->eta_index + j];
+    }
+  f3r_link_solve_dependent(k, -gx - d->gamma[2 * i], -gy - d->gamma[2 * i + 1], &a[i],
+                           &a[F3R_Q_THETA + i]);
 }
 
-/* R = M a + h + k - Q; its dependent rows give the loop forces lambda = G_d^{-T} R_d, its
- * independent rows less G_z^T lambda are the reduced equations B^T R. */
-static void loop_forces(const f3r_model* m, f3r_data* d) {
+/* Link i's rows of R = M a + h + k - Q (as f3r_data_mass_times and the force stage give them),
+ * its loop force lambda_i = G_d^{-T} R_d and, into res_eta, its modal rows of the reduced
+ * equations R_eta - (G^T lambda)_eta. */
+static void link_loop_forces(const f3r_model* m, int i, f3r_data* d, double* res_eta) {
+  const f3r_link_data* k = &d->link[i];
+  const f3r_link_params* lp = &m->link[i];
+  const double mass = m->link_mass, *a = d->a;
+  const int r = i, t = F3R_Q_THETA + i, base = lp->eta_index;
   double* R = d->R;
-  f3r_data_mass_times(m, d, d->a, R);
-  for (int n = 0; n < m->nq; ++n) R[n] += d->h[n] + d->k[n] - d->Q[n];
-  f3r_data_solve_dependent_transpose(d, R, d->lambda);
+  double coupled = 0.0;
+  for (int j = 0; j < lp->modes; ++j) {
+    const int n = base + j;
+    coupled += k->m_theta_eta[j] * a[n];
+    R[n] = k->m_theta_eta[j] * a[t] + mass * a[n] + (d->h[n] + d->k[n] - d->Q[n]);
+  }
+  R[r] = mass * a[r] + k->m_rho_theta * a[t] + (d->h[r] + d->k[r] - d->Q[r]);
+  R[t] = k->m_rho_theta * a[r] + k->m_theta_theta * a[t] + coupled + (d->h[t] + d->k[t] - d->Q[t]);
+  f3r_link_solve_dependent_transpose(k, R[r], R[t], &d->lambda[2 * i], &d->lambda[2 * i + 1]);
+  const double lx = d->lambda[2 * i], ly = d->lambda[2 * i + 1];
+  if (!res_eta) return;
+  const int tip = lp->model == F3R_LINK_FIXED_FREE;
+  for (int j = 0; j < lp->modes; ++j) {
+    double gt_lambda = 0.0;
+    if (tip) gt_lambda += (-lp->tip[j] * k->s) * lx, gt_lambda += (lp->tip[j] * k->c) * ly;
+    res_eta[j] = R[base + j] - gt_lambda;
+  }
+}
+
+/* The accelerations a (a_z given in a_z), R = M a + h + k - Q, the loop forces lambda and, when
+ * res_u is not NULL, the reduced equations B^T R = R_z - G_z^T lambda, one pass per link. */
+static void reduced_equations(const f3r_model* m, f3r_data* d, const double* a_z, double* res_u) {
+  const int nz = m->n_independent;
+  double* a = d->a;
+  for (int j = 0; j < nz; ++j) a[F3R_Q_INDEPENDENT + j] = a_z[j];
+  double pose[3] = {0.0, 0.0, 0.0}; /* G_P^T lambda, summed as constraint_transpose_times */
+  /* two passes: the three links' divisions then run side by side */
+  for (int i = 0; i < 3; ++i) link_accelerations(m, i, d);
+  for (int i = 0; i < 3; ++i) {
+    link_loop_forces(m, i, d, res_u ? res_u + m->link[i].eta_index - F3R_Q_INDEPENDENT : NULL);
+    const double lx = d->lambda[2 * i], ly = d->lambda[2 * i + 1];
+    pose[0] += -1.0 * lx;
+    pose[1] += -1.0 * ly;
+    pose[2] += d->link[i].g_phi[0] * lx;
+    pose[2] += d->link[i].g_phi[1] * ly;
+  }
+  const double inertia[3] = {m->platform_mass, m->platform_mass, m->platform_inertia};
+  for (int c = 0; c < 3; ++c) {
+    const int n = F3R_Q_INDEPENDENT + c;
+    d->R[n] = inertia[c] * a[n] + (d->h[n] + d->k[n] - d->Q[n]);
+    if (res_u) res_u[c] = d->R[n] - pose[c];
+  }
 }
 
 void f3r_minimal_multipliers(const f3r_model* m, const double* yp, f3r_data* d) {
-  memcpy(d->a + F3R_Q_INDEPENDENT, yp + m->n_independent,
-         (size_t)m->n_independent * sizeof(double));
-  dependent_accelerations(m, d);
-  loop_forces(m, d);
+  reduced_equations(m, d, yp + m->n_independent, NULL);
 }
 
 f3r_status f3r_minimal_residual(const f3r_model* m, double t, const double* y, const double* yp,
                                 const double* held, double* res, f3r_workspace* ws) {
   const int nz = m->n_independent;
-  const f3r_status st = expand(m, y, yp, ws);
-  if (st != F3R_OK) return st;
   f3r_data* d = &ws->data;
+  const f3r_status st = forward(m, t, y, held, d);
+  if (st != F3R_OK) return st;
   const int lag_at = f3r_lag_index(m, F3R_FORMULATION_MINIMAL), w_at = lag_at + m->n_lag;
-  f3r_fwd_forces(m, t, held, ws->q, ws->v, m->n_lag ? y + lag_at : 0, d);
-  loop_forces(m, d);
-  const double* R = d->R;
-  f3r_data_constraint_transpose_times(m, d, d->lambda, ws->tmp);
-  for (int j = 0; j < nz; ++j) {
-    res[j] = yp[j] - y[nz + j];
-    res[nz + j] = R[F3R_Q_INDEPENDENT + j] - ws->tmp[F3R_Q_INDEPENDENT + j];
-  }
+  reduced_equations(m, d, yp + nz, res + nz);
+  for (int j = 0; j < nz; ++j) res[j] = yp[j] - y[nz + j];
   for (int i = 0; i < m->n_lag; ++i)
     res[lag_at + i] = m->lag_time_constant * yp[lag_at + i] - (d->commanded[i] - y[lag_at + i]);
   res[w_at] = yp[w_at] - d->power;
@@ -197,19 +233,21 @@ static f3r_status arrow_solve(const f3r_model* m, f3r_workspace* ws, double* b) 
   return F3R_OK;
 }
 
-/* y' of the minimal formulation. F_u is linear in u': F_u(u') = F_u(0) + K u'; likewise the
- * lag and W rows. dense: solve with K assembled whole and Cholesky (the benchmark's comparison)
- * instead of its arrow structure. */
+/* y' of the minimal formulation. F_u is linear in u': F_u(u') = F_u(0) + K u', F_u(0) from
+ * the forward pass and reduced_equations at u' = 0 (the residual's z rows are not needed);
+ * likewise the lag and W rows. dense: solve with K assembled whole and Cholesky (the
+ * benchmark's comparison) instead of its arrow structure. */
 static f3r_status minimal_rhs(const f3r_model* m, double t, const double* y, const double* held,
                               double* ydot, f3r_workspace* ws, int dense) {
+  static const double no_rate[F3R_MAX_Q]; /* u' = 0: the residual rows F_u(0) */
   const int nz = m->n_independent, ny = f3r_state_size(m, F3R_FORMULATION_MINIMAL);
-  double* zero_rate = ws->y_perturbed;
-  memset(zero_rate, 0, (size_t)ny * sizeof(double));
-  f3r_status st = f3r_minimal_residual(m, t, y, zero_rate, held, ws->res_base, ws);
+  f3r_data* d = &ws->data;
+  f3r_status st = forward(m, t, y, held, d);
   if (st != F3R_OK) return st;
-  reduced_mass_blocks(m, ws);
   double* rate = ydot + nz;
-  for (int i = 0; i < nz; ++i) rate[i] = -ws->res_base[nz + i];
+  reduced_equations(m, d, no_rate, rate);
+  for (int i = 0; i < nz; ++i) rate[i] = -rate[i];
+  reduced_mass_blocks(m, ws);
   if (dense) {
     double* K = ws->solve_work; /* nz x nz fits in the (nq + 6)^2 of the acceleration solver */
     memset(K, 0, (size_t)nz * (size_t)nz * sizeof(double));
@@ -222,9 +260,11 @@ static f3r_status minimal_rhs(const f3r_model* m, double t, const double* y, con
   }
   for (int i = 0; i < nz; ++i) ydot[i] = y[nz + i];
   const int lag_at = 2 * nz;
-  for (int i = 0; i < m->n_lag; ++i)
-    ydot[lag_at + i] = -ws->res_base[lag_at + i] / m->lag_time_constant;
-  ydot[ny - 1] = -ws->res_base[ny - 1]; /* F_W(W' = 0) = -Q.v */
+  for (int i = 0; i < m->n_lag; ++i) { /* F_lag(F_a' = 0), as the residual forms it */
+    const double res = m->lag_time_constant * 0.0 - (d->commanded[i] - y[lag_at + i]);
+    ydot[lag_at + i] = -res / m->lag_time_constant;
+  }
+  ydot[ny - 1] = -(0.0 - d->power); /* F_W(W' = 0) = -Q.v */
   return F3R_OK;
 }
 
@@ -249,35 +289,127 @@ f3r_status f3r_minimal_rhs_arrow(const f3r_model* m, double t, const double* y, 
   return minimal_rhs(m, t, y, held, ydot, ws, 0);
 }
 
-/* out (rows x nz) = X B for X (rows x nq, leading dimension rows): B is the identity on z below
- * its dependent rows Bd (6 x nz), so (X B)(:, j) = X(:, z_j) + X(:, legs) Bd(:, j). */
-static void times_B(const double* X, int rows, const double* Bd, int nz, double* out) {
+/* out (6 x nz) = X B for X (6 x nq) of the constraints' derivatives: B is the identity on z
+ * below its dependent rows Bd (6 x nz), so (X B)(:, j) = X(:, z_j) + X(:, legs) Bd(:, j), and
+ * the rows of link i reach only its own legs' columns rho_i, theta_i (the other legs' terms of
+ * the dense sum are exact zeros). */
+static void times_B_constraints(const double* X, const double* Bd, int nz, double* out) {
   for (int j = 0; j < nz; ++j)
-    for (int r = 0; r < rows; ++r) {
-      double sum = X[r + rows * (F3R_Q_INDEPENDENT + j)];
-      for (int c = 0; c < F3R_Q_LEG_JOINTS; ++c) sum += X[r + rows * c] * Bd[c + 6 * j];
-      out[r + rows * j] = sum;
-    }
+    for (int i = 0; i < 3; ++i)
+      for (int r = 2 * i; r < 2 * i + 2; ++r) {
+        double sum = X[r + 6 * (F3R_Q_INDEPENDENT + j)];
+        sum += X[r + 6 * i] * Bd[i + 6 * j];
+        sum += X[r + 6 * (F3R_Q_THETA + i)] * Bd[F3R_Q_THETA + i + 6 * j];
+        out[r + 6 * j] = sum;
+      }
 }
 
-/* J(rows0.., cols0..) += scale B^T Y for Y (nq x nz). */
-static void add_B_transpose_times(const double* Bd, const double* Y, int nq, int nz, double scale,
-                                  double* J, int ld) {
-  for (int j = 0; j < nz; ++j)
-    for (int i = 0; i < nz; ++i) {
-      double sum = Y[F3R_Q_INDEPENDENT + i + nq * j];
-      for (int c = 0; c < F3R_Q_LEG_JOINTS; ++c) sum += Bd[c + 6 * i] * Y[c + nq * j];
+/* T(:, j) += M x_j for the nz columns x_j of X (nq x nz) that are nonzero on the legs only (as
+ * f3r_data_mass_times gives it: the skipped terms are exact zeros). */
+static void add_mass_times_legs(const f3r_model* m, const int* owner, const f3r_data* d,
+                                const double* X, double* T) {
+  const int nq = m->nq;
+  const double mass = m->link_mass;
+  for (int j = 0; j < m->n_independent; ++j) {
+    const double* x = X + (size_t)nq * j;
+    double* t = T + (size_t)nq * j;
+    for (int i = 0; i < 3; ++i) {
+      if (owner[j] >= 0 && i != owner[j]) continue; /* x is zero on the other links' legs */
+      const f3r_link_data* k = &d->link[i];
+      const double xr = x[i], xt = x[F3R_Q_THETA + i];
+      t[i] += mass * xr + k->m_rho_theta * xt;
+      t[F3R_Q_THETA + i] += k->m_rho_theta * xr + k->m_theta_theta * xt;
+      for (int e = 0; e < m->link[i].modes; ++e)
+        t[m->link[i].eta_index + e] += k->m_theta_eta[e] * xt;
+    }
+  }
+}
+
+/* The nq x nq products Z and H (and the effects' dQ/dq, dQ/dv) couple each link's coordinates
+ * (rho_i, theta_i, eta_i) only among themselves, and the platform's among themselves (the terms
+ * of dynamics.c, constraints.c and effects.c; test_residual_jacobian checks the result against
+ * finite differences). So column rho_i or theta_i of X reaches link i's rows only, and
+ * o += X(:, legs) b adds, row by row in the dense sum's order, only the terms that can be
+ * nonzero (a skipped term is an exact zero). */
+static void add_leg_columns(const f3r_model* m, const double* X, const double* b, double* o) {
+  const int nq = m->nq;
+  for (int c = 0; c < F3R_Q_LEG_JOINTS; ++c) {
+    const double bc = b[c]; /* held: o may alias nothing it reads, but the compiler can't know */
+    if (bc == 0.0) continue;
+    const int i = c % 3, base = m->link[i].eta_index;
+    const double* x = X + (size_t)nq * c;
+    o[i] += x[i] * bc;
+    o[F3R_Q_THETA + i] += x[F3R_Q_THETA + i] * bc;
+    for (int j = 0; j < m->link[i].modes; ++j) o[base + j] += x[base + j] * bc;
+  }
+}
+
+/* owner[j]: the link whose modal coordinate z_j is, or -1 for the pose. A product's column of a
+ * modal coordinate of link l is nonzero on link l's rows only (its B column moves only link l's
+ * legs), so only those rows of it are formed and read. */
+static void column_owners(const f3r_model* m, int* owner) {
+  for (int j = 0; j < 3; ++j) owner[j] = -1;
+  for (int l = 0; l < 3; ++l)
+    for (int e = 0; e < m->link[l].modes; ++e)
+      owner[m->link[l].eta_index - F3R_Q_INDEPENDENT + e] = l;
+}
+
+/* out (nq x nz) = X B for X (nq x nq) of that structure; a modal column on its link's rows. */
+static void times_B_links(const f3r_model* m, const int* owner, const double* X, const double* Bd,
+                          double* out) {
+  const int nq = m->nq;
+  for (int j = 0; j < m->n_independent; ++j) {
+    double* o = out + (size_t)nq * j;
+    const double* x = X + (size_t)nq * (F3R_Q_INDEPENDENT + j);
+    const int l = owner[j];
+    if (l < 0) {
+      memcpy(o, x, (size_t)nq * sizeof(double));
+    } else {
+      o[l] = x[l];
+      o[F3R_Q_THETA + l] = x[F3R_Q_THETA + l];
+      for (int e = 0; e < m->link[l].modes; ++e)
+        o[m->link[l].eta_index + e] = x[m->link[l].eta_index + e];
+    }
+    add_leg_columns(m, X, Bd + 6 * j, o);
+  }
+}
+
+/* J(rows0.., cols0..) += scale B^T Y for Y (nq x nz) as times_B_links forms it. Column z_i of Bd
+ * is nonzero on every leg for the pose and on its own link's legs only for a modal coordinate;
+ * the rows of two different links' modal coordinates stay zero. */
+static void add_B_transpose_times(const f3r_model* m, const int* owner, const double* Bd,
+                                  const double* Y, double scale, double* J, int ld) {
+  const int nq = m->nq, nz = m->n_independent;
+  for (int j = 0; j < nz; ++j) {
+    const double* y = Y + (size_t)nq * j;
+    const int lj = owner[j];
+    for (int i = 0; i < 3; ++i) {
+      double sum;
+      if (lj < 0) {
+        sum = y[F3R_Q_INDEPENDENT + i];
+        for (int c = 0; c < F3R_Q_LEG_JOINTS; ++c) sum += Bd[c + 6 * i] * y[c];
+      } else { /* y is zero on the pose and the other links' legs */
+        sum = 0.0 + Bd[lj + 6 * i] * y[lj];
+        sum += Bd[F3R_Q_THETA + lj + 6 * i] * y[F3R_Q_THETA + lj];
+      }
       F3R_AT(J, ld, i, j) += scale * sum;
     }
+    for (int l = 0; l < 3; ++l) {
+      if (lj >= 0 && l != lj) continue;
+      for (int e = 0; e < m->link[l].modes; ++e) {
+        const int i = m->link[l].eta_index - F3R_Q_INDEPENDENT + e;
+        double sum = y[F3R_Q_INDEPENDENT + i];
+        sum += Bd[l + 6 * i] * y[l];
+        sum += Bd[F3R_Q_THETA + l + 6 * i] * y[F3R_Q_THETA + l];
+        F3R_AT(J, ld, i, j) += scale * sum;
+      }
+    }
+  }
 }
 
 /* The legs' rows of -G_d^{-1} X for each of the nz columns of X (6 x nz), into out (6 x nz). */
 static void minus_dependent_solve(const f3r_data* d, const double* X, int nz, double* out) {
-  double x[F3R_Q_LEG_JOINTS];
-  for (int j = 0; j < nz; ++j) {
-    f3r_data_solve_dependent(d, X + 6 * j, x);
-    for (int c = 0; c < F3R_Q_LEG_JOINTS; ++c) out[c + 6 * j] = -x[c];
-  }
+  f3r_data_solve_dependent(d, X, nz, -1.0, out);
 }
 
 /* The Jacobian's products, column-major, in ws->jac_work (cleared per evaluation) and ws->dQ. */
@@ -315,25 +447,45 @@ static jacobian_products jacobian_products_in(f3r_workspace* ws, int nq, int nz)
   return p;
 }
 
+/* Z and H are nonzero only in the links' blocks and at (phi_p, phi_p) (add_leg_columns): only
+ * those are cleared per evaluation; the rest was cleared when the workspace was created, and
+ * nothing writes it (the effects' dQ is zero there too). */
+static void clear_link_blocks(const f3r_model* m, double* X) {
+  const int nq = m->nq;
+  for (int i = 0; i < 3; ++i) {
+    const f3r_link_params* lp = &m->link[i];
+    int rows[2 + F3R_MAX_MODES], n = 0;
+    rows[n++] = i;
+    rows[n++] = F3R_Q_THETA + i;
+    for (int e = 0; e < lp->modes; ++e) rows[n++] = lp->eta_index + e;
+    for (int c = 0; c < n; ++c)
+      for (int r = 0; r < n; ++r) X[rows[r] + (size_t)nq * rows[c]] = 0.0;
+  }
+  X[F3R_Q_PHI + (size_t)nq * F3R_Q_PHI] = 0.0;
+}
+
 /* Z, H, dQ/dq, dQ/dv and the constraints' derivatives at the state the residual left in ws,
  * with the loop forces lambda held. */
 static void force_derivatives(const f3r_model* m, f3r_workspace* ws, const jacobian_products* p) {
   const int nq = m->nq;
   const f3r_data* d = &ws->data;
-  const double *q = ws->q, *v = ws->v, *a = d->a;
+  const double *q = d->q, *v = d->v, *a = d->a;
   double *Z = p->Z, *H = p->H, *Qq = p->Qq, *Qv = p->Qv;
-  memset(ws->jac_work, 0, (2 * (size_t)nq * nq + 18 * (size_t)nq) * sizeof(double));
-  memset(ws->dQ, 0, 2 * (size_t)nq * nq * sizeof(double));
-  for (int e = 0; e < m->n_effects; ++e) {
-    if (m->effects[e]->add_dq) m->effects[e]->add_dq(m, q, v, d, 1.0, Qq, nq);
-    if (m->effects[e]->add_dv) m->effects[e]->add_dv(m, q, v, 1.0, Qv, nq);
+  clear_link_blocks(m, Z);
+  clear_link_blocks(m, H);
+  memset(p->Gvq, 0, 18 * (size_t)nq * sizeof(double)); /* Gvq, Caq, gv */
+  const int effects = f3r_effects_have_derivatives(m);
+  if (effects) {
+    memset(ws->dQ, 0, 2 * (size_t)nq * nq * sizeof(double));
+    f3r_effects_add_derivatives(m, d, 1.0, Qq, Qv, nq);
   }
   f3r_add_mass_times_dq(m, q, a, 1.0, Z, nq);
   f3r_add_velocity_forces_dq(m, q, v, 1.0, Z, nq);
   f3r_add_elastic_forces_dq(m, 1.0, Z, nq);
   f3r_data_add_constraint_transpose_times_dq(m, d, d->lambda, -1.0, Z, nq);
   f3r_data_add_velocity_forces_dv(m, d, q, 1.0, H, nq);
-  for (size_t k = 0; k < (size_t)nq * nq; ++k) Z[k] -= Qq[k], H[k] -= Qv[k];
+  if (effects)
+    for (size_t k = 0; k < (size_t)nq * nq; ++k) Z[k] -= Qq[k], H[k] -= Qv[k];
   f3r_data_add_constraint_times_dq(m, d, v, 1.0, p->Gvq, 6);
   f3r_data_add_constraint_times_dq(m, d, a, 1.0, p->Caq, 6);
   f3r_data_add_constraint_bias_dq(m, d, v, 1.0, p->Caq, 6);
@@ -358,17 +510,19 @@ static void set_leg_rows(const double* S6, int nq, int nz, double* out) {
 static void dependent_rates(const f3r_data* d, int nq, int nz, const jacobian_products* p) {
   const double *Bd = p->Bd, *gv = p->gv, *Vz = p->Vz;
   double* S6 = p->S6;
-  memset(p->Vz, 0, 3 * (size_t)nq * nz * sizeof(double));
-  times_B(p->Gvq, 6, Bd, nz, S6);
+  times_B_constraints(p->Gvq, Bd, nz, S6);
   minus_dependent_solve(d, S6, nz, S6);
   set_leg_rows(S6, nq, nz, p->Vz);
-  times_B(gv, 6, Bd, nz, S6);
+  times_B_constraints(gv, Bd, nz, S6);
   minus_dependent_solve(d, S6, nz, S6);
   set_leg_rows(S6, nq, nz, p->Au);
-  times_B(p->Caq, 6, Bd, nz, S6);
-  for (int j = 0; j < nz; ++j) /* + dgamma/dv V_z */
-    for (int r = 0; r < 6; ++r)
-      for (int c = 0; c < F3R_Q_LEG_JOINTS; ++c) S6[r + 6 * j] += gv[r + 6 * c] * Vz[c + nq * j];
+  times_B_constraints(p->Caq, Bd, nz, S6);
+  for (int j = 0; j < nz; ++j) /* + dgamma/dv V_z: link i's rows reach its own legs only */
+    for (int r = 0; r < 6; ++r) {
+      const int i = r / 2;
+      S6[r + 6 * j] += gv[r + 6 * i] * Vz[i + nq * j];
+      S6[r + 6 * j] += gv[r + 6 * (F3R_Q_THETA + i)] * Vz[F3R_Q_THETA + i + nq * j];
+    }
   minus_dependent_solve(d, S6, nz, S6);
   set_leg_rows(S6, nq, nz, p->Az);
 }
@@ -380,21 +534,15 @@ static void add_force_blocks(const f3r_model* m, const f3r_data* d, const jacobi
   const int nq = m->nq, nz = m->n_independent;
   const double *H = p->H, *Bd = p->Bd, *Vz = p->Vz;
   double* T = p->T;
-  times_B(p->Z, nq, Bd, nz, T);
-  double Mx[F3R_MAX_Q];
-  for (int j = 0; j < nz; ++j) {
-    for (int r = 0; r < nq; ++r)
-      for (int c = 0; c < F3R_Q_LEG_JOINTS; ++c) T[r + nq * j] += H[r + nq * c] * Vz[c + nq * j];
-    f3r_data_mass_times(m, d, p->Az + (size_t)nq * j, Mx);
-    for (int r = 0; r < nq; ++r) T[r + nq * j] += Mx[r];
-  }
-  add_B_transpose_times(Bd, T, nq, nz, 1.0, &F3R_AT(J, ld, nz, 0), ld);
-  times_B(H, nq, Bd, nz, T);
-  for (int j = 0; j < nz; ++j) {
-    f3r_data_mass_times(m, d, p->Au + (size_t)nq * j, Mx);
-    for (int r = 0; r < nq; ++r) T[r + nq * j] += Mx[r];
-  }
-  add_B_transpose_times(Bd, T, nq, nz, 1.0, &F3R_AT(J, ld, nz, nz), ld);
+  int owner[F3R_MAX_Q];
+  column_owners(m, owner);
+  times_B_links(m, owner, p->Z, Bd, T);
+  for (int j = 0; j < nz; ++j) add_leg_columns(m, H, Vz + (size_t)nq * j, T + (size_t)nq * j);
+  add_mass_times_legs(m, owner, d, p->Az, T);
+  add_B_transpose_times(m, owner, Bd, T, 1.0, &F3R_AT(J, ld, nz, 0), ld);
+  times_B_links(m, owner, H, Bd, T);
+  add_mass_times_legs(m, owner, d, p->Au, T);
+  add_B_transpose_times(m, owner, Bd, T, 1.0, &F3R_AT(J, ld, nz, nz), ld);
 }
 
 /* cj dF/dy' for z (identity), u (B^T M B) and the lag states (tau, with their own 1), and
@@ -402,7 +550,7 @@ static void add_force_blocks(const f3r_model* m, const f3r_data* d, const jacobi
 static void add_rate_and_lag_blocks(const f3r_model* m, f3r_workspace* ws, double cj,
                                     const double* Bd, int w_at, double* J, int ld) {
   const int nz = m->n_independent, lag_at = 2 * nz;
-  const double* v = ws->v;
+  const double* v = ws->data.v;
   for (int j = 0; j < nz; ++j) {
     F3R_AT(J, ld, j, j) += cj;
     F3R_AT(J, ld, j, nz + j) -= 1.0;
@@ -421,11 +569,13 @@ static void add_rate_and_lag_blocks(const f3r_model* m, f3r_workspace* ws, doubl
 static void add_work_row(const f3r_model* m, const f3r_workspace* ws, double cj,
                          const jacobian_products* p, int w_at, double* J, int ld) {
   const int nq = m->nq, nz = m->n_independent;
-  const double *v = ws->v, *Qq = p->Qq, *Qv = p->Qv, *Bd = p->Bd, *Vz = p->Vz;
-  double wq[F3R_MAX_Q], wv[F3R_MAX_Q]; /* v^T dQ/dq and v^T dQ/dv + Q^T, as rows */
+  const double *v = ws->data.v, *Qq = p->Qq, *Qv = p->Qv, *Bd = p->Bd, *Vz = p->Vz;
+  double wq[F3R_MAX_Q], wv[F3R_MAX_Q];                 /* v^T dQ/dq and v^T dQ/dv + Q^T, as rows */
+  const int effects = f3r_effects_have_derivatives(m); /* without, dQ/dq and dQ/dv are zero */
   for (int c = 0; c < nq; ++c) {
     double sq = 0.0, sv = ws->data.Q[c];
-    for (int r = 0; r < nq; ++r) sq += v[r] * Qq[r + nq * c], sv += v[r] * Qv[r + nq * c];
+    if (effects)
+      for (int r = 0; r < nq; ++r) sq += v[r] * Qq[r + nq * c], sv += v[r] * Qv[r + nq * c];
     wq[c] = sq, wv[c] = sv;
   }
   for (int j = 0; j < nz; ++j) {

@@ -1,7 +1,7 @@
 /* Impacts at the cylinders' end stops (the end_stops effect). See f3r_impact in stages.h. */
 #include "dense.h"
-#include "flex3rpr/stages.h"
 #include "model_layout.h"
+#include "stages.h"
 
 size_t f3r_impact_work_size(const f3r_model* m) {
   const size_t n = (size_t)m->nq + F3R_NCON + 3;

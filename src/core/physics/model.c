@@ -228,17 +228,18 @@ double f3r_model_tip_deflection(const f3r_model* m, const double* q, int link) {
 /* The closed-form loop closure and its rates are the minimal formulation's position and
  * velocity stages (forward.c). */
 f3r_status f3r_model_close_loops(const f3r_model* m, double* q) {
-  f3r_data d = {.sincos_pairs = 0};
-  const f3r_status st = f3r_fwd_position_closed(m, q, &d);
+  f3r_data d = {.z = q + F3R_Q_INDEPENDENT};
+  const f3r_status st = f3r_forward(m, &d, F3R_FWD_POSITION_CLOSED);
   if (st != F3R_OK) return st;
+  for (int i = 0; i < 3; ++i) q[F3R_Q_RHO + i] = d.q_closed[F3R_Q_RHO + i];
   f3r_fwd_leg_angles(m, &d, q);
   return F3R_OK;
 }
 
 void f3r_model_close_loop_rates(const f3r_model* m, const double* q, double* qdot) {
-  f3r_data d = {.sincos_pairs = 0};
-  f3r_fwd_position(m, q, &d);
-  f3r_fwd_velocity_closed(m, q, qdot, &d);
+  f3r_data d = {.q = q, .u = qdot + F3R_Q_INDEPENDENT};
+  f3r_forward(m, &d, F3R_FWD_POSITION | F3R_FWD_VELOCITY_CLOSED);
+  for (int n = 0; n < F3R_Q_LEG_JOINTS; ++n) qdot[n] = d.v_closed[n];
 }
 
 void f3r_model_beam_point(const f3r_model* m, const double* q, int link, double xi,
@@ -304,9 +305,8 @@ static void symmetric_eigenvalues3(const double a[3][3], double ev[3]) {
 }
 
 double f3r_model_actuation_condition(const f3r_model* m, const double* q) {
-  f3r_data d = {.sincos_pairs = 0};
-  f3r_fwd_position(m, q, &d);
-  return f3r_data_actuation_condition(m, &d, q);
+  f3r_data d;
+  return f3r_data_actuation_condition(m, f3r_forward_at(m, q, NULL, F3R_FWD_POSITION, &d), q);
 }
 
 double f3r_data_actuation_condition(const f3r_model* m, const f3r_data* d, const double* q) {

@@ -127,9 +127,12 @@ f3r_status f3r_consistent_state(const f3r_model* m, f3r_formulation form, double
                                 double* y, double* yp, double* lambda_out, f3r_workspace* ws) {
   const int nq = m->nq, nz = m->n_independent, ny = f3r_state_size(m, form);
   f3r_data* d = &ws->data;
-  f3r_fwd_position(m, q, d);
-  f3r_fwd_velocity(m, q, v, d);
-  f3r_fwd_forces(m, t, held, q, v, lag, d);
+  d->t = t;
+  d->q = q;
+  d->v = v;
+  d->held = held;
+  d->lag = lag;
+  f3r_forward(m, d, F3R_FWD_POSITION | F3R_FWD_VELOCITY | F3R_FWD_FORCES);
   const f3r_status st = f3r_solve_accelerations(m, q, v, d->Q, d->a, d->lambda, ws->solve_work);
   if (st != F3R_OK) return st;
   if (lambda_out) memcpy(lambda_out, d->lambda, sizeof d->lambda);

@@ -3,14 +3,11 @@
 #define FLEX3RPR_WORKSPACE_H
 
 #include "data.h"
-#include "flex3rpr/residual.h"
+#include "residual.h"
 
 struct f3r_workspace {
   int nq, nz, ny;
-  f3r_data data; /* the last evaluation's forward pass */
-  /* its full coordinates, the minimal formulation's expansion; theta_i are not filled there
-   * (the stages need only the legs' directions, in data): f3r_state_to_full gives them */
-  double q[F3R_MAX_Q], v[F3R_MAX_Q];
+  f3r_data data; /* the last evaluation's forward pass: its inputs and stages */
   double tmp[F3R_MAX_Q];
   double* solve_work;  /* f3r_solve_accelerations_work_size */
   double* y_perturbed; /* ny: the zero rate of the explicit right-hand side */
@@ -25,11 +22,8 @@ struct f3r_workspace {
 };
 
 /* form: F3R_FORMULATION_DAE or F3R_FORMULATION_INDEX3 (form_dae.c serves both) */
-f3r_status f3r_dae_residual(const f3r_model* m, f3r_formulation form, double t, const double* y,
-                            const double* yp, const double* held, double* res, f3r_workspace* ws);
-f3r_status f3r_dae_jacobian(const f3r_model* m, f3r_formulation form, double t, double cj,
-                            const double* y, const double* yp, const double* held, double* J,
-                            int ld, f3r_workspace* ws);
+f3r_residual_fn f3r_dae_residual;
+f3r_jacobian_fn f3r_dae_jacobian;
 f3r_status f3r_minimal_residual(const f3r_model* m, double t, const double* y, const double* yp,
                                 const double* held, double* res, f3r_workspace* ws);
 f3r_status f3r_minimal_jacobian(const f3r_model* m, double t, double cj, const double* y,
@@ -40,11 +34,7 @@ f3r_status f3r_minimal_jacobian(const f3r_model* m, double t, double cj, const d
  * independent accelerations in yp, given the position, velocity and force stages in d. */
 void f3r_minimal_multipliers(const f3r_model* m, const double* yp, f3r_data* d);
 
-f3r_status f3r_minimal_rhs(const f3r_model* m, double t, const double* y, const double* held,
-                           double* ydot, f3r_workspace* ws);
-f3r_status f3r_minimal_rhs_dense(const f3r_model* m, double t, const double* y, const double* held,
-                                 double* ydot, f3r_workspace* ws);
-f3r_status f3r_minimal_rhs_arrow(const f3r_model* m, double t, const double* y, const double* held,
-                                 double* ydot, f3r_workspace* ws);
+/* y' with the solve chosen by size, the dense Cholesky, the arrow structure (form_minimal.c). */
+f3r_rhs_fn f3r_minimal_rhs, f3r_minimal_rhs_dense, f3r_minimal_rhs_arrow;
 
 #endif

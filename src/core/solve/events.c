@@ -4,8 +4,8 @@
 #include <math.h>
 #include <string.h>
 
-#include "flex3rpr/residual.h"
-#include "flex3rpr/stages.h"
+#include "residual.h"
+#include "stages.h"
 #include "data.h"
 
 int f3r_event_roots(const f3r_model* m, f3r_formulation form, const double* y, double* g) {

@@ -1,5 +1,5 @@
 /* A SUNLinearSolver for IDA's iteration matrix J = dF/dy + cj dF/dy' of the formulations whose
- * first nk rows are kinematic (include/flex3rpr/residual.h). Private.
+ * first nk rows are kinematic (residual.h). Private.
  *
  * With y = [k | r]:  J = [ J_kk  J_kr ]   where J_kk = cj I exactly (minimal: the rows z' - u)
  *                        [ J_rk  J_rr ]   or cj I + d(G^T mu)/dq (dae: q' - v + G^T mu).

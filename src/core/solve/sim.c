@@ -6,7 +6,8 @@
 #include <string.h>
 
 #include "flex3rpr/sim.h"
-#include "flex3rpr/stages.h"
+#include "residual.h"
+#include "stages.h"
 #include "stepper.h"
 #include "workspace.h"
 
@@ -371,9 +372,8 @@ const f3r_outputs* f3r_sim_outputs(f3r_sim* s) {
     s->stepper.yp_stale = 0;
   }
   double lag[3];
-  f3r_fwd_position(m, o->q, d);
-  f3r_fwd_velocity(m, o->q, o->v, d);
-  f3r_fwd_forces(m, s->t, s->held, o->q, o->v, lag_states(s, lag), d);
+  d->t = s->t, d->q = o->q, d->v = o->v, d->held = s->held, d->lag = lag_states(s, lag);
+  f3r_forward(m, d, F3R_FWD_POSITION | F3R_FWD_VELOCITY | F3R_FWD_FORCES | F3R_FWD_ENERGY);
   memcpy(o->forces, d->Q, (size_t)nq * sizeof(double));
   /* The actuators' share of Q on the leg joints: what the force stage applied for them (the lag
    * states, or the held force plus the scripted input it commanded), the rest is passive. */
@@ -390,13 +390,8 @@ const f3r_outputs* f3r_sim_outputs(f3r_sim* s) {
     f3r_minimal_multipliers(m, N_VGetArrayPointer(s->yp), d);
     memcpy(o->lambda, d->lambda, sizeof o->lambda);
   }
-  double Mv[F3R_MAX_Q];
-  f3r_data_mass_times(m, d, o->v, Mv);
-  o->kinetic_energy = o->potential_energy = 0.0;
-  for (int n = 0; n < nq; ++n) {
-    o->kinetic_energy += 0.5 * o->v[n] * Mv[n];
-    o->potential_energy += 0.5 * d->k[n] * o->q[n]; /* k = K eta: V = eta^T K eta / 2 */
-  }
+  o->kinetic_energy = d->kinetic;
+  o->potential_energy = d->potential;
   for (int i = 0; i < 3; ++i) {
     o->tip_deflection[i] = d->link[i].w;
     o->tip_deflection_rate[i] = d->link[i].w_dot;

@@ -1,5 +1,6 @@
 /* The model as a residual F(t, y, y') = 0 in one of three formulations, with its Jacobian
- * dF/dy + cj dF/dy'. Public so that any DAE or ODE solver can integrate the same model.
+ * dF/dy + cj dF/dy'. Private to the core, the tests, the benchmark and the peer library
+ * (flex3rpr_core_private), so that any DAE or ODE solver there can integrate the same model.
  *
  * dae (stabilised index 2, Gear-Gupta-Leimkuhler), ny = 2 nq + 13:
  *   y = [q (nq) | v (nq) | lambda (6) | mu (6) | W (1)]
@@ -42,8 +43,6 @@ typedef struct f3r_workspace f3r_workspace;
 f3r_workspace* f3r_workspace_create(const f3r_model* model);
 void f3r_workspace_destroy(f3r_workspace* ws);
 
-int f3r_state_size(const f3r_model* model, f3r_formulation form);
-
 /* sin/cos pairs the forward pass has evaluated through this workspace since its creation: a
  * counter for tests and the benchmark (one evaluation's share is the difference of two reads). */
 long f3r_workspace_sincos_pairs(const f3r_workspace* ws);
@@ -58,24 +57,31 @@ void f3r_state_kinds(const f3r_model* model, f3r_formulation form, double* id);
  * index (q, lag and W: 1; v: 2; lambda: 3). */
 void f3r_index3_variable_indices(const f3r_model* model, int* index_of, int counts[3]);
 
+/* The shapes of a residual F(t, y, y'), its Jacobian and an explicit right-hand side y' = f(t, y),
+ * which the public functions below and the formulations' own (workspace.h) share. */
+typedef f3r_status f3r_residual_fn(const f3r_model* model, f3r_formulation form, double t,
+                                   const double* y, const double* yp, const double* held,
+                                   double* res, f3r_workspace* ws);
+typedef f3r_status f3r_jacobian_fn(const f3r_model* model, f3r_formulation form, double t,
+                                   double cj, const double* y, const double* yp, const double* held,
+                                   double* J, int ld, f3r_workspace* ws);
+typedef f3r_status f3r_rhs_fn(const f3r_model* model, double t, const double* y, const double* held,
+                              double* ydot, f3r_workspace* ws);
+
 /* held: the caller's generalized forces (nq), or NULL. Returns F3R_OK, F3R_ERR_SINGULAR for a
  * configuration the loop closure cannot reach, or F3R_ERR_NONFINITE. */
-f3r_status f3r_residual(const f3r_model* model, f3r_formulation form, double t, const double* y,
-                        const double* yp, const double* held, double* res, f3r_workspace* ws);
+f3r_residual_fn f3r_residual;
 
 /* J (ny x ny, column-major, leading dimension ld) = dF/dy + cj dF/dy', exact and analytic for
  * both formulations (form_minimal.c derives the minimal one through the loop closure). */
-f3r_status f3r_residual_jacobian(const f3r_model* model, f3r_formulation form, double t, double cj,
-                                 const double* y, const double* yp, const double* held, double* J,
-                                 int ld, f3r_workspace* ws);
+f3r_jacobian_fn f3r_residual_jacobian;
 
 /* The minimal formulation as an explicit ODE y' = f(t, y), y = [z | u | W]: one residual
  * evaluation and one solve with the reduced mass B^T M B, whose blocks are assembled per link
  * (each link's modes couple only to themselves and to the platform). The solve is a dense
  * Cholesky up to 15 independent coordinates and the arrow structure above, whichever
  * f3r_microbench measured faster. For explicit integrators and ODE peers. */
-f3r_status f3r_explicit_rhs(const f3r_model* model, double t, const double* y, const double* held,
-                            double* ydot, f3r_workspace* ws);
+f3r_rhs_fn f3r_explicit_rhs;
 /* The same with the solve chosen: arrow 1 (Schur complement on the pose), 0 (dense Cholesky).
  * For the benchmark's comparison and the tests of both. */
 f3r_status f3r_explicit_rhs_solver(const f3r_model* model, int arrow, double t, const double* y,

@@ -1,5 +1,6 @@
 /* The stages the equations of motion are built from, in the redundant coordinates q of model.h.
- * Public so that another solver or formulation can assemble the same model from them.
+ * Private (flex3rpr_core_private): the tests, the benchmark and the peer library assemble the
+ * same model from them.
  *
  * Equations of motion (paper eq. 18-19, derived from eqs. 8-17, ../shared/MODEL.md):
  *   M(q) a + h(q, v) + k(q) = Q(t, q, v) + G(q)^T lambda,     g(q) = 0
@@ -21,23 +22,23 @@
 extern "C" {
 #endif
 
-#define F3R_NCON 6 /* constraints: (x, y) of the loop of each link */
+/* The two shapes most functions below share: out = a matrix at q times x (x is a, v or lambda),
+ * and scale * the derivative of such a product (x held fixed) added into A. */
+typedef void f3r_product_fn(const f3r_model* m, const double* q, const double* x, double* out);
+typedef void f3r_add_derivative_fn(const f3r_model* m, const double* q, const double* x,
+                                   double scale, double* A, int ld);
 
 /* --- inertia ------------------------------------------------------------------------------- */
 /* scale * M(q) (nq x nq) added into A. */
 void f3r_add_mass_matrix(const f3r_model* m, const double* q, double scale, double* A, int ld);
-/* out = M(q) a (nq). */
-void f3r_mass_times(const f3r_model* m, const double* q, const double* a, double* out);
-/* scale * d(M(q) a)/dq added into A (nq x nq), a held fixed. */
-void f3r_add_mass_times_dq(const f3r_model* m, const double* q, const double* a, double scale,
-                           double* A, int ld);
+/* out = M(q) a (nq); scale * d(M(q) a)/dq added into A (nq x nq), a held fixed. */
+f3r_product_fn f3r_mass_times;
+f3r_add_derivative_fn f3r_add_mass_times_dq;
 
 /* --- velocity-dependent forces h(q, v) --------------------------------------------------------- */
-void f3r_velocity_forces(const f3r_model* m, const double* q, const double* v, double* h);
-void f3r_add_velocity_forces_dq(const f3r_model* m, const double* q, const double* v, double scale,
-                                double* A, int ld);
-void f3r_add_velocity_forces_dv(const f3r_model* m, const double* q, const double* v, double scale,
-                                double* A, int ld);
+/* h (nq) at (q, v); scale * dh/dq, dh/dv (nq x nq) added into A. */
+f3r_product_fn f3r_velocity_forces;
+f3r_add_derivative_fn f3r_add_velocity_forces_dq, f3r_add_velocity_forces_dv;
 
 /* --- elastic forces k(q) = dV/dq --------------------------------------------------------------- */
 void f3r_elastic_forces(const f3r_model* m, const double* q, double* k);
@@ -51,10 +52,8 @@ void f3r_generalized_forces(const f3r_model* m, double t, const double* held, co
  * ones; lag may be NULL when the model has none. commanded (3, may be NULL) receives the command. */
 void f3r_applied_forces(const f3r_model* m, double t, const double* held, const double* q,
                         const double* v, const double* lag, double* Q, double* commanded);
-void f3r_add_generalized_forces_dq(const f3r_model* m, const double* q, const double* v,
-                                   double scale, double* A, int ld);
-void f3r_add_generalized_forces_dv(const f3r_model* m, const double* q, const double* v,
-                                   double scale, double* A, int ld);
+/* scale * dQ/dq, dQ/dv of the effects at (q, v) added into A (nq x nq). */
+f3r_add_derivative_fn f3r_add_generalized_forces_dq, f3r_add_generalized_forces_dv;
 
 /* --- constraints -------------------------------------------------------------------------------- */
 void f3r_constraints(const f3r_model* m, const double* q, double* g); /* g (6) */
@@ -62,21 +61,13 @@ void f3r_add_constraint_jacobian(const f3r_model* m, const double* q, double sca
                                  int ld); /* G (6 x nq) */
 void f3r_add_constraint_jacobian_transpose(const f3r_model* m, const double* q, double scale,
                                            double* A, int ld); /* G^T (nq x 6) */
-void f3r_constraint_times(const f3r_model* m, const double* q, const double* v, double* out);
-void f3r_constraint_transpose_times(const f3r_model* m, const double* q, const double* lambda,
-                                    double* out);
-/* d(G(q)^T lambda)/dq (nq x nq) and d(G(q) v)/dq (6 x nq). */
-void f3r_add_constraint_transpose_times_dq(const f3r_model* m, const double* q,
-                                           const double* lambda, double scale, double* A, int ld);
-void f3r_add_constraint_times_dq(const f3r_model* m, const double* q, const double* v, double scale,
-                                 double* A, int ld);
-/* gamma = (dG/dt) v, so that G a + gamma = 0 along a motion. */
-void f3r_constraint_bias(const f3r_model* m, const double* q, const double* v, double* gamma);
-/* scale * d(gamma)/dq and scale * d(gamma)/dv (6 x nq) added into A. */
-void f3r_add_constraint_bias_dq(const f3r_model* m, const double* q, const double* v, double scale,
-                                double* A, int ld);
-void f3r_add_constraint_bias_dv(const f3r_model* m, const double* q, const double* v, double scale,
-                                double* A, int ld);
+/* G(q) v (6) and G(q)^T lambda (nq); d(G(q)^T lambda)/dq (nq x nq) and d(G(q) v)/dq (6 x nq). */
+f3r_product_fn f3r_constraint_times, f3r_constraint_transpose_times;
+f3r_add_derivative_fn f3r_add_constraint_transpose_times_dq, f3r_add_constraint_times_dq;
+/* gamma = (dG/dt) v (6), so that G a + gamma = 0 along a motion; scale * d(gamma)/dq and
+ * scale * d(gamma)/dv (6 x nq) added into A. */
+f3r_product_fn f3r_constraint_bias;
+f3r_add_derivative_fn f3r_add_constraint_bias_dq, f3r_add_constraint_bias_dv;
 
 /* --- energy ------------------------------------------------------------------------------------- */
 double f3r_kinetic_energy(const f3r_model* m, const double* q, const double* v);
