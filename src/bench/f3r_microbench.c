@@ -22,7 +22,7 @@
 
 /* weak: absent from cores built before the forward pass */
 extern long f3r_workspace_sincos_pairs(const f3r_workspace* ws) __attribute__((weak));
-extern f3r_status f3r_explicit_rhs_solver(const f3r_model* model, int arrow, double t,
+extern f3r_status f3r_explicit_rhs_solver(const f3r_model* model, int structured, double t,
                                           const double* y, const double* held, double* ydot,
                                           f3r_workspace* ws) __attribute__((weak));
 
@@ -125,7 +125,7 @@ static f3r_scene bench_scene(int modes) {
   return s;
 }
 
-/* ns per explicit right-hand side (minimal) into rhs, and with the arrow / dense Cholesky solver
+/* ns per explicit right-hand side (minimal) into rhs, and with the low-rank / dense Cholesky solver
  * into rhs_dense ("n/a" when the core lacks f3r_explicit_rhs_solver). */
 static double time_explicit_rhs(const f3r_model* m, const double* y, double* res, f3r_workspace* ws,
                                 long reps, char* rhs, char* rhs_dense, size_t size) {
@@ -210,7 +210,7 @@ int main(int argc, char** argv) {
   const int modes[] = {1, 3, 8, 20};
   printf(
       "| modes per link | formulation | state size | residual (ns) | Jacobian (ns) | explicit RHS "
-      "(ns) | explicit RHS, arrow / dense Cholesky (ns) | sin/cos pairs per residual |\n");
+      "(ns) | explicit RHS, low-rank / dense Cholesky (ns) | sin/cos pairs per residual |\n");
   printf("|---:|---|---:|---:|---:|---:|---:|---:|\n");
   for (int k = 0; k < 4; ++k) {
     const f3r_scene s = bench_scene(modes[k]);

@@ -98,10 +98,10 @@ f3r_status f3r_explicit_rhs(const f3r_model* m, double t, const double* y, const
   return check_finite(ydot, f3r_state_size(m, F3R_FORMULATION_MINIMAL));
 }
 
-f3r_status f3r_explicit_rhs_solver(const f3r_model* m, int arrow, double t, const double* y,
+f3r_status f3r_explicit_rhs_solver(const f3r_model* m, int structured, double t, const double* y,
                                    const double* held, double* ydot, f3r_workspace* ws) {
-  const f3r_status st = arrow ? f3r_minimal_rhs_arrow(m, t, y, held, ydot, ws)
-                              : f3r_minimal_rhs_dense(m, t, y, held, ydot, ws);
+  const f3r_status st = structured ? f3r_minimal_rhs(m, t, y, held, ydot, ws)
+                                   : f3r_minimal_rhs_dense(m, t, y, held, ydot, ws);
   if (st != F3R_OK) return st;
   return check_finite(ydot, f3r_state_size(m, F3R_FORMULATION_MINIMAL));
 }

@@ -76,16 +76,17 @@ f3r_residual_fn f3r_residual;
  * both formulations (form_minimal.c derives the minimal one through the loop closure). */
 f3r_jacobian_fn f3r_residual_jacobian;
 
-/* The minimal formulation as an explicit ODE y' = f(t, y), y = [z | u | W]: one residual
- * evaluation and one solve with the reduced mass B^T M B, whose blocks are assembled per link
- * (each link's modes couple only to themselves and to the platform). The solve is a dense
- * Cholesky up to 15 independent coordinates and the arrow structure above, whichever
- * f3r_microbench measured faster. For explicit integrators and ODE peers. */
+/* The minimal formulation as an explicit ODE y' = f(t, y), y = [z | u | W]: the forward pass,
+ * the reduced equations at u' = 0, and one solve with the reduced mass K = B^T M B. K is never
+ * formed: each link's modal block is m I plus a rank-2 term and couples to the pose through
+ * rank 2 (form_minimal.c), so the solve costs O(r) a link. For explicit integrators and ODE
+ * peers. */
 f3r_rhs_fn f3r_explicit_rhs;
-/* The same with the solve chosen: arrow 1 (Schur complement on the pose), 0 (dense Cholesky).
- * For the benchmark's comparison and the tests of both. */
-f3r_status f3r_explicit_rhs_solver(const f3r_model* model, int arrow, double t, const double* y,
-                                   const double* held, double* ydot, f3r_workspace* ws);
+/* The same with the solve chosen: structured 1 (the low-rank solve above), 0 (K assembled and
+ * factored by a dense Cholesky). For the benchmark's comparison and the tests of both. */
+f3r_status f3r_explicit_rhs_solver(const f3r_model* model, int structured, double t,
+                                   const double* y, const double* held, double* ydot,
+                                   f3r_workspace* ws);
 
 /* Full coordinates q, v (nq each) of a state y. */
 f3r_status f3r_state_to_full(const f3r_model* model, f3r_formulation form, const double* y,

@@ -16,7 +16,6 @@ struct f3r_workspace {
   double mass_pp[9];                                /* platform, 3 x 3 */
   double mass_pe[3][3 * F3R_MAX_MODES];             /* link i's modes with the platform, 3 x r_i */
   double mass_ee[3][F3R_MAX_MODES * F3R_MAX_MODES]; /* link i's modes, r_i x r_i */
-  double arrow_w[3][4 * F3R_MAX_MODES]; /* the arrow solve's D_i^{-1} [K_Pe_i^T | b_i] */
   double* jac_work; /* the minimal Jacobian's products: 2 nq^2 + 18 nq + 4 nq nz + 12 nz */
   double* dQ;       /* 2 nq x nq: dQ/dq and dQ/dv of the effects */
 };
@@ -34,7 +33,7 @@ f3r_status f3r_minimal_jacobian(const f3r_model* m, double t, double cj, const d
  * independent accelerations in yp, given the position, velocity and force stages in d. */
 void f3r_minimal_multipliers(const f3r_model* m, const double* yp, f3r_data* d);
 
-/* y' with the solve chosen by size, the dense Cholesky, the arrow structure (form_minimal.c). */
-f3r_rhs_fn f3r_minimal_rhs, f3r_minimal_rhs_dense, f3r_minimal_rhs_arrow;
+/* y' with K's low-rank structure, and with K assembled and factored whole (form_minimal.c). */
+f3r_rhs_fn f3r_minimal_rhs, f3r_minimal_rhs_dense;
 
 #endif
