@@ -30,8 +30,8 @@ extern "C" {
 enum { F3R_SHAPE_TIP_FORCE = 1, F3R_SHAPE_UNIFORM_LOAD = 2, F3R_SHAPE_LINEAR_LOAD = 4 };
 
 /* A shape is dropped when its residual is this small against the shape, in mass norm:
- * ||t_k|| / ||s_k|| < 1e-6. The constants lose about 1e-16 / (that ratio) relative to rounding
- * (cancellation in t_k = s_k - sum C psi), so the kept functions stay accurate to ~1e-10. */
+ * ||t_k|| / ||s_k|| < 1e-6 (the research note's tolerance). The functions lose about
+ * eps / (that ratio) to the cancellation in t_k = s_k - sum C psi. */
 #define F3R_SHAPE_DROP_RATIO 1e-6
 
 typedef struct {
@@ -46,8 +46,11 @@ typedef struct {
   double first_moment[F3R_MAX_MODES]; /* int xi phi_j */
   double tip[F3R_MAX_MODES];          /* phi_j(1): exactly 0 for fixed-pinned */
   double residual_ratio[3];           /* ||t_k|| / ||s_k|| (mass norm) of each kept shape */
-  double V[3][3];                     /* phi_{r+m} = sum_k V[k][m] s_k - sum_j CV[j][m] psi_j */
-  double CV[F3R_MAX_MODES][3];
+  /* phi_{r+m} = sum_k V[k][m] s_k - sum_j CV[j][m] psi_j. Long double: |CV| reaches |s|/|t|
+   * (1e5 at r = 3), and its double rounding alone left int phi psi_1 at 1e-10 (r = 3, three
+   * shapes) against 2e-13 in long double (x86-64's 64-bit mantissa). */
+  long double V[3][3];
+  long double CV[F3R_MAX_MODES][3];
 } f3r_beam_basis;
 
 /* Builds the basis of `modes` paper modes plus the orthogonalised static shapes in shape_set
