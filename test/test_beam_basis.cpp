@@ -233,19 +233,33 @@ TEST(BeamBasis, OrthonormalWithDiagonalStiffness) {
       }
 }
 
-TEST(BeamBasis, OrthonormalAtTenModes) {
+// r = 6..20 (as far as r plus the shapes fit): the build drops the shapes whose residual is below
+// 1e-6 of themselves, so the cancellation stays bounded. Measured worst over r and sets: 4.4e-13
+// and 3.0e-14 (fixed-pinned); at r = 10, 4.2e-13 and 1.3e-14.
+TEST(BeamBasis, OrthonormalUpToTwentyFunctions) {
   for (auto end : kEnds)
     for (unsigned set : ShapeSets(end)) {
-      f3r_beam_basis b;
-      ASSERT_EQ(f3r_beam_basis_build(end, 10, set, &b), 0);
-      const Orthogonality o = Check(b);
-      std::printf(
-          "end %d r 10 set %u: shapes %d, min ratio %.1e, max|M - I| %.1e, "
-          "max|K - diag|/k %.1e\n",
-          end, set, b.shapes, MinRatio(b), o.mass, o.bending);
-      // |t| / |s| down to 1.1e-6 here: measured 4.2e-13 and 1.3e-14
-      EXPECT_LT(o.mass, 5e-12) << "end " << end << " set " << set;
-      EXPECT_LT(o.bending, 5e-13) << "end " << end << " set " << set;
+      Orthogonality worst;
+      int last = 0;
+      for (int r = 6; r <= F3R_MAX_MODES; ++r) {
+        f3r_beam_basis b;
+        const int asked = (set & 1) + (set >> 1 & 1) + (set >> 2 & 1);
+        ASSERT_EQ(f3r_beam_basis_build(end, r, set, &b), r + asked <= F3R_MAX_MODES ? 0 : -1);
+        if (r + asked > F3R_MAX_MODES) continue;
+        last = r;
+        const Orthogonality o = Check(b);
+        EXPECT_LT(o.mass, 2e-12) << "end " << end << " r " << r << " set " << set;
+        EXPECT_LT(o.bending, 2e-13) << "end " << end << " r " << r << " set " << set;
+        worst.mass = std::max(worst.mass, o.mass);
+        worst.bending = std::max(worst.bending, o.bending);
+        if (r == 10)
+          std::printf(
+              "end %d r 10 set %u: shapes %d, min ratio %.1e, max|M - I| %.1e, "
+              "max|K - diag|/k %.1e\n",
+              end, set, b.shapes, MinRatio(b), o.mass, o.bending);
+      }
+      std::printf("end %d set %u, r = 6..%d: max|M - I| %.1e, max|K - diag|/k %.1e\n", end, set,
+                  last, worst.mass, worst.bending);
     }
 }
 
