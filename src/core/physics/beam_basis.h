@@ -48,7 +48,8 @@ typedef struct {
   double residual_ratio[3];           /* ||t_k|| / ||s_k|| (mass norm) of each kept shape */
   /* phi_{r+m} = sum_k V[k][m] s_k - sum_j CV[j][m] psi_j. Long double: |CV| reaches |s|/|t|
    * (1e5 at r = 3), and its double rounding alone left int phi psi_1 at 1e-10 (r = 3, three
-   * shapes) against 2e-13 in long double (x86-64's 64-bit mantissa). */
+   * shapes) against 2e-13 in long double (x86-64's 64-bit mantissa; aarch64 Linux's is quad).
+   * Where long double is double (MSVC, Apple arm64) the basis is good to ~1e-10 only. */
   long double V[3][3];
   long double CV[F3R_MAX_MODES][3];
 } f3r_beam_basis;
