@@ -359,17 +359,14 @@ typedef struct {
   double cpu_total, cpu_integrating, cpu_outputs;
 } run_stats;
 
-/* The mode shapes of every link at its beam_points stations (beam_points <= 101). */
+/* The basis functions of every link at its beam_points stations (beam_points <= 101). */
 static void eval_mode_shapes(const f3r_model* model, int beam_points,
                              double shapes[3][101][F3R_MAX_MODES]) {
   for (int i = 0; i < 3; ++i) {
     const f3r_link_params* lp = f3r_model_link(model, i);
     for (int k = 0; k < beam_points; ++k)
-      for (int j = 0; j < lp->modes; ++j) {
-        double dpsi;
-        f3r_beam_mode_eval((f3r_beam_end)lp->model, lp->alpha[j], (double)k / (beam_points - 1),
-                           &shapes[i][k][j], &dpsi, NULL);
-      }
+      for (int j = 0; j < lp->modes; ++j)
+        f3r_model_link_shape(model, i, j, (double)k / (beam_points - 1), &shapes[i][k][j], NULL);
   }
 }
 
@@ -453,6 +450,9 @@ static void print_summary(const cli_options* o, const f3r_scene* scene, const f3
     printf("butcher table       %s\n", scene->table[0] ? scene->table : "default");
   if (scene->integrator == F3R_INTEGRATOR_IDA) printf("max BDF order       %d\n", scene->max_order);
   printf("sundials            %s, %s\n", SUNDIALS_VERSION, F3R_SUNDIALS_BUILD);
+  char basis[3][96];
+  for (int i = 0; i < 3; ++i) f3r_model_link_basis_name(model, i, basis[i], sizeof basis[i]);
+  printf("links               %s; %s; %s\n", basis[0], basis[1], basis[2]);
   printf("state dimension     %d (nq %d)\n", f3r_state_size(model, scene->formulation),
          f3r_model_nq(model));
   printf("simulated time      %.6g s\n", out->t);

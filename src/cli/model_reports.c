@@ -28,8 +28,11 @@ void f3r_cli_print_geometry(const f3r_model* model) {
       "\"cylinder_outer_diameter\": %.17g,"
       " \"cylinder_mass\": %.17g,\n",
       g.cylinder_length, s->cylinder_inner_diameter, s->cylinder_outer_diameter, g.cylinder_mass);
-  printf(" \"stroke_min\": %.17g, \"stroke_max\": %.17g, \"end_stops\": %s}\n", g.stroke_min,
+  printf(" \"stroke_min\": %.17g, \"stroke_max\": %.17g, \"end_stops\": %s,\n", g.stroke_min,
          g.stroke_max, g.end_stops ? "true" : "false");
+  char basis[3][96];
+  for (int i = 0; i < 3; ++i) f3r_model_link_basis_name(model, i, basis[i], sizeof basis[i]);
+  printf(" \"link_basis\": [\"%s\", \"%s\", \"%s\"]}\n", basis[0], basis[1], basis[2]);
 }
 
 int f3r_cli_run_modal(const f3r_model* m) {
@@ -41,6 +44,10 @@ int f3r_cli_run_modal(const f3r_model* m) {
     return 1;
   }
   printf("# linearised natural frequencies of the constrained system at the initial pose (Hz)\n");
+  for (int i = 0; i < 3; ++i) {
+    char basis[96];
+    printf("# links[%d]: %s\n", i, f3r_model_link_basis_name(m, i, basis, sizeof basis));
+  }
   for (int k = 0; k < count; ++k) printf("%d %.6f\n", k + 1, hz[k]);
   return 0;
 }
