@@ -35,6 +35,7 @@ typedef struct {
   const char* scene_path;
   const char* out_path;
   int modal;
+  const char* modal_csv; /* --modal-csv FILE: the frequencies as CSV, to 17 digits */
   int geometry;
   int check;
   int fd_jacobian;
@@ -64,7 +65,7 @@ static void usage(FILE* to) {
       "                    [--stop-at-outputs] [--hold T:INDEX:VALUE ...]\n"
       "                    [--accuracy METRES] [--linear-path FILE.csv] [--linearise FILE.mat]\n"
       "                    [--set FIELD=VALUE ...]   (any scene field: --set links[0].modes=4)\n"
-      "       flex3rpr_sim --modal SCENE.yaml\n"
+      "       flex3rpr_sim --modal SCENE.yaml [--modal-csv FILE.csv] [--set FIELD=VALUE ...]\n"
       "       flex3rpr_sim --geometry SCENE.yaml\n"
       "       flex3rpr_sim --check SCENE.yaml [--set FIELD=VALUE ...]   (load and build only)\n");
 }
@@ -104,6 +105,7 @@ static const option_field paths[] = {
     {"--out", offsetof(cli_options, out_path)},
     {"--linear-path", offsetof(cli_options, linear_path)},
     {"--linearise", offsetof(cli_options, linearise_path)},
+    {"--modal-csv", offsetof(cli_options, modal_csv)},
     {"--formulation", offsetof(cli_options, formulation)},
 };
 static const option_field numbers[] = {
@@ -526,7 +528,7 @@ static int describe_model(const cli_options* o, const f3r_model* model) {
 static int analyse(const cli_options* o, const f3r_model* model) {
   if (o->linear_path) return f3r_cli_write_linear_path(model, o->linear_path);
   if (o->linearise_path) return f3r_cli_write_state_space(model, o->linearise_path);
-  if (o->modal) return f3r_cli_run_modal(model);
+  if (o->modal || o->modal_csv) return f3r_cli_run_modal(model, o->modal_csv);
   return -1;
 }
 
