@@ -4,7 +4,8 @@
  *   q[0..2] rho_i   stroke |A_i B_i| (m)
  *   q[3..5] theta_i direction of leg i from +X at A_i (rad)
  *   q[6..8] X_p, Y_p, phi_p platform pose (m, m, rad)
- *   q[9..]  eta of link 1 (link_modes[0] values), then link 2, then link 3 (m)
+ *   q[9..]  eta of link 1 (link[0].modes values: its r modes, then its static shapes), then
+ *           link 2, then link 3 (m)
  * A rigid link contributes no modal coordinates. */
 #ifndef FLEX3RPR_MODEL_H
 #define FLEX3RPR_MODEL_H
