@@ -108,7 +108,7 @@ static f3r_status fill_link_constants(f3r_model* m, int i, double* room, f3r_err
   f3r_beam_basis* b = &m->basis[i];
   if (f3r_beam_basis_build((f3r_beam_end)lp->model, L->modes, correction_shapes(L), b))
     return f3r_error_set(err, F3R_ERR_SCENE, "links[%d].modes: %d is out of range 1..%d", i,
-                         L->modes, F3R_MAX_MODES - f3r_link_static_shapes(lp->model));
+                         L->modes, F3R_MAX_MODES - (f3r_link_scene_functions(L) - L->modes));
   lp->modes = b->count;
   lp->static_shapes = b->shapes;
   double** arrays[] = {&lp->alpha, &lp->mean,      &lp->first_moment,
