@@ -4,6 +4,7 @@
 
 #include <cstdio>
 #include <fstream>
+#include <iterator>
 
 #include "flex3rpr/modal.h"
 #include "test_support.h"
@@ -218,4 +219,58 @@ TEST(StaticCorrection, DrivenRunKeepsEnergyBalanceAndFormulationsAgree) {
   for (size_t k = 0; k < xy[0].size(); ++k)
     worst = std::max(worst, std::hypot(xy[0][k][0] - xy[1][k][0], xy[0][k][1] - xy[1][k][1]));
   EXPECT_LE(worst, 1e-8) << "dae against minimal";
+}
+
+// The CLI's --modal-csv, which scripts/basis_convergence reads: the frequencies of the public
+// modal API to 17 digits and each link's basis; --geometry names it too.
+TEST(StaticCorrection, CliWritesTheFrequenciesAndNamesTheBasis) {
+  const std::string csv = ::testing::TempDir() + "sc_modal.csv", out = csv + ".txt";
+  const std::string cmd = std::string(F3R_CLI) + " " + ScenePath("paper_sim3_fixed_free.yaml") +
+                          " --set links.modes=2 --set links[1].static_correction=true" +
+                          " --modal-csv " + csv + " > " + out;
+  ASSERT_EQ(std::system(cmd.c_str()), 0) << cmd;
+  f3r_scene s = Sim3(2, false);
+  s.links[1].static_correction = 1;
+  auto m = MakeModel(s);
+  double hz[F3R_MAX_Q];
+  int count = 0;
+  f3r_error err{};
+  ASSERT_EQ(f3r_modal_frequencies(m.get(), hz, &count, &err), F3R_OK) << err.message;
+  std::ifstream in(csv);
+  std::string line;
+  std::getline(in, line);
+  EXPECT_EQ(line,
+            "mode,hz,link_1_modes,link_1_static_shapes,link_2_modes,link_2_static_shapes,"
+            "link_3_modes,link_3_static_shapes");
+  int rows = 0;
+  while (std::getline(in, line)) {
+    int k = 0, counts[6] = {0};
+    double f = 0.0;
+    ASSERT_EQ(std::sscanf(line.c_str(), "%d,%lf,%d,%d,%d,%d,%d,%d", &k, &f, &counts[0], &counts[1],
+                          &counts[2], &counts[3], &counts[4], &counts[5]),
+              8)
+        << line;
+    EXPECT_NEAR(f, hz[rows], 1e-12 * (1.0 + hz[rows])) << line;
+    EXPECT_EQ(counts[0], 2);
+    EXPECT_EQ(counts[1], 0);
+    EXPECT_EQ(counts[2], 2);
+    EXPECT_EQ(counts[3], 3);
+    ++rows;
+  }
+  EXPECT_EQ(rows, count);
+  std::ifstream text(out);
+  const std::string printed((std::istreambuf_iterator<char>(text)),
+                            std::istreambuf_iterator<char>());
+  EXPECT_NE(printed.find("# links[1]: fixed_free, 2 modes + 3 static shapes"), std::string::npos)
+      << printed;
+  const std::string geometry = std::string(F3R_CLI) + " --geometry " +
+                               ScenePath("paper_sim3_fixed_free.yaml") +
+                               " --set links[0].static_correction=true > " + out;
+  ASSERT_EQ(std::system(geometry.c_str()), 0);
+  std::ifstream g(out);
+  const std::string json((std::istreambuf_iterator<char>(g)), std::istreambuf_iterator<char>());
+  EXPECT_NE(json.find("\"link_basis\": [\"fixed_free, 3 modes + 3 static shapes\", "
+                      "\"fixed_free, 3 modes\", \"fixed_free, 3 modes\"]"),
+            std::string::npos)
+      << json;
 }
