@@ -174,6 +174,15 @@ TEST(StaticCorrection, InvalidUsesAreErrorsNamingTheField) {
   }
   f3r_scene s;
   f3r_error err{};
+  // At r = 8 a fixed-free link drops the linear-load shape: its initial value has no function.
+  f3r_scene dropped = Sim3(8, true);
+  dropped.links[2].eta0[10] = 1e-6;
+  f3r_model* m = nullptr;
+  EXPECT_NE(f3r_model_create(&dropped, &m, &err), F3R_OK);
+  f3r_model_destroy(m);
+  EXPECT_NE(std::string(err.message).find("links[2].initial_deflection[10]: the link keeps 10"),
+            std::string::npos)
+      << err.message;
   const std::string rigid = WriteTemp("sc_rigid.yaml", "links: {model: rigid}\n");
   EXPECT_NE(LoadWith(rigid, {"links[2].static_correction=true"}, &s, &err), F3R_OK);
   EXPECT_NE(std::string(err.message).find("links[2].static_correction"), std::string::npos)

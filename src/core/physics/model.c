@@ -111,6 +111,13 @@ static f3r_status fill_link_constants(f3r_model* m, int i, double* room, f3r_err
                          L->modes, F3R_MAX_MODES - (f3r_link_scene_functions(L) - L->modes));
   lp->modes = b->count;
   lp->static_shapes = b->shapes;
+  for (int j = b->count; j < f3r_link_scene_functions(L); ++j)
+    if (L->eta0[j] != 0.0 || L->eta_rate0[j] != 0.0)
+      return f3r_error_set(err, F3R_ERR_SCENE,
+                           "links[%d].initial_deflection[%d]: the link keeps %d functions (%d "
+                           "modes + %d static shapes): at %d modes the residual of a shape falls "
+                           "under %g of it and the shape is dropped",
+                           i, j, b->count, b->modes, b->shapes, b->modes, F3R_SHAPE_DROP_RATIO);
   double** arrays[] = {&lp->alpha, &lp->mean,      &lp->first_moment,
                        &lp->tip,   &lp->stiffness, &lp->omega_clamped};
   for (int a = 0; a < 6; ++a, room += lp->modes) *arrays[a] = room;
