@@ -4,7 +4,8 @@
 #include <math.h>
 #include <string.h>
 
-#include "flex3rpr/beam_modes.h" /* f3r_beam_mode_eval, f3r_gauss_legendre */
+#include "flex3rpr/beam_modes.h" /* f3r_gauss_legendre */
+#include "beam_basis.h"          /* f3r_beam_basis_eval */
 
 #define PANELS 24
 #define POINTS 8
@@ -33,7 +34,8 @@ static void deflection(const f3r_model* m, int i, const double* q, const double*
   if (wxx) *wxx = 0.0;
   for (int j = 0; j < lp->modes; ++j) {
     double psi, ddpsi;
-    f3r_beam_mode_eval((f3r_beam_end)lp->model, lp->alpha[j], xi, &psi, NULL, &ddpsi);
+    /* the paper's modes (f3r_beam_mode_eval) for j < r, the static shapes' closed forms after */
+    f3r_beam_basis_eval(&m->basis[i], j, xi, &psi, NULL, &ddpsi);
     *w += psi * q[lp->eta_index + j];
     if (wd) *wd += psi * qd[lp->eta_index + j];
     if (wxx) *wxx += ddpsi * q[lp->eta_index + j] / (m->link_length * m->link_length);

@@ -2,7 +2,8 @@
  * T is integrated by quadrature over the beam's velocity field (paper eq. 9, or, with exact
  * kinematics, the complex-step derivative of the beam point positions r(x; q)), V by quadrature
  * of EI w''^2; the equations come from finite differences of T and V. Only the model's constants
- * and f3r_beam_mode_eval are shared with the code under test. */
+ * and f3r_beam_basis_eval (the mode shapes and the static shapes) are shared with the code under
+ * test. */
 #ifndef FLEX3RPR_TEST_INDEPENDENT_LAGRANGIAN_H
 #define FLEX3RPR_TEST_INDEPENDENT_LAGRANGIAN_H
 

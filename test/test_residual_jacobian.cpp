@@ -102,7 +102,10 @@ INSTANTIATE_TEST_SUITE_P(
                       Case{"paper_sim3_fixed_free.yaml", F3R_FORMULATION_MINIMAL, true, 1e-6},
                       Case{"test/scenes/all_effects.yaml", F3R_FORMULATION_MINIMAL, true, 1e-6},
                       Case{"paper_sim3_fixed_free.yaml", F3R_FORMULATION_INDEX3, false, 1e-6},
-                      Case{"test/scenes/all_effects.yaml", F3R_FORMULATION_INDEX3, true, 1e-6}));
+                      Case{"test/scenes/all_effects.yaml", F3R_FORMULATION_INDEX3, true, 1e-6},
+                      Case{"test/scenes/sim3_corrected.yaml", F3R_FORMULATION_DAE, false, 1e-6},
+                      Case{"test/scenes/sim3_corrected.yaml", F3R_FORMULATION_MINIMAL, true, 1e-6},
+                      Case{"test/scenes/sim3_corrected.yaml", F3R_FORMULATION_INDEX3, true, 1e-6}));
 
 // The peers' index-3 form: a state made consistent by the constrained solve (LU of
 // [M -G^T; G 0]) zeroes every row, and the variables are counted by index as MEBDFI wants them.

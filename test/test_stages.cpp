@@ -19,19 +19,26 @@ struct LinkCase {
   const char* name;
   f3r_link_model a, b, c;
   int ra, rb, rc;
+  int corrected;  // links.static_correction on every flexible link
 };
 
 const LinkCase kCases[] = {
-    {"rigid", F3R_LINK_RIGID, F3R_LINK_RIGID, F3R_LINK_RIGID, 0, 0, 0},
+    {"rigid", F3R_LINK_RIGID, F3R_LINK_RIGID, F3R_LINK_RIGID, 0, 0, 0, 0},
     {"fixed_pinned_r3", F3R_LINK_FIXED_PINNED, F3R_LINK_FIXED_PINNED, F3R_LINK_FIXED_PINNED, 3, 3,
-     3},
-    {"fixed_free_r3", F3R_LINK_FIXED_FREE, F3R_LINK_FIXED_FREE, F3R_LINK_FIXED_FREE, 3, 3, 3},
-    {"mixed", F3R_LINK_RIGID, F3R_LINK_FIXED_PINNED, F3R_LINK_FIXED_FREE, 0, 2, 5},
-    {"fixed_free_r8", F3R_LINK_FIXED_FREE, F3R_LINK_FIXED_FREE, F3R_LINK_FIXED_FREE, 8, 8, 8},
+     3, 0},
+    {"fixed_free_r3", F3R_LINK_FIXED_FREE, F3R_LINK_FIXED_FREE, F3R_LINK_FIXED_FREE, 3, 3, 3, 0},
+    {"mixed", F3R_LINK_RIGID, F3R_LINK_FIXED_PINNED, F3R_LINK_FIXED_FREE, 0, 2, 5, 0},
+    {"fixed_free_r8", F3R_LINK_FIXED_FREE, F3R_LINK_FIXED_FREE, F3R_LINK_FIXED_FREE, 8, 8, 8, 0},
+    // the static shapes: the independent Lagrangian integrates their closed forms itself
+    {"fixed_free_r1_corrected", F3R_LINK_FIXED_FREE, F3R_LINK_FIXED_FREE, F3R_LINK_FIXED_FREE, 1, 1,
+     1, 1},
+    {"mixed_corrected", F3R_LINK_RIGID, F3R_LINK_FIXED_PINNED, F3R_LINK_FIXED_FREE, 0, 2, 3, 1},
 };
 
 ModelPtr CaseModel(const LinkCase& c, bool exact) {
-  return MakeModel(SceneWithLinks(c.a, c.ra, c.b, c.rb, c.c, c.rc, exact));
+  f3r_scene s = SceneWithLinks(c.a, c.ra, c.b, c.rb, c.c, c.rc, exact);
+  for (int i = 0; i < 3; ++i) s.links[i].static_correction = c.corrected && s.links[i].modes > 0;
+  return MakeModel(s);
 }
 
 // Dense column-major matrix from an add-into function.
@@ -223,7 +230,7 @@ TEST_P(StagesTest, InertiaAndForceDerivativesMatchFiniteDifferences) {
 }
 
 INSTANTIATE_TEST_SUITE_P(AllLinkModels, StagesTest,
-                         ::testing::Combine(::testing::Range(0, 5), ::testing::Bool()));
+                         ::testing::Combine(::testing::Range(0, 7), ::testing::Bool()));
 
 TEST(Stages, AppendixCorrectionOfModalCoriolisForce) {
   // The paper's appendix prints F_c_eta = +rho' th' int psi; the derivation gives

@@ -4,7 +4,8 @@
  *   q[0..2] rho_i   stroke |A_i B_i| (m)
  *   q[3..5] theta_i direction of leg i from +X at A_i (rad)
  *   q[6..8] X_p, Y_p, phi_p platform pose (m, m, rad)
- *   q[9..]  eta of link 1 (link_modes[0] values), then link 2, then link 3 (m)
+ *   q[9..]  eta of link 1 (link[0].modes values: its r modes, then its static shapes), then
+ *           link 2, then link 3 (m)
  * A rigid link contributes no modal coordinates. */
 #ifndef FLEX3RPR_MODEL_H
 #define FLEX3RPR_MODEL_H
@@ -22,9 +23,13 @@ extern "C" {
  * link. */
 typedef struct {
   f3r_link_model model;
-  int modes;             /* r_i (chosen by the model when the scene says auto) */
-  int eta_index;         /* index of this link's first modal coordinate in q */
-  double* alpha;         /* roots of the frequency equation */
+  int modes;         /* modal coordinates: r_i paper modes (chosen above the model when the
+                          * scene says auto), then static_shapes correction shapes */
+  int static_shapes; /* links.static_correction's orthogonalised static shapes (0 without) */
+  int eta_index;     /* index of this link's first modal coordinate in q */
+  /* psi_j: function j of the link's basis, mass-orthonormal (int psi_i psi_j = delta_ij) with
+   * a diagonal stiffness; the paper's modes first, then the static shapes (beam_basis.h) */
+  double* alpha;         /* roots of the frequency equation; (int psi_j''^2)^(1/4) of a shape */
   double* mean;          /* int_0^1 psi_j dxi */
   double* first_moment;  /* int_0^1 xi psi_j dxi */
   double* tip;           /* psi_j(1): 0 for fixed-pinned */
@@ -85,6 +90,16 @@ void f3r_model_close_loop_rates(const f3r_model* model, const double* q, double*
  * the world and tangent angle of the deflected centre line, and the deflection w there. */
 void f3r_model_beam_point(const f3r_model* model, const double* q, int link, double xi,
                           double position[2], double* tangent_angle, double* deflection);
+
+/* Function j (0 .. modes - 1) of link i's basis at xi in [0, 1]: psi_j and psi_j' (derivative
+ * with respect to xi); either output may be NULL. The paper's mode shapes for j < modes -
+ * static_shapes, the link's orthogonalised static shapes after them. */
+void f3r_model_link_shape(const f3r_model* model, int link, int j, double xi, double* psi,
+                          double* dpsi);
+
+/* "fixed_free, 1 mode + 3 static shapes", "fixed_pinned, 3 modes" or "rigid" into text (size
+ * bytes, terminated); returns text. */
+const char* f3r_model_link_basis_name(const f3r_model* model, int link, char* text, size_t size);
 
 /* Condition number (2-norm) of the actuation map of leg forces: column i is the unit vector
  * u_i from A_i to C_i and its moment about P, (C_i - P) x u_i / r_PC. Capped at 1e16. */

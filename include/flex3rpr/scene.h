@@ -109,8 +109,12 @@ typedef struct {
                                         F3R_MODES_AUTO to let the model choose */
   double auto_tolerance;           /* modes: auto: static truncation target, default 1e-3 */
   double damping_ratio;            /* modal damping ratio of every mode, default 0 */
-  double eta0[F3R_MAX_MODES];      /* initial modal deflections (m) */
-  double eta_rate0[F3R_MAX_MODES]; /* initial modal rates (m/s) */
+  double eta0[F3R_MAX_MODES];      /* initial modal coordinates (m): of the link's basis
+                                      functions, its modes first, then its static shapes */
+  double eta_rate0[F3R_MAX_MODES]; /* initial modal rates (m/s), the same functions */
+  int static_correction; /* 1: the link's basis adds orthogonalised static shapes of the loads
+                          * it carries to its modes (issue 28): fixed-free only, tip force,
+                          * uniform and linear load, so modes + 3 <= F3R_MAX_MODES. Default 0 */
 } f3r_link_scene;
 
 typedef struct {
@@ -200,6 +204,12 @@ f3r_status f3r_input_set_table(f3r_input* input, const double* time, const doubl
 /* Checks every field against its allowed range. The message names the field, the value and the
  * range, e.g. "links[1].modes: 25 is out of range 1..20". */
 f3r_status f3r_scene_validate(const f3r_scene* scene, f3r_error* err);
+
+/* The static shapes links.static_correction adds to a link of this model (3 fixed-free, 2
+ * fixed-pinned, 0 rigid), and the number of modal coordinates of a link scene with a numeric
+ * mode count: modes, plus those shapes when static_correction is on. */
+int f3r_link_static_shapes(f3r_link_model model);
+int f3r_link_scene_functions(const f3r_link_scene* link);
 
 /* The Butcher tables an integrator offers by name (those the benchmark measures), NULL-ended:
  * erk: ARKODE's FEHLBERG_13_7_8 (default), DORMAND_PRINCE_7_4_5, VERNER_8_5_6 and the pairs of

@@ -35,6 +35,7 @@ typedef struct {
   const char* scene_path;
   const char* out_path;
   int modal;
+  const char* modal_csv; /* --modal-csv FILE: the frequencies as CSV, to 17 digits */
   int geometry;
   int check;
   int fd_jacobian;
@@ -64,7 +65,7 @@ static void usage(FILE* to) {
       "                    [--stop-at-outputs] [--hold T:INDEX:VALUE ...]\n"
       "                    [--accuracy METRES] [--linear-path FILE.csv] [--linearise FILE.mat]\n"
       "                    [--set FIELD=VALUE ...]   (any scene field: --set links[0].modes=4)\n"
-      "       flex3rpr_sim --modal SCENE.yaml\n"
+      "       flex3rpr_sim --modal SCENE.yaml [--modal-csv FILE.csv] [--set FIELD=VALUE ...]\n"
       "       flex3rpr_sim --geometry SCENE.yaml\n"
       "       flex3rpr_sim --check SCENE.yaml [--set FIELD=VALUE ...]   (load and build only)\n");
 }
@@ -104,6 +105,7 @@ static const option_field paths[] = {
     {"--out", offsetof(cli_options, out_path)},
     {"--linear-path", offsetof(cli_options, linear_path)},
     {"--linearise", offsetof(cli_options, linearise_path)},
+    {"--modal-csv", offsetof(cli_options, modal_csv)},
     {"--formulation", offsetof(cli_options, formulation)},
 };
 static const option_field numbers[] = {
@@ -359,17 +361,14 @@ typedef struct {
   double cpu_total, cpu_integrating, cpu_outputs;
 } run_stats;
 
-/* The mode shapes of every link at its beam_points stations (beam_points <= 101). */
+/* The basis functions of every link at its beam_points stations (beam_points <= 101). */
 static void eval_mode_shapes(const f3r_model* model, int beam_points,
                              double shapes[3][101][F3R_MAX_MODES]) {
   for (int i = 0; i < 3; ++i) {
     const f3r_link_params* lp = f3r_model_link(model, i);
     for (int k = 0; k < beam_points; ++k)
-      for (int j = 0; j < lp->modes; ++j) {
-        double dpsi;
-        f3r_beam_mode_eval((f3r_beam_end)lp->model, lp->alpha[j], (double)k / (beam_points - 1),
-                           &shapes[i][k][j], &dpsi, NULL);
-      }
+      for (int j = 0; j < lp->modes; ++j)
+        f3r_model_link_shape(model, i, j, (double)k / (beam_points - 1), &shapes[i][k][j], NULL);
   }
 }
 
@@ -453,6 +452,9 @@ static void print_summary(const cli_options* o, const f3r_scene* scene, const f3
     printf("butcher table       %s\n", scene->table[0] ? scene->table : "default");
   if (scene->integrator == F3R_INTEGRATOR_IDA) printf("max BDF order       %d\n", scene->max_order);
   printf("sundials            %s, %s\n", SUNDIALS_VERSION, F3R_SUNDIALS_BUILD);
+  char basis[3][96];
+  for (int i = 0; i < 3; ++i) f3r_model_link_basis_name(model, i, basis[i], sizeof basis[i]);
+  printf("links               %s; %s; %s\n", basis[0], basis[1], basis[2]);
   printf("state dimension     %d (nq %d)\n", f3r_state_size(model, scene->formulation),
          f3r_model_nq(model));
   printf("simulated time      %.6g s\n", out->t);
@@ -526,7 +528,7 @@ static int describe_model(const cli_options* o, const f3r_model* model) {
 static int analyse(const cli_options* o, const f3r_model* model) {
   if (o->linear_path) return f3r_cli_write_linear_path(model, o->linear_path);
   if (o->linearise_path) return f3r_cli_write_state_space(model, o->linearise_path);
-  if (o->modal) return f3r_cli_run_modal(model);
+  if (o->modal || o->modal_csv) return f3r_cli_run_modal(model, o->modal_csv);
   return -1;
 }
 

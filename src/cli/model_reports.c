@@ -28,11 +28,36 @@ void f3r_cli_print_geometry(const f3r_model* model) {
       "\"cylinder_outer_diameter\": %.17g,"
       " \"cylinder_mass\": %.17g,\n",
       g.cylinder_length, s->cylinder_inner_diameter, s->cylinder_outer_diameter, g.cylinder_mass);
-  printf(" \"stroke_min\": %.17g, \"stroke_max\": %.17g, \"end_stops\": %s}\n", g.stroke_min,
+  printf(" \"stroke_min\": %.17g, \"stroke_max\": %.17g, \"end_stops\": %s,\n", g.stroke_min,
          g.stroke_max, g.end_stops ? "true" : "false");
+  char basis[3][96];
+  for (int i = 0; i < 3; ++i) f3r_model_link_basis_name(model, i, basis[i], sizeof basis[i]);
+  printf(" \"link_basis\": [\"%s\", \"%s\", \"%s\"]}\n", basis[0], basis[1], basis[2]);
 }
 
-int f3r_cli_run_modal(const f3r_model* m) {
+/* The frequencies as CSV (mode, hz, 17 digits) with each link's basis: for scripts. */
+static int write_modal_csv(const f3r_model* m, const char* path, const double* hz, int count) {
+  FILE* f = fopen(path, "w");
+  if (!f) {
+    fprintf(stderr, "flex3rpr_sim: cannot write %s\n", path);
+    return 1;
+  }
+  fprintf(f, "mode,hz");
+  for (int i = 0; i < 3; ++i) fprintf(f, ",link_%d_modes,link_%d_static_shapes", i + 1, i + 1);
+  fprintf(f, "\n");
+  for (int k = 0; k < count; ++k) {
+    fprintf(f, "%d,%.17g", k + 1, hz[k]);
+    for (int i = 0; i < 3; ++i) {
+      const f3r_link_params* lp = f3r_model_link(m, i);
+      fprintf(f, ",%d,%d", lp->modes - lp->static_shapes, lp->static_shapes);
+    }
+    fprintf(f, "\n");
+  }
+  fclose(f);
+  return 0;
+}
+
+int f3r_cli_run_modal(const f3r_model* m, const char* csv_path) {
   double hz[F3R_MAX_Q];
   int count = 0;
   f3r_error err = {0};
@@ -41,8 +66,12 @@ int f3r_cli_run_modal(const f3r_model* m) {
     return 1;
   }
   printf("# linearised natural frequencies of the constrained system at the initial pose (Hz)\n");
+  for (int i = 0; i < 3; ++i) {
+    char basis[96];
+    printf("# links[%d]: %s\n", i, f3r_model_link_basis_name(m, i, basis, sizeof basis));
+  }
   for (int k = 0; k < count; ++k) printf("%d %.6f\n", k + 1, hz[k]);
-  return 0;
+  return csv_path ? write_modal_csv(m, csv_path, hz, count) : 0;
 }
 
 /* The platform pose of the linearised model (linear.h) at the output step, as CSV: first order

@@ -6,8 +6,9 @@
 
 /* --geometry: geometry, masses and stroke as JSON on stdout (scripts/make_urdf.py reads it). */
 void f3r_cli_print_geometry(const f3r_model* m);
-/* --modal: the linearised natural frequencies (Hz) at the initial pose. */
-int f3r_cli_run_modal(const f3r_model* m);
+/* --modal: the linearised natural frequencies (Hz) at the initial pose and each link's basis;
+ * with csv_path (--modal-csv) also as CSV there, to 17 digits. */
+int f3r_cli_run_modal(const f3r_model* m, const char* csv_path);
 /* --linear-path FILE.csv: the linear model's platform path. */
 int f3r_cli_write_linear_path(const f3r_model* m, const char* path);
 /* --linearise FILE.mat: the state-space model, and FILE.json beside it. */

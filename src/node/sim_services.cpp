@@ -122,7 +122,8 @@ void SimNode::LineariseCall(Linearise::Response* res) {
     scene->platform_velocity0[k] = 0.0;
   }
   for (int i = 0; i < 3; ++i) {
-    scene->links[i].modes = f3r_model_link(model_.get(), i)->modes;
+    const f3r_link_params* lp = f3r_model_link(model_.get(), i);
+    scene->links[i].modes = lp->modes - lp->static_shapes;  // the shapes follow static_correction
     for (int j = 0; j < F3R_MAX_MODES; ++j)
       scene->links[i].eta0[j] = scene->links[i].eta_rate0[j] = 0.0;
   }

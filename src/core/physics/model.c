@@ -91,32 +91,69 @@ static f3r_status check_modes_resolved(const f3r_scene* scene, f3r_error* err) {
   return F3R_OK;
 }
 
+/* The static shapes links[i].static_correction adds (beam_basis.h): fixed-free links carry the
+ * platform joint's tip force and their own inertia, uniform and growing along the link; a pin
+ * takes no tip force. */
+static unsigned correction_shapes(const f3r_link_scene* L) {
+  if (!L->static_correction) return 0u;
+  const unsigned loads = F3R_SHAPE_UNIFORM_LOAD | F3R_SHAPE_LINEAR_LOAD;
+  return L->model == F3R_LINK_FIXED_FREE ? loads | F3R_SHAPE_TIP_FORCE : loads;
+}
+
+/* Link i's basis (its r modes, then its static shapes) and each function's constants: the modes'
+ * exactly as f3r_beam_mode_constants gives them, the shapes' from the Ritz step. */
+static f3r_status fill_link_constants(f3r_model* m, int i, double* room, f3r_error* err) {
+  const f3r_link_scene* L = &m->scene.links[i];
+  f3r_link_params* lp = &m->link[i];
+  f3r_beam_basis* b = &m->basis[i];
+  if (f3r_beam_basis_build((f3r_beam_end)lp->model, L->modes, correction_shapes(L), b))
+    return f3r_error_set(err, F3R_ERR_SCENE, "links[%d].modes: %d is out of range 1..%d", i,
+                         L->modes, F3R_MAX_MODES - (f3r_link_scene_functions(L) - L->modes));
+  lp->modes = b->count;
+  lp->static_shapes = b->shapes;
+  for (int j = b->count; j < f3r_link_scene_functions(L); ++j)
+    if (L->eta0[j] != 0.0 || L->eta_rate0[j] != 0.0)
+      return f3r_error_set(err, F3R_ERR_SCENE,
+                           "links[%d].initial_deflection[%d]: the link keeps %d functions (%d "
+                           "modes + %d static shapes): at %d modes the residual of a shape falls "
+                           "under %g of it and the shape is dropped",
+                           i, j, b->count, b->modes, b->shapes, b->modes, F3R_SHAPE_DROP_RATIO);
+  double** arrays[] = {&lp->alpha, &lp->mean,      &lp->first_moment,
+                       &lp->tip,   &lp->stiffness, &lp->omega_clamped};
+  for (int a = 0; a < 6; ++a, room += lp->modes) *arrays[a] = room;
+  const double l = m->link_length, EI_l3 = m->bending_stiffness / (l * l * l);
+  for (int j = 0; j < lp->modes; ++j) {
+    lp->alpha[j] = b->alpha[j];
+    lp->mean[j] = b->mean[j];
+    lp->first_moment[j] = b->first_moment[j];
+    lp->tip[j] = b->tip[j];
+    const double a2 = lp->alpha[j] * lp->alpha[j];
+    if (j < b->modes) { /* int psi_j''^2 = alpha_j^4 (beam_modes.h) */
+      lp->stiffness[j] = EI_l3 * a2 * a2;
+      lp->omega_clamped[j] = a2 * sqrt(EI_l3 / m->link_mass);
+    } else { /* the shape's Rayleigh quotient: its frequency alone in the clamped link */
+      lp->stiffness[j] = EI_l3 * b->stiffness[j];
+      lp->omega_clamped[j] = sqrt(b->stiffness[j]) * sqrt(EI_l3 / m->link_mass);
+    }
+  }
+  return F3R_OK;
+}
+
 /* The coordinate layout (each link's modal coordinates after the 9 rigid ones: m->nq) and each
- * flexible link's modal constants, stiffnesses and clamped frequencies. */
+ * flexible link's basis, modal constants, stiffnesses and clamped frequencies. */
 static f3r_status fill_links(f3r_model* m, double* room, f3r_error* err) {
-  const f3r_scene* scene = &m->scene;
-  const double l = m->link_length;
   int next = 9;
-  const double EI_l3 = m->bending_stiffness / (l * l * l);
   for (int i = 0; i < 3; ++i) {
     f3r_link_params* lp = &m->link[i];
-    lp->model = scene->links[i].model;
-    lp->modes = lp->model == F3R_LINK_RIGID ? 0 : scene->links[i].modes;
+    lp->model = m->scene.links[i].model;
+    lp->modes = lp->static_shapes = 0;
     lp->eta_index = next;
-    next += lp->modes;
-    if (!lp->modes) continue;
-    double** arrays[] = {&lp->alpha, &lp->mean,      &lp->first_moment,
-                         &lp->tip,   &lp->stiffness, &lp->omega_clamped};
-    for (int a = 0; a < 6; ++a, room += lp->modes) *arrays[a] = room;
-    if (f3r_beam_mode_constants((f3r_beam_end)lp->model, lp->modes, lp->alpha, lp->mean,
-                                lp->first_moment, lp->tip))
-      return f3r_error_set(err, F3R_ERR_SCENE, "links[%d].modes: %d is out of range 1..%d", i,
-                           lp->modes, F3R_MAX_MODES);
-    for (int j = 0; j < lp->modes; ++j) {
-      const double a2 = lp->alpha[j] * lp->alpha[j];
-      lp->stiffness[j] = EI_l3 * a2 * a2; /* int psi_j''^2 = alpha_j^4 (beam_modes.h) */
-      lp->omega_clamped[j] = a2 * sqrt(EI_l3 / m->link_mass);
+    if (lp->model != F3R_LINK_RIGID) {
+      const f3r_status st = fill_link_constants(m, i, room, err);
+      if (st != F3R_OK) return st;
     }
+    next += lp->modes;
+    room += 6 * lp->modes;
   }
   m->nq = next;
   return F3R_OK;
@@ -147,9 +184,8 @@ static f3r_status close_initial_pose(f3r_model* m, f3r_error* err) {
 /* The doubles after the struct: the scene's tables, the breakpoints, six modal constants per
  * mode and the modal damping (nq). */
 static size_t buffer_doubles(const f3r_scene* scene) {
-  int modes = 0;
-  for (int i = 0; i < 3; ++i)
-    if (scene->links[i].model != F3R_LINK_RIGID) modes += scene->links[i].modes;
+  int modes = 0; /* at most: a nearly dependent static shape is dropped */
+  for (int i = 0; i < 3; ++i) modes += f3r_link_scene_functions(&scene->links[i]);
   return f3r_scene_table_doubles(scene) + (size_t)breakpoint_room(scene) + 6 * (size_t)modes +
          (size_t)(F3R_Q_MODAL + modes);
 }
@@ -249,7 +285,7 @@ void f3r_model_beam_point(const f3r_model* m, const double* q, int link, double 
   double w = 0.0, slope = 0.0;
   for (int j = 0; j < lp->modes; ++j) {
     double psi, dpsi;
-    f3r_beam_mode_eval((f3r_beam_end)lp->model, lp->alpha[j], xi, &psi, &dpsi, NULL);
+    f3r_beam_basis_eval(&m->basis[link], j, xi, &psi, &dpsi, NULL);
     w += psi * q[lp->eta_index + j];
     slope += dpsi * q[lp->eta_index + j] / l;
   }
@@ -258,6 +294,24 @@ void f3r_model_beam_point(const f3r_model* m, const double* q, int link, double 
   position[1] = m->base_joint[link][1] + along * s + w * c;
   if (tangent_angle) *tangent_angle = theta + atan(slope);
   if (deflection) *deflection = w;
+}
+
+void f3r_model_link_shape(const f3r_model* m, int link, int j, double xi, double* psi,
+                          double* dpsi) {
+  f3r_beam_basis_eval(&m->basis[link], j, xi, psi, dpsi, NULL);
+}
+
+const char* f3r_model_link_basis_name(const f3r_model* m, int link, char* text, size_t size) {
+  const f3r_link_params* lp = &m->link[link];
+  const int r = lp->modes - lp->static_shapes;
+  if (lp->model == F3R_LINK_RIGID)
+    snprintf(text, size, "rigid");
+  else if (lp->static_shapes)
+    snprintf(text, size, "%s, %d mode%s + %d static shape%s", f3r_link_model_name(lp->model), r,
+             r == 1 ? "" : "s", lp->static_shapes, lp->static_shapes == 1 ? "" : "s");
+  else
+    snprintf(text, size, "%s, %d mode%s", f3r_link_model_name(lp->model), r, r == 1 ? "" : "s");
+  return text;
 }
 
 f3r_status f3r_model_initial_state(const f3r_model* m, double* q, double* v) {

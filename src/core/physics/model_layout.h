@@ -8,6 +8,7 @@
 #define FLEX3RPR_MODEL_LAYOUT_H
 
 #include "flex3rpr/model.h"
+#include "beam_basis.h"
 
 #ifdef __cplusplus
 extern "C" {
@@ -57,6 +58,7 @@ struct f3r_model {
   const f3r_force_effect* effects[F3R_MAX_EFFECTS];
 
   f3r_link_params link[3]; /* modal constants: link[i].modes values each, in the buffer */
+  f3r_beam_basis basis[3]; /* each flexible link's basis: its functions' coefficients */
   int exact_kinematics;
 
   /* breakpoints of the scripted inputs (s), ascending: integration stops (n_breakpoints values

@@ -334,6 +334,46 @@ static f3r_status validate_bodies(const f3r_scene* s, f3r_error* err) {
   return F3R_OK;
 }
 
+int f3r_link_static_shapes(f3r_link_model model) {
+  /* beam_basis.h: tip force, uniform and linear load; a pin takes no tip force */
+  return model == F3R_LINK_FIXED_FREE ? 3 : model == F3R_LINK_FIXED_PINNED ? 2 : 0;
+}
+
+int f3r_link_scene_functions(const f3r_link_scene* L) {
+  if (L->model == F3R_LINK_RIGID) return 0;
+  return L->modes + (L->static_correction ? f3r_link_static_shapes(L->model) : 0);
+}
+
+/* links[i].static_correction: a flexible link with a number of modes that leaves room for the
+ * shapes. */
+static f3r_status validate_static_correction(const f3r_scene* s, int i, f3r_error* err) {
+  char name[64];
+  const f3r_link_scene* L = &s->links[i];
+  if (!L->static_correction) return F3R_OK;
+  snprintf(name, sizeof name, "links[%d].static_correction", i);
+  if (L->static_correction != 1)
+    return f3r_scene_error(err, name, NULL, "%d is not true or false", L->static_correction);
+  if (L->model == F3R_LINK_RIGID)
+    return f3r_scene_error(err, name, NULL,
+                           "true given for a rigid link, which has no modes (allowed with "
+                           "model fixed_free or fixed_pinned)");
+  const int shapes = f3r_link_static_shapes(L->model);
+  if (L->modes == F3R_MODES_AUTO || L->modes == 0)
+    return f3r_scene_error(err, name, NULL,
+                           "true needs a number of modes: the accuracy knob does not choose "
+                           "them with the correction (give links[%d].modes 1..%d)",
+                           i, F3R_MAX_MODES - shapes);
+  if (L->modes + shapes > F3R_MAX_MODES) {
+    snprintf(name, sizeof name, "links[%d].modes", i);
+    return f3r_scene_error(err, name, NULL,
+                           "%d with static_correction adds %d shapes, %d functions: allowed "
+                           "1..%d modes (at most %d functions)",
+                           L->modes, shapes, L->modes + shapes, F3R_MAX_MODES - shapes,
+                           F3R_MAX_MODES);
+  }
+  return F3R_OK;
+}
+
 /* Link i's model, its mode count and its initial modal state. */
 static f3r_status validate_link(const f3r_scene* s, int i, f3r_error* err) {
   char name[64];
@@ -356,14 +396,23 @@ static f3r_status validate_link(const f3r_scene* s, int i, f3r_error* err) {
   } else if (L->modes < 1 || L->modes > F3R_MAX_MODES) {
     return f3r_scene_error(err, name, NULL, "%d is out of range 1..%d", L->modes, F3R_MAX_MODES);
   }
+  f3r_status st = validate_static_correction(s, i, err);
+  if (st != F3R_OK) return st;
+  const int functions = f3r_link_scene_functions(L);
   for (int j = 0; j < F3R_MAX_MODES; ++j) {
     CHECK_RANGE_AT(L->eta0[j], -0.1, 0.1, "links[%d].initial_deflection[%d]", i, j);
     CHECK_RANGE_AT(L->eta_rate0[j], -100.0, 100.0, "links[%d].initial_rate[%d]", i, j);
     const int open = L->modes == F3R_MODES_AUTO || (L->modes == 0 && L->model != F3R_LINK_RIGID);
-    if (!open && j >= L->modes && (L->eta0[j] != 0.0 || L->eta_rate0[j] != 0.0)) {
+    if (!open && j >= functions && (L->eta0[j] != 0.0 || L->eta_rate0[j] != 0.0)) {
       char list[64];
       snprintf(list, sizeof list, "links[%d].initial_deflection", i);
       snprintf(name, sizeof name, "%s[%d]", list, j);
+      if (functions > L->modes)
+        return f3r_scene_error(err, name, list,
+                               "function %d given but the link has %d functions (%d mode%s + "
+                               "%d static shapes)",
+                               j + 1, functions, L->modes, L->modes == 1 ? "" : "s",
+                               functions - L->modes);
       return f3r_scene_error(err, name, list, "mode %d given but the link has %d modes", j + 1,
                              L->modes);
     }

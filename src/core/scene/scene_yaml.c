@@ -42,6 +42,9 @@ static f3r_status read_link(loader* L, const yaml_node_t* map, int i) {
       }
     } else if (!strcmp(key, "auto_tolerance")) {
       if ((st = f3r_yaml_number(L, value, name, &link->auto_tolerance)) != F3R_OK) return st;
+    } else if (!strcmp(key, "static_correction")) {
+      if ((st = f3r_yaml_bool(L, value, name, &link->static_correction)) != F3R_OK) return st;
+      f3r_yaml_remember(L, name, value);
     } else if (!strcmp(key, "damping_ratio")) {
       if ((st = f3r_yaml_number(L, value, name, &link->damping_ratio)) != F3R_OK) return st;
     } else if (!strcmp(key, "initial_deflection") || !strcmp(key, "initial_rate")) {
@@ -55,8 +58,8 @@ static f3r_status read_link(loader* L, const yaml_node_t* map, int i) {
       if ((st = f3r_yaml_vector(L, value, name, target, len)) != F3R_OK) return st;
     } else {
       return f3r_yaml_fail(L, value, name,
-                           "unknown key (allowed: model, modes, auto_tolerance, damping_ratio, "
-                           "initial_deflection, initial_rate)");
+                           "unknown key (allowed: model, modes, static_correction, auto_tolerance, "
+                           "damping_ratio, initial_deflection, initial_rate)");
     }
   }
   return F3R_OK;

@@ -1,0 +1,285 @@
+// links.static_correction (issue 28): the scene option, the model's enlarged basis, and the
+// mechanism's first linearised frequency against the independent 50-digit derivation.
+#include <gtest/gtest.h>
+
+#include <cstdio>
+#include <fstream>
+#include <iterator>
+
+#include "flex3rpr/modal.h"
+#include "test_support.h"
+
+namespace {
+
+f3r_status LoadWith(const std::string& path, std::vector<const char*> sets, f3r_scene* s,
+                    f3r_error* err) {
+  f3r_scene_options options{};
+  options.overrides = sets.data();
+  options.override_count = static_cast<int>(sets.size());
+  return f3r_scene_load_with(path.c_str(), &options, s, err);
+}
+
+std::string WriteTemp(const std::string& name, const std::string& text) {
+  const std::string path = ::testing::TempDir() + name;
+  std::ofstream(path) << text;
+  return path;
+}
+
+double FirstFrequency(const f3r_scene& s) {
+  auto m = MakeModel(s);
+  double hz[F3R_MAX_Q];
+  int count = 0;
+  f3r_error err{};
+  if (f3r_modal_frequencies(m.get(), hz, &count, &err) != F3R_OK)
+    throw std::runtime_error(err.message);
+  for (int k = 0; k < count; ++k)
+    if (hz[k] > 1.0) return hz[k];  // the first three are the mechanism's free motions (0 Hz)
+  return 0.0;
+}
+
+f3r_scene Sim3(int modes, bool corrected) {
+  f3r_scene s;
+  f3r_error err{};
+  if (f3r_scene_load(ScenePath("paper_sim3_fixed_free.yaml").c_str(), &s, &err) != F3R_OK)
+    throw std::runtime_error(err.message);
+  for (int i = 0; i < 3; ++i) {
+    s.links[i].modes = modes;
+    s.links[i].static_correction = corrected ? 1 : 0;
+  }
+  return s;
+}
+
+}  // namespace
+
+// The issue's independent derivation converges to 226.82015 Hz (/work/research28, 50 digits).
+// With the static shapes, 1 mode beats the paper's basis at r = 20 (4.7e-6), 2 modes reach 1e-7.
+TEST(StaticCorrection, FirstFrequencyOfPaperSimulation3MatchesTheIndependentDerivation) {
+  const double reference = 226.82015;
+  const double r1 = FirstFrequency(Sim3(1, true)), r2 = FirstFrequency(Sim3(2, true));
+  const double plain20 = FirstFrequency(Sim3(20, false)), plain3 = FirstFrequency(Sim3(3, false));
+  std::printf(
+      "first frequency: 1 mode + shapes %.9f, 2 modes + shapes %.9f, plain r = 3 %.9f, "
+      "plain r = 20 %.9f Hz\n",
+      r1, r2, plain3, plain20);
+  EXPECT_NEAR(r1, reference, 1e-5 * reference);
+  EXPECT_NEAR(r2, reference, 1e-7 * reference);
+  EXPECT_LT(std::fabs(r1 - reference), std::fabs(plain20 - reference));
+  EXPECT_NEAR(plain3, 227.16071, 1e-5 * reference);  // the issue's paper basis, r = 3
+}
+
+// Without the option, the model's constants are the paper's modes' exactly; with it the first r
+// stay the same bit for bit and the shapes follow, and the beam points take the new functions.
+TEST(StaticCorrection, ModelKeepsTheModesAndAddsTheShapes) {
+  auto plain = MakeModel(Sim3(2, false));
+  auto corrected = MakeModel(Sim3(2, true));
+  EXPECT_EQ(plain->nq, 9 + 3 * 2);
+  EXPECT_EQ(corrected->nq, 9 + 3 * 5);
+  for (int i = 0; i < 3; ++i) {
+    const f3r_link_params *a = f3r_model_link(plain.get(), i),
+                          *b = f3r_model_link(corrected.get(), i);
+    EXPECT_EQ(a->static_shapes, 0);
+    EXPECT_EQ(b->static_shapes, 3);
+    EXPECT_EQ(b->modes, 5);
+    for (int j = 0; j < 2; ++j) {
+      EXPECT_EQ(a->alpha[j], b->alpha[j]);
+      EXPECT_EQ(a->mean[j], b->mean[j]);
+      EXPECT_EQ(a->tip[j], b->tip[j]);
+      EXPECT_EQ(a->stiffness[j], b->stiffness[j]);
+      EXPECT_EQ(a->omega_clamped[j], b->omega_clamped[j]);
+    }
+    for (int j = 2; j < 5; ++j) {  // stiffer than the kept modes, in ascending order
+      EXPECT_GT(b->stiffness[j], b->stiffness[j - 1]);
+      EXPECT_NEAR(b->omega_clamped[j] * b->omega_clamped[j] * corrected->link_mass, b->stiffness[j],
+                  1e-12 * b->stiffness[j]);
+    }
+  }
+  char text[96];
+  EXPECT_STREQ(f3r_model_link_basis_name(corrected.get(), 0, text, sizeof text),
+               "fixed_free, 2 modes + 3 static shapes");
+  EXPECT_STREQ(f3r_model_link_basis_name(plain.get(), 0, text, sizeof text), "fixed_free, 2 modes");
+  // The beam point at the tip deflects by the tip deflection, through every function.
+  std::vector<double> q(F3R_MAX_Q, 0.0), v(F3R_MAX_Q, 0.0);
+  ASSERT_EQ(f3r_model_initial_state(corrected.get(), q.data(), v.data()), F3R_OK);
+  for (int k = 9; k < corrected->nq; ++k) q[k] = 1e-4 * std::sin(3.0 * k);
+  for (int i = 0; i < 3; ++i) {
+    double position[2], angle, w;
+    f3r_model_beam_point(corrected.get(), q.data(), i, 1.0, position, &angle, &w);
+    EXPECT_NEAR(w, f3r_model_tip_deflection(corrected.get(), q.data(), i), 1e-15) << i;
+    double psi, dpsi;
+    f3r_model_link_shape(corrected.get(), i, 4, 1.0, &psi, &dpsi);
+    EXPECT_NEAR(psi, corrected->link[i].tip[4], 1e-12 * std::fabs(psi));
+  }
+}
+
+// The option per link, for all three in the mapping form and through --set; initial
+// deflections index the basis functions, the shapes after the modes.
+TEST(StaticCorrection, SceneOptionPerLinkForAllAndThroughSet) {
+  f3r_scene s;
+  f3r_error err{};
+  const std::string all =
+      WriteTemp("sc_all.yaml", "links: {model: fixed_free, modes: 1, static_correction: true}\n");
+  ASSERT_EQ(LoadWith(all, {}, &s, &err), F3R_OK) << err.message;
+  for (int i = 0; i < 3; ++i) EXPECT_EQ(s.links[i].static_correction, 1) << i;
+  const std::string list = WriteTemp("sc_list.yaml",
+                                     "links:\n  - {model: fixed_free, modes: 2}\n"
+                                     "  - {model: fixed_free, modes: 2, static_correction: true,"
+                                     " initial_deflection: [0, 0, 1e-5, 0, 2e-6]}\n"
+                                     "  - {model: rigid}\n");
+  ASSERT_EQ(LoadWith(list, {}, &s, &err), F3R_OK) << err.message;
+  EXPECT_EQ(s.links[0].static_correction, 0);
+  EXPECT_EQ(s.links[1].static_correction, 1);
+  auto m = MakeModel(s);
+  EXPECT_EQ(m->nq, 9 + 2 + 5);
+  std::vector<double> q(F3R_MAX_Q), v(F3R_MAX_Q);
+  ASSERT_EQ(f3r_model_initial_state(m.get(), q.data(), v.data()), F3R_OK);
+  EXPECT_EQ(q[m->link[1].eta_index + 4], 2e-6);
+  const std::string plain = WriteTemp("sc_plain.yaml", "links: {model: fixed_free, modes: 3}\n");
+  ASSERT_EQ(LoadWith(plain, {"links[0].static_correction=true"}, &s, &err), F3R_OK) << err.message;
+  EXPECT_EQ(s.links[0].static_correction, 1);
+  EXPECT_EQ(s.links[1].static_correction, 0);
+  ASSERT_EQ(LoadWith(plain, {"links.static_correction=true"}, &s, &err), F3R_OK) << err.message;
+  for (int i = 0; i < 3; ++i) EXPECT_EQ(s.links[i].static_correction, 1) << i;
+}
+
+// Wrong uses name the file, the field and what is allowed.
+TEST(StaticCorrection, InvalidUsesAreErrorsNamingTheField) {
+  struct Bad {
+    const char* text;
+    const char* field;
+    const char* says;
+  };
+  const Bad bad[] = {
+      {"links: {model: rigid, static_correction: true}\n", "links[0].static_correction",
+       "allowed with model fixed_free"},
+      {"links: {model: fixed_free, modes: 18, static_correction: true}\n", "links[0].modes",
+       "allowed 1..17 modes"},
+      {"links: {model: fixed_free, modes: auto, static_correction: true}\n",
+       "links[0].static_correction", "needs a number of modes"},
+      {"links: {model: fixed_free, modes: 3, static_correction: maybe}\n",
+       "links[0].static_correction", ""},
+      {"links: {model: fixed_free, modes: 1, static_correction: true,"
+       " initial_deflection: [0, 0, 0, 0, 1e-5]}\n",
+       "links[0].initial_deflection",
+       "function 5 given but the link has 4 functions (1 mode + 3 static shapes)"},
+  };
+  for (const Bad& b : bad) {
+    f3r_scene s;
+    f3r_error err{};
+    const std::string path = WriteTemp("sc_bad.yaml", b.text);
+    EXPECT_NE(LoadWith(path, {}, &s, &err), F3R_OK) << b.text;
+    const std::string message = err.message;
+    EXPECT_NE(message.find(path), std::string::npos) << message;
+    EXPECT_NE(message.find(b.field), std::string::npos) << message;
+    EXPECT_NE(message.find(b.says), std::string::npos) << message;
+  }
+  f3r_scene s;
+  f3r_error err{};
+  // At r = 8 a fixed-free link drops the linear-load shape: its initial value has no function.
+  f3r_scene dropped = Sim3(8, true);
+  dropped.links[2].eta0[10] = 1e-6;
+  f3r_model* m = nullptr;
+  EXPECT_NE(f3r_model_create(&dropped, &m, &err), F3R_OK);
+  f3r_model_destroy(m);
+  EXPECT_NE(std::string(err.message).find("links[2].initial_deflection[10]: the link keeps 10"),
+            std::string::npos)
+      << err.message;
+  const std::string rigid = WriteTemp("sc_rigid.yaml", "links: {model: rigid}\n");
+  EXPECT_NE(LoadWith(rigid, {"links[2].static_correction=true"}, &s, &err), F3R_OK);
+  EXPECT_NE(std::string(err.message).find("links[2].static_correction"), std::string::npos)
+      << err.message;
+}
+
+// Paper simulation 3, driven, with 1 mode + 3 shapes a link: the dae formulation keeps the
+// constraints and T + V - W to the tolerances PaperRun holds the plain basis to, and the
+// minimal formulation follows the same platform path.
+TEST(StaticCorrection, DrivenRunKeepsEnergyBalanceAndFormulationsAgree) {
+  std::vector<std::vector<double>> xy[2];
+  for (int pass = 0; pass < 2; ++pass) {
+    f3r_scene s = Sim3(1, true);
+    s.formulation = pass == 0 ? F3R_FORMULATION_DAE : F3R_FORMULATION_MINIMAL;
+    s.rtol = 1e-10;
+    s.atol = 1e-12;
+    auto m = MakeModel(s);
+    f3r_solver_settings set = f3r_solver_settings_from_scene(&s);
+    f3r_sim* raw = nullptr;
+    f3r_error err{};
+    ASSERT_EQ(f3r_sim_create(m.get(), &set, &raw, &err), F3R_OK) << err.message;
+    SimPtr sim(raw);
+    const f3r_outputs* o = f3r_sim_outputs(sim.get());
+    const double e0 = o->kinetic_energy + o->potential_energy - o->external_work;
+    double worst_energy = 0.0, worst_constraint = 0.0, scale = 0.0;
+    for (int k = 1; k <= 500; ++k) {
+      ASSERT_EQ(f3r_sim_advance(sim.get(), k * 1e-3, &err), F3R_OK) << err.message;
+      o = f3r_sim_outputs(sim.get());  // the outputs are formed when asked for
+      const double mechanical = o->kinetic_energy + o->potential_energy;
+      worst_energy = std::max(worst_energy, std::fabs(mechanical - o->external_work - e0));
+      worst_constraint = std::max(worst_constraint, o->constraint_residual);
+      scale = std::max(scale, mechanical);
+      xy[pass].push_back({o->q[F3R_Q_X], o->q[F3R_Q_Y]});
+    }
+    if (pass == 0) {
+      EXPECT_LE(worst_constraint, 1e-10);
+      EXPECT_LE(worst_energy, 1e-8 * scale) << "T + V - W drifts";
+      std::printf("corrected paper simulation 3, dae: T + V - W within %.2e of max T + V\n",
+                  worst_energy / scale);
+    }
+  }
+  double worst = 0.0;
+  for (size_t k = 0; k < xy[0].size(); ++k)
+    worst = std::max(worst, std::hypot(xy[0][k][0] - xy[1][k][0], xy[0][k][1] - xy[1][k][1]));
+  EXPECT_LE(worst, 1e-8) << "dae against minimal";
+}
+
+// The CLI's --modal-csv, which scripts/basis_convergence reads: the frequencies of the public
+// modal API to 17 digits and each link's basis; --geometry names it too.
+TEST(StaticCorrection, CliWritesTheFrequenciesAndNamesTheBasis) {
+  const std::string csv = ::testing::TempDir() + "sc_modal.csv", out = csv + ".txt";
+  const std::string cmd = std::string(F3R_CLI) + " " + ScenePath("paper_sim3_fixed_free.yaml") +
+                          " --set links.modes=2 --set links[1].static_correction=true" +
+                          " --modal-csv " + csv + " > " + out;
+  ASSERT_EQ(std::system(cmd.c_str()), 0) << cmd;
+  f3r_scene s = Sim3(2, false);
+  s.links[1].static_correction = 1;
+  auto m = MakeModel(s);
+  double hz[F3R_MAX_Q];
+  int count = 0;
+  f3r_error err{};
+  ASSERT_EQ(f3r_modal_frequencies(m.get(), hz, &count, &err), F3R_OK) << err.message;
+  std::ifstream in(csv);
+  std::string line;
+  std::getline(in, line);
+  EXPECT_EQ(line,
+            "mode,hz,link_1_modes,link_1_static_shapes,link_2_modes,link_2_static_shapes,"
+            "link_3_modes,link_3_static_shapes");
+  int rows = 0;
+  while (std::getline(in, line)) {
+    int k = 0, counts[6] = {0};
+    double f = 0.0;
+    ASSERT_EQ(std::sscanf(line.c_str(), "%d,%lf,%d,%d,%d,%d,%d,%d", &k, &f, &counts[0], &counts[1],
+                          &counts[2], &counts[3], &counts[4], &counts[5]),
+              8)
+        << line;
+    EXPECT_NEAR(f, hz[rows], 1e-12 * (1.0 + hz[rows])) << line;
+    EXPECT_EQ(counts[0], 2);
+    EXPECT_EQ(counts[1], 0);
+    EXPECT_EQ(counts[2], 2);
+    EXPECT_EQ(counts[3], 3);
+    ++rows;
+  }
+  EXPECT_EQ(rows, count);
+  std::ifstream text(out);
+  const std::string printed((std::istreambuf_iterator<char>(text)),
+                            std::istreambuf_iterator<char>());
+  EXPECT_NE(printed.find("# links[1]: fixed_free, 2 modes + 3 static shapes"), std::string::npos)
+      << printed;
+  const std::string geometry = std::string(F3R_CLI) + " --geometry " +
+                               ScenePath("paper_sim3_fixed_free.yaml") +
+                               " --set links[0].static_correction=true > " + out;
+  ASSERT_EQ(std::system(geometry.c_str()), 0);
+  std::ifstream g(out);
+  const std::string json((std::istreambuf_iterator<char>(g)), std::istreambuf_iterator<char>());
+  EXPECT_NE(json.find("\"link_basis\": [\"fixed_free, 3 modes + 3 static shapes\", "
+                      "\"fixed_free, 3 modes\", \"fixed_free, 3 modes\"]"),
+            std::string::npos)
+      << json;
+}
