@@ -119,7 +119,8 @@ bool SameBits(const std::vector<double>& a, const std::vector<double>& b) {
 
 void CheckAccepted(const std::vector<double>& forces, const f3r_model& model,
                    const CommandLimits& limits) {
-  if (forces.size() != static_cast<size_t>(model.nq)) Fail("accepted, but forces is not nq long");
+  if (forces.size() != static_cast<size_t>(f3r_model_nq(&model)))
+    Fail("accepted, but forces is not nq long");
   for (size_t n = 0; n < forces.size(); ++n) {
     if (!std::isfinite(forces[n])) Fail("accepted, but a force is not finite");
     if (std::fabs(forces[n]) > LimitAt(n, limits)) {
@@ -131,13 +132,31 @@ void CheckAccepted(const std::vector<double>& forces, const f3r_model& model,
   }
 }
 
+// The default scene with fixed-free links carrying n_modal modes in all (up to 20 a link; a
+// link left with none is rigid), built once per count and kept.
+f3r_model* ModelWithModalCoordinates(int n_modal) {
+  static f3r_model* models[F3R_MAX_Q] = {};
+  if (models[n_modal]) return models[n_modal];
+  f3r_scene scene = f3r_default_scene();
+  int left = n_modal;
+  for (int i = 0; i < 3; ++i) {
+    const int r = left < F3R_MAX_MODES ? left : F3R_MAX_MODES;
+    scene.links[i].model = r ? F3R_LINK_FIXED_FREE : F3R_LINK_RIGID;
+    scene.links[i].modes = r;
+    left -= r;
+  }
+  f3r_error err;
+  if (f3r_model_create(&scene, &models[n_modal], &err) != F3R_OK) Fail(err.message);
+  if (f3r_model_nq(models[n_modal]) != 9 + n_modal) Fail("the model has the wrong nq");
+  return models[n_modal];
+}
+
 }  // namespace
 
 extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   FuzzedDataProvider p(data, size);
-  static f3r_model* model = static_cast<f3r_model*>(std::calloc(1, sizeof(f3r_model)));
-  // Decoding reads only nq: a real model has 9 + sum of modes, at most F3R_MAX_Q.
-  model->nq = 9 + p.ConsumeIntegralInRange<int>(0, F3R_MAX_Q - 9);
+  // A real model with any nq: 9 + the modes of links flexible or rigid, at most F3R_MAX_Q.
+  f3r_model* model = ModelWithModalCoordinates(p.ConsumeIntegralInRange<int>(0, F3R_MAX_Q - 9));
   CommandLimits limits;
   limits.force = AnyLimit(p, limits.force);
   limits.torque = AnyLimit(p, limits.torque);
@@ -163,7 +182,7 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
                   Allowed(msg.cylinder_torque[i], limits.torque) &&
                   Allowed(msg.platform[i], i < 2 ? limits.force : limits.torque);
     }
-    const size_t n_modal = static_cast<size_t>(model->nq - 9);
+    const size_t n_modal = static_cast<size_t>(f3r_model_nq(model) - 9);
     size_t len;
     switch (p.ConsumeIntegralInRange<int>(0, 3)) {
       case 0: len = 0; break;
@@ -177,7 +196,7 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
     }
     expect_ok = expect_ok && (len == 0 || len == n_modal);
     why = flex3rpr::DecodeEffortCommand(msg, *model, limits, &forces);
-    expected.assign(static_cast<size_t>(model->nq), 0.0);
+    expected.assign(static_cast<size_t>(f3r_model_nq(model)), 0.0);
     for (size_t i = 0; i < 3; ++i) {
       expected[i] = msg.leg_force[i];
       expected[3 + i] = msg.cylinder_torque[i];
@@ -203,7 +222,7 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
     }
     expect_ok = expect_ok && len == 6;
     why = flex3rpr::DecodeEffortGroup(msg, *model, limits, &forces);
-    expected.assign(static_cast<size_t>(model->nq), 0.0);
+    expected.assign(static_cast<size_t>(f3r_model_nq(model)), 0.0);
     for (size_t k = 0; k < 6 && k < len; ++k) expected[k] = msg.data[k];
   } else {
     geometry_msgs::WrenchStamped msg;
@@ -235,9 +254,9 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
                 w.force.z == 0.0 && w.torque.x == 0.0 && w.torque.y == 0.0;
     why = flex3rpr::DecodeWrench(msg, flex3rpr::YawRotation(in_world ? 0.0 : phi_p), limits, *model,
                                  &forces);
-    if (why.empty() && forces.size() == static_cast<size_t>(model->nq)) {
+    if (why.empty() && forces.size() == static_cast<size_t>(f3r_model_nq(model))) {
       if (in_world) {
-        expected.assign(static_cast<size_t>(model->nq), 0.0);
+        expected.assign(static_cast<size_t>(f3r_model_nq(model)), 0.0);
         expected[6] = w.force.x;
         expected[7] = w.force.y;
         expected[8] = w.torque.z;
@@ -253,8 +272,8 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   static const bool verbose = std::getenv("FUZZ_COMMANDS_VERBOSE") != nullptr;
   if (verbose) {  // FUZZ_COMMANDS_VERBOSE=1 build/fuzz/fuzz_commands FILE...: what each input is
     static const char* names[] = {"~command", "~effort_group/command", "~platform_wrench"};
-    std::fprintf(stderr, "%s, nq %d, limits %g %g %g: %s\n", names[which], model->nq, limits.force,
-                 limits.torque, limits.modal, why.empty() ? "accepted" : why.c_str());
+    std::fprintf(stderr, "%s, nq %d, limits %g %g %g: %s\n", names[which], f3r_model_nq(model),
+                 limits.force, limits.torque, limits.modal, why.empty() ? "accepted" : why.c_str());
     if (why.empty()) {
       std::fprintf(stderr, "  forces");
       for (double f : forces) std::fprintf(stderr, " %.17g", f);
