@@ -51,7 +51,7 @@ f3r_scene Sim3(int modes, bool corrected) {
 
 }  // namespace
 
-// The issue's independent derivation converges to 226.82015 Hz (/work/research28, 50 digits).
+// The issue's independent derivation converges to 226.82015 Hz (issue 28; test/reference/static_correction_reference.py, 50 digits).
 // With the static shapes, 1 mode beats the paper's basis at r = 20 (4.7e-6), 2 modes reach 1e-7.
 TEST(StaticCorrection, FirstFrequencyOfPaperSimulation3MatchesTheIndependentDerivation) {
   const double reference = 226.82015;
