@@ -4,8 +4,8 @@ renders it in rviz under Xvfb with scripts/render_bag, and checks the result:
 
   bag_counts     rosbag info lists every recorded topic with its expected count: duration *
                  publish_rate + 1 on /clock, /tf, joint_states, ~status, ~beam_state, ~beams, ~odom,
-                 one /tf_static, and one message on each command topic (a zero command is
-                 published, latched, on all three before the run).
+                 one /tf_static, and at least one message on each command topic (a zero command
+                 is published, latched, on all three before the run; a reconnection repeats it).
   platform_drawn in each frame the platform's colour (its URDF material) covers the platform's
                  triangle where the bag's TF and the rviz view (config/flex3rpr.rviz: top-down,
                  its scale and centre) put it, and its centroid is within 4 px of P.
@@ -305,8 +305,12 @@ def run(args, checks, work):
     counts = {t["topic"]: t["messages"] for t in info}
     expected = {t: int(round(DURATION * RATE)) + 1 for t in OUTPUTS}
     expected["/tf_static"] = 1
-    expected.update({t: 1 for t in COMMANDS})
+    # The commands come from latched publishers outside the node: a latched message is delivered
+    # again on every new connection, so how often the recorder saw it is not the node's doing.
+    # Present is all that is asked of them.
     bad = {t: (counts.get(t, 0), n) for t, n in expected.items() if counts.get(t, 0) != n}
+    bad.update({t: (counts.get(t, 0), ">= 1") for t in COMMANDS if counts.get(t, 0) < 1})
+    expected.update({t: 1 for t in COMMANDS})
     extra = sorted(set(counts) - set(expected))
     if bad or extra:
         checks.fail("bag_counts", "topic: (found, expected) " + ", ".join(f"{t}: {v}" for t, v in bad.items())
