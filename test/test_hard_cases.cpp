@@ -21,10 +21,21 @@ f3r_scene LoadScene(const std::string& path) {
   return s;
 }
 
+// The scenes loaded here, whose input tables the process frees at exit: the tests use copies
+// of them, which share the tables (scene.h).
+struct LoadedScenes {
+  std::vector<f3r_scene> scenes;
+  ~LoadedScenes() {
+    for (f3r_scene& s : scenes) f3r_scene_free(&s);
+  }
+};
+
 f3r_scene SceneFromText(const std::string& text) {
+  static LoadedScenes loaded;
   const std::string path = ::testing::TempDir() + "/hard_case_scene.yaml";
   std::ofstream(path) << text;
-  return LoadScene(path);
+  loaded.scenes.push_back(LoadScene(path));
+  return loaded.scenes.back();
 }
 
 struct Outcome {
