@@ -260,25 +260,6 @@ TEST(SceneFiles, InvalidSceneCorpusGivesTheExpectedErrors) {
 
 }  // namespace
 
-namespace {
-
-// Loads `path` with the overrides `sets`; the status, the scene and the error.
-f3r_status LoadWith(const std::string& path, std::vector<const char*> sets, f3r_scene* s,
-                    f3r_error* err) {
-  f3r_scene_options options{};
-  options.overrides = sets.data();
-  options.override_count = static_cast<int>(sets.size());
-  return f3r_scene_load_with(path.c_str(), &options, s, err);
-}
-
-std::string WriteTemp(const std::string& name, const std::string& text) {
-  const std::string path = ::testing::TempDir() + name;
-  std::ofstream(path) << text;
-  return path;
-}
-
-}  // namespace
-
 // An override gives the scene the same file with the field edited by hand would give (the
 // independent computation here is the edited file), whether the field is in the file or not.
 TEST(SceneOverrides, EqualTheFileEditedByHand) {

@@ -11,20 +11,6 @@
 
 namespace {
 
-f3r_status LoadWith(const std::string& path, std::vector<const char*> sets, f3r_scene* s,
-                    f3r_error* err) {
-  f3r_scene_options options{};
-  options.overrides = sets.data();
-  options.override_count = static_cast<int>(sets.size());
-  return f3r_scene_load_with(path.c_str(), &options, s, err);
-}
-
-std::string WriteTemp(const std::string& name, const std::string& text) {
-  const std::string path = ::testing::TempDir() + name;
-  std::ofstream(path) << text;
-  return path;
-}
-
 double FirstFrequency(const f3r_scene& s) {
   auto m = MakeModel(s);
   double hz[F3R_MAX_Q];

@@ -1,7 +1,10 @@
 // Shared helpers of the C++ tests over the C core.
 #pragma once
 
+#include <gtest/gtest.h>
+
 #include <cmath>
+#include <fstream>
 #include <memory>
 #include <random>
 #include <string>
@@ -42,6 +45,23 @@ struct SceneTables {
   f3r_scene* scene;
   ~SceneTables() { f3r_scene_free(scene); }
 };
+
+// Loads `path` with the overrides `sets` (as --set gives them); the status, the scene and the
+// error.
+inline f3r_status LoadWith(const std::string& path, std::vector<const char*> sets, f3r_scene* s,
+                           f3r_error* err) {
+  f3r_scene_options options{};
+  options.overrides = sets.data();
+  options.override_count = static_cast<int>(sets.size());
+  return f3r_scene_load_with(path.c_str(), &options, s, err);
+}
+
+// Writes text to a file named name in the test temporary folder; its path.
+inline std::string WriteTemp(const std::string& name, const std::string& text) {
+  const std::string path = ::testing::TempDir() + name;
+  std::ofstream(path) << text;
+  return path;
+}
 
 inline ModelPtr MakeModel(const f3r_scene& s) {
   f3r_model* m = nullptr;
