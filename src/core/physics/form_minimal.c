@@ -361,19 +361,30 @@ f3r_status f3r_minimal_rhs_dense(const f3r_model* m, double t, const double* y, 
   return minimal_rhs(m, t, y, held, ydot, ws, 1);
 }
 
+/* The links a column of B reaches: every link for the pose (owner -1), its own for a modal one. */
+static void links_of_column(int owner, int* first, int* end) {
+  *first = owner < 0 ? 0 : owner;
+  *end = owner < 0 ? 3 : owner + 1;
+}
+
 /* out (6 x nz) = X B for X (6 x nq) of the constraints' derivatives: B is the identity on z
  * below its dependent rows Bd (6 x nz), so (X B)(:, j) = X(:, z_j) + X(:, legs) Bd(:, j), and
- * the rows of link i reach only its own legs' columns rho_i, theta_i (the other legs' terms of
- * the dense sum are exact zeros). */
-static void times_B_constraints(const double* X, const double* Bd, int nz, double* out) {
-  for (int j = 0; j < nz; ++j)
-    for (int i = 0; i < 3; ++i)
+ * the rows of link i reach only its own legs' columns rho_i, theta_i. A modal column z_j of
+ * link l (owner[j] = l) is zero on the other links' rows: X(:, z_j) and Bd(:, j) both are. */
+static void times_B_constraints(const double* X, const double* Bd, const int* owner, int nz,
+                                double* out) {
+  for (int j = 0; j < nz; ++j) {
+    int first, end;
+    links_of_column(owner[j], &first, &end);
+    for (int r = 0; r < 6; ++r) out[r + 6 * j] = 0.0;
+    for (int i = first; i < end; ++i)
       for (int r = 2 * i; r < 2 * i + 2; ++r) {
         double sum = X[r + 6 * (F3R_Q_INDEPENDENT + j)];
         sum += X[r + 6 * i] * Bd[i + 6 * j];
         sum += X[r + 6 * (F3R_Q_THETA + i)] * Bd[F3R_Q_THETA + i + 6 * j];
         out[r + 6 * j] = sum;
       }
+  }
 }
 
 /* T(:, j) += M x_j for the nz columns x_j of X (nq x nz) that are nonzero on the legs only (as
@@ -479,9 +490,22 @@ static void add_B_transpose_times(const f3r_model* m, const int* owner, const do
   }
 }
 
-/* The legs' rows of -G_d^{-1} X for each of the nz columns of X (6 x nz), into out (6 x nz). */
-static void minus_dependent_solve(const f3r_data* d, const double* X, int nz, double* out) {
-  f3r_data_solve_dependent(d, X, nz, -1.0, out);
+/* The legs' rows of -G_d^{-1} X for each of the nz columns of X (6 x nz), into out (6 x nz),
+ * which may be X; a modal column's only on its own link (the other links' rows stay zero). */
+static void minus_dependent_solve(const f3r_data* d, const int* owner, const double* X, int nz,
+                                  double* out) {
+  for (int j = 0; j < nz; ++j) {
+    int first, end;
+    links_of_column(owner[j], &first, &end);
+    const double* x = X + 6 * j;
+    double rho[3] = {0.0, 0.0, 0.0}, theta[3] = {0.0, 0.0, 0.0}; /* read before out is written */
+    for (int i = first; i < end; ++i)
+      f3r_link_solve_dependent(&d->link[i], x[2 * i], x[2 * i + 1], &rho[i], &theta[i]);
+    for (int i = 0; i < 3; ++i) {
+      out[i + 6 * j] = -rho[i];
+      out[F3R_Q_THETA + i + 6 * j] = -theta[i];
+    }
+  }
 }
 
 /* The Jacobian's products, column-major, in ws->jac_work (cleared per evaluation) and ws->dQ. */
@@ -565,10 +589,11 @@ static void force_derivatives(const f3r_model* m, f3r_workspace* ws, const jacob
 }
 
 /* B's dependent rows (6 x nz): G_d^{-1} applied to -G_z's columns. */
-static void dependent_rows_of_B(const f3r_model* m, const f3r_data* d, int nz, double* Bd) {
+static void dependent_rows_of_B(const f3r_model* m, const f3r_data* d, const int* owner, int nz,
+                                double* Bd) {
   double G[F3R_NCON * F3R_MAX_Q] = {0};
   f3r_data_add_constraint_jacobian(m, d, -1.0, G, F3R_NCON);
-  minus_dependent_solve(d, G + F3R_NCON * F3R_Q_INDEPENDENT, nz, Bd);
+  minus_dependent_solve(d, owner, G + F3R_NCON * F3R_Q_INDEPENDENT, nz, Bd);
   for (size_t k = 0; k < 6 * (size_t)nz; ++k) Bd[k] = -Bd[k];
 }
 
@@ -579,35 +604,37 @@ static void set_leg_rows(const double* S6, int nq, int nz, double* out) {
 }
 
 /* V_z, A_u, A_z: only their legs' rows are nonzero. */
-static void dependent_rates(const f3r_data* d, int nq, int nz, const jacobian_products* p) {
+static void dependent_rates(const f3r_data* d, const int* owner, int nq, int nz,
+                            const jacobian_products* p) {
   const double *Bd = p->Bd, *gv = p->gv, *Vz = p->Vz;
   double* S6 = p->S6;
-  times_B_constraints(p->Gvq, Bd, nz, S6);
-  minus_dependent_solve(d, S6, nz, S6);
+  times_B_constraints(p->Gvq, Bd, owner, nz, S6);
+  minus_dependent_solve(d, owner, S6, nz, S6);
   set_leg_rows(S6, nq, nz, p->Vz);
-  times_B_constraints(gv, Bd, nz, S6);
-  minus_dependent_solve(d, S6, nz, S6);
+  times_B_constraints(gv, Bd, owner, nz, S6);
+  minus_dependent_solve(d, owner, S6, nz, S6);
   set_leg_rows(S6, nq, nz, p->Au);
-  times_B_constraints(p->Caq, Bd, nz, S6);
-  for (int j = 0; j < nz; ++j) /* + dgamma/dv V_z: link i's rows reach its own legs only */
-    for (int r = 0; r < 6; ++r) {
+  times_B_constraints(p->Caq, Bd, owner, nz, S6);
+  for (int j = 0; j < nz; ++j) { /* + dgamma/dv V_z: link i's rows reach its own legs only */
+    int first, end;
+    links_of_column(owner[j], &first, &end);
+    for (int r = 2 * first; r < 2 * end; ++r) {
       const int i = r / 2;
       S6[r + 6 * j] += gv[r + 6 * i] * Vz[i + nq * j];
       S6[r + 6 * j] += gv[r + 6 * (F3R_Q_THETA + i)] * Vz[F3R_Q_THETA + i + nq * j];
     }
-  minus_dependent_solve(d, S6, nz, S6);
+  }
+  minus_dependent_solve(d, owner, S6, nz, S6);
   set_leg_rows(S6, nq, nz, p->Az);
 }
 
 /* The reduced equations' rows in z and u: dF_u/dz = B^T (Z B + H V_z + M A_z) and
  * dF_u/du = B^T (H B + M A_u), added into J. */
-static void add_force_blocks(const f3r_model* m, const f3r_data* d, const jacobian_products* p,
-                             double* J, int ld) {
+static void add_force_blocks(const f3r_model* m, const f3r_data* d, const int* owner,
+                             const jacobian_products* p, double* J, int ld) {
   const int nq = m->nq, nz = m->n_independent;
   const double *H = p->H, *Bd = p->Bd, *Vz = p->Vz;
   double* T = p->T;
-  int owner[F3R_MAX_Q];
-  column_owners(m, owner);
   times_B_links(m, owner, p->Z, Bd, T);
   for (int j = 0; j < nz; ++j) add_leg_columns(m, H, Vz + (size_t)nq * j, T + (size_t)nq * j);
   add_mass_times_legs(m, owner, d, p->Az, T);
@@ -679,9 +706,11 @@ f3r_status f3r_minimal_jacobian(const f3r_model* m, double t, double cj, const d
   if (st != F3R_OK) return st;
   const jacobian_products p = jacobian_products_in(ws, nq, nz);
   force_derivatives(m, ws, &p);
-  dependent_rows_of_B(m, &ws->data, nz, p.Bd);
-  dependent_rates(&ws->data, nq, nz, &p);
-  add_force_blocks(m, &ws->data, &p, J, ld);
+  int owner[F3R_MAX_Q];
+  column_owners(m, owner);
+  dependent_rows_of_B(m, &ws->data, owner, nz, p.Bd);
+  dependent_rates(&ws->data, owner, nq, nz, &p);
+  add_force_blocks(m, &ws->data, owner, &p, J, ld);
   add_rate_and_lag_blocks(m, ws, cj, p.Bd, w_at, J, ld);
   add_work_row(m, ws, cj, &p, w_at, J, ld);
   return F3R_OK;
