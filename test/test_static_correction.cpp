@@ -139,8 +139,6 @@ TEST(StaticCorrection, InvalidUsesAreErrorsNamingTheField) {
        "allowed with model fixed_free"},
       {"links: {model: fixed_free, modes: 18, static_correction: true}\n", "links[0].modes",
        "allowed 1..17 modes"},
-      {"links: {model: fixed_free, modes: auto, static_correction: true}\n",
-       "links[0].static_correction", "needs a number of modes"},
       {"links: {model: fixed_free, modes: 3, static_correction: maybe}\n",
        "links[0].static_correction", ""},
       {"links: {model: fixed_free, modes: 1, static_correction: true,"
@@ -169,6 +167,10 @@ TEST(StaticCorrection, InvalidUsesAreErrorsNamingTheField) {
   EXPECT_NE(std::string(err.message).find("links[2].initial_deflection[10]: the link keeps 10"),
             std::string::npos)
       << err.message;
+  // Open modes with the correction: the knob (or modes: auto) chooses the modes beside the shapes.
+  const std::string open = WriteTemp(
+      "sc_open.yaml", "links: {model: fixed_free, modes: auto, static_correction: true}\n");
+  EXPECT_EQ(LoadWith(open, {}, &s, &err), F3R_OK) << err.message;
   const std::string rigid = WriteTemp("sc_rigid.yaml", "links: {model: rigid}\n");
   EXPECT_NE(LoadWith(rigid, {"links[2].static_correction=true"}, &s, &err), F3R_OK);
   EXPECT_NE(std::string(err.message).find("links[2].static_correction"), std::string::npos)

@@ -5,7 +5,10 @@
  * Total error = model error + kinematics error + solver error, each given a share of the request:
  *  - model error: the end-effector path of the linearised model (linear.h) with r modes against
  *    the same with F3R_MAX_MODES on every link being chosen, over the scene's own inputs,
- *    duration and initial state; r is raised uniformly until it fits, then trimmed per link;
+ *    duration and initial state; r is raised uniformly until it fits, then trimmed per link.
+ *    Where the scene leaves links[i].static_correction open on a fixed-free link, the same search
+ *    runs with the static shapes added (against the corrected basis with more modes), and the
+ *    cheaper basis that fits is kept (f3r_mode_search_cost: steps from the highest frequency);
  *  - pilot check: when the linear path leaves the initial pose far, short nonlinear runs at the
  *    least mode counts and one more measure what the linearisation cannot, unless the linear
  *    estimate lies far below its share; with end stops the knob takes 20 modes instead;
@@ -31,8 +34,9 @@ extern "C" {
 #define F3R_ACCURACY_SOLVER_SHARE 0.25
 
 typedef struct {
-  double request; /* m; 0 when only modes: auto asked */
-  int modes[3];   /* per link; 0 for rigid links */
+  double request;           /* m; 0 when only modes: auto asked */
+  int modes[3];             /* per link; 0 for rigid links */
+  int static_correction[3]; /* 1: link i's basis adds its static shapes to its modes */
   int exact_kinematics;
   f3r_formulation formulation;
   f3r_integrator integrator;

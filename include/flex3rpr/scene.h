@@ -100,7 +100,8 @@ enum {
   F3R_EXPLICIT_RTOL = 1 << 5,
   F3R_EXPLICIT_TABLE = 1 << 6,
   F3R_EXPLICIT_EXACT_KINEMATICS = 1 << 7,
-  F3R_EXPLICIT_ATOL = 1 << 8
+  F3R_EXPLICIT_ATOL = 1 << 8,
+  F3R_EXPLICIT_STATIC_CORRECTION = 1 << 9 /* << i: links[i].static_correction was given */
 };
 
 typedef struct {
@@ -113,8 +114,9 @@ typedef struct {
                                       functions, its modes first, then its static shapes */
   double eta_rate0[F3R_MAX_MODES]; /* initial modal rates (m/s), the same functions */
   int static_correction; /* 1: the link's basis adds orthogonalised static shapes of the loads
-                          * it carries to its modes (issue 28): fixed-free only, tip force,
-                          * uniform and linear load, so modes + 3 <= F3R_MAX_MODES. Default 0 */
+                          * it carries to its modes (f3r_link_static_shapes of them), so
+                          * modes + shapes <= F3R_MAX_MODES. Default 0; where the scene leaves it
+                          * open, the accuracy knob may turn it on */
 } f3r_link_scene;
 
 typedef struct {

@@ -90,6 +90,73 @@ static void open_choice(const f3r_scene* scene, double request, int commanded, f
   run->solver_open = (scene->explicit_settings & solver_fixed) != solver_fixed;
 }
 
+/* The links whose basis the knob may correct: chosen, fixed-free and left open by the scene. A
+ * fixed-pinned link's own shapes pay only below about 4e-8 m, where the knob's requests do not
+ * reach (docs/benchmarks/basis_convergence.md). */
+static unsigned correctable_links(const choice_run* run) {
+  unsigned links = 0;
+  for (int i = 0; i < 3; ++i)
+    if ((run->chosen >> i & 1) && run->scene->links[i].model == F3R_LINK_FIXED_FREE &&
+        !run->scene->links[i].static_correction &&
+        !(run->scene->explicit_settings & (F3R_EXPLICIT_STATIC_CORRECTION << i)))
+      links |= 1u << i;
+  return links;
+}
+
+/* Both bases' costs, where each found counts within the model's share (0 otherwise). */
+static f3r_status basis_costs(choice_run* run, const f3r_scene* corrected,
+                              const f3r_mode_search* ms, const int* plain_modes, f3r_error* err) {
+  f3r_status st = F3R_OK;
+  if (run->plain_found)
+    st = f3r_mode_search_cost(run->s, &run->ms, plain_modes, &run->plain_cost, err);
+  if (st == F3R_OK && run->corrected_found)
+    st = f3r_mode_search_cost(corrected, ms, run->corrected_modes, &run->corrected_cost, err);
+  return st;
+}
+
+/* The same search with the static shapes on the correctable links, after the pilot: its ratio
+ * of the nonlinear to the linear difference scales both bases' estimates alike (it measures how
+ * the motion amplifies a truncation, not the basis). The cheaper basis that fits the model's
+ * share stays in run->ms and run->s (the paper's modes where neither is cheaper). */
+static f3r_status compare_correction(choice_run* run, f3r_accuracy_choice* c, f3r_error* err) {
+  run->correctable = run->ms.at_rest || run->impacts ? 0u : correctable_links(run);
+  if (!run->correctable) return F3R_OK;
+  f3r_scene corrected = *run->s; /* a view of the same tables */
+  for (int i = 0; i < 3; ++i)
+    if (run->correctable >> i & 1) corrected.links[i].static_correction = 1;
+  f3r_mode_search ms;
+  double estimate = 0.0;
+  const double ratio = c->pilot_ratio > 1.0 ? c->pilot_ratio : 1.0;
+  memcpy(run->plain_modes, c->modes, sizeof run->plain_modes);
+  run->plain_error = c->model_error;
+  run->plain_found = f3r_mode_search_found(&run->ms, c->modes);
+  f3r_status st = f3r_mode_search_init(&corrected, run->chosen, &ms, err);
+  if (st == F3R_OK)
+    st = f3r_mode_search_run(&corrected, &ms, run->model_target / ratio, run->corrected_modes,
+                             &estimate, err);
+  run->corrected_error = ratio * estimate;
+  run->corrected_found = st == F3R_OK && f3r_mode_search_found(&ms, run->corrected_modes);
+  if (st == F3R_OK) st = basis_costs(run, &corrected, &ms, c->modes, err);
+  const int take = st == F3R_OK && run->corrected_found &&
+                   (!run->plain_found || run->corrected_cost < run->plain_cost);
+  run->ms.evaluations += ms.evaluations;
+  if (!take) {
+    f3r_mode_search_free(&ms);
+    return st;
+  }
+  ms.evaluations = run->ms.evaluations;
+  f3r_mode_search_free(&run->ms);
+  run->ms = ms; /* the search's paths move with it */
+  *run->s = corrected;
+  memcpy(c->modes, run->corrected_modes, sizeof c->modes);
+  run->linear_error = estimate;
+  c->model_error = run->corrected_error;
+  /* the pilot's runs and reference are of the paper's basis: a solver check starts its own */
+  f3r_pilot_free(&run->pilot);
+  run->pilot_started = 0;
+  return F3R_OK;
+}
+
 /* The mode counts: the fewest whose linearised path stays within the model's share, or the most
  * faithful model where there are impacts. */
 static f3r_status search_modes(choice_run* run, f3r_accuracy_choice* c, f3r_error* err) {
@@ -105,7 +172,7 @@ static f3r_status search_modes(choice_run* run, f3r_accuracy_choice* c, f3r_erro
     /* Neither the linear model nor a pilot window sees an impact's jump, and a path with impacts
      * need not converge in the mode count at all (end_stop_impact: 12 and 20 modes part by 5 cm
      * within 0.3 s): the knob takes the most faithful model, with no estimate of its error. */
-    for (int i = 0; i < 3; ++i) c->modes[i] = (ms->chosen >> i & 1) ? F3R_MAX_MODES : ms->fixed[i];
+    for (int i = 0; i < 3; ++i) c->modes[i] = (ms->chosen >> i & 1) ? ms->most[i] : ms->fixed[i];
   } else if (st == F3R_OK) {
     st =
         f3r_mode_search_run(run->s, &run->ms, run->model_target, c->modes, &run->linear_error, err);
@@ -303,6 +370,9 @@ f3r_status f3r_accuracy_choose(const f3r_scene* scene, double request, int comma
   open_choice(scene, request, commanded, &s, &run);
   f3r_status st = search_modes(&run, c, err);
   if (st == F3R_OK) st = check_modes(&run, c, err);
+  if (st == F3R_OK) st = compare_correction(&run, c, err);
+  for (int i = 0; i < 3; ++i)
+    c->static_correction[i] = f3r_is_flexible(&s, i) && s.links[i].static_correction;
   c->linear_evaluations = run.ms.evaluations;
   if (st == F3R_OK) {
     f3r_summarise_modes(&run, c);
@@ -317,7 +387,10 @@ f3r_status f3r_accuracy_choose(const f3r_scene* scene, double request, int comma
 
 void f3r_accuracy_apply(const f3r_accuracy_choice* c, f3r_scene* s) {
   for (int i = 0; i < 3; ++i)
-    if (f3r_is_flexible(s, i)) s->links[i].modes = c->modes[i];
+    if (f3r_is_flexible(s, i)) {
+      s->links[i].modes = c->modes[i];
+      s->links[i].static_correction = c->static_correction[i];
+    }
   s->exact_kinematics = c->exact_kinematics;
   s->formulation = c->formulation;
   s->integrator = c->integrator;

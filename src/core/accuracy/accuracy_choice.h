@@ -38,7 +38,7 @@
  * and the facts the summary reports. */
 typedef struct {
   const f3r_scene* scene; /* the caller's */
-  const f3r_scene* s;     /* the working copy */
+  f3r_scene* s;           /* the working copy */
   double request;
   double model_target; /* m: the model's share of the request */
   const char* kind;    /* the solver relations' kind: rigid, flexible or commanded */
@@ -46,6 +46,12 @@ typedef struct {
   int any_flexible;
   int kinematics_open, kinematics_off, solver_open;
   f3r_mode_search ms;
+  /* The static correction against the paper's modes, where the knob may choose it: the links it
+   * may go on, each basis's counts, linear estimate and relative cost (f3r_mode_search_cost) */
+  unsigned correctable;
+  int plain_modes[3], corrected_modes[3];
+  int plain_found, corrected_found;
+  double plain_error, corrected_error, plain_cost, corrected_cost;
   int impacts;            /* end stops on a path that moves: the most faithful model */
   int long_run;           /* longer than the benchmark's scenes */
   double linear_error;    /* m: the search's last linear estimate */

@@ -34,7 +34,9 @@ typedef struct {
   int count;
   unsigned chosen;
   int low[3];
-  int fixed[3]; /* the modes of the links not chosen */
+  int fixed[3];       /* the modes of the links not chosen */
+  unsigned corrected; /* the links whose basis adds the static shapes (the scene's flags) */
+  int most[3];        /* the most modes link i may take: F3R_MAX_MODES less its shapes */
   int order;
   int ref_r;       /* the uniform count the reference in ref has on the chosen links, 0: none */
   double* ref;     /* 3 count */
@@ -49,6 +51,7 @@ typedef struct {
   struct {
     int modes[3];
     int order;
+    unsigned corrected;
     double* pose; /* 3 count */
   } memo[F3R_PATH_MEMO];
   int memo_used, memo_next;
@@ -69,6 +72,14 @@ void f3r_mode_search_free(f3r_mode_search* ms);
 /* The least mode counts the search may give: one mode, or the initial state's highest, on each
  * chosen link; the other links keep theirs. */
 void f3r_mode_search_least(const f3r_mode_search* ms, int modes[3]);
+/* 1 when the search found counts within its target (0: the chosen links are at their most). */
+int f3r_mode_search_found(const f3r_mode_search* ms, const int modes[3]);
+/* The relative CPU cost of a run at modes: sqrt(highest linearised frequency) times the
+ * coordinates. IDA's steps grow as the square root of the highest frequency and a step's cost
+ * with the coordinates (docs/benchmarks/practical_tolerances.md: 105 000, 142 000 and 262 000
+ * steps for 6.8, 16 and 49 kHz; 0.15, 0.26 and 0.67 s against 1 : 2.0 : 5.0 here). */
+f3r_status f3r_mode_search_cost(const f3r_scene* s, const f3r_mode_search* ms, const int modes[3],
+                                double* cost, f3r_error* err);
 /* The effect of exact kinematics on the end-effector path at the given modes, to first order:
  * the linear response to its added forces along the first-order linear path, at the search's
  * sampling (linear.h: f3r_linear_difference_response). */

@@ -59,9 +59,10 @@ double f3r_pilot_cost(const char* kind, double resolution, int capped) {
            : 1.0; /* the baseline, minimal IDA at 1e-6, is what the costs are measured from */
 }
 
-void f3r_pilot_free(f3r_pilot* p) {
+void f3r_pilot_free(f3r_pilot* p) { /* safe twice: the knob drops a pilot of the other basis */
   free(p->a);
   free(p->b);
+  p->a = p->b = NULL;
 }
 
 /* A difference over the window carried to the whole run: d(W) T / W. A difference that starts at
@@ -103,7 +104,7 @@ f3r_status f3r_pilot_pair(const f3r_scene* s, f3r_mode_search* ms, f3r_pilot* p,
   *nonlinear = *linear = 0.0;
   int more[3];
   for (int i = 0; i < 3; ++i)
-    more[i] = (ms->chosen >> i & 1) && p->modes[i] < F3R_MAX_MODES ? p->modes[i] + 1 : p->modes[i];
+    more[i] = (ms->chosen >> i & 1) && p->modes[i] < ms->most[i] ? p->modes[i] + 1 : p->modes[i];
   double* la = malloc((size_t)ms->count * 3 * sizeof(double));
   double* lb = malloc((size_t)ms->count * 3 * sizeof(double));
   f3r_status st = la && lb ? F3R_OK : f3r_error_set(err, F3R_ERR_MEMORY, "accuracy: out of memory");

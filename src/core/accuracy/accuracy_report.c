@@ -58,6 +58,31 @@ static void unmet_reason(const f3r_scene* scene, const f3r_accuracy_choice* c, u
   }
 }
 
+/* Counts a link each, "r/r/r", into text. */
+static void counts(const int* modes, char* text, size_t size) {
+  snprintf(text, size, "%d/%d/%d", modes[0], modes[1], modes[2]);
+}
+
+/* The summary's line on the basis, where the knob compared the static correction with the
+ * paper's modes: each one's counts, estimate and relative cost, and which it kept. */
+static void summarise_basis(const choice_run* run, f3r_accuracy_choice* c) {
+  if (!run->correctable) return;
+  char plain[32], corrected[32], p_est[64] = "no count within the share",
+                                 c_est[64] = "no count within the share";
+  counts(run->plain_modes, plain, sizeof plain);
+  counts(run->corrected_modes, corrected, sizeof corrected);
+  if (run->plain_found)
+    snprintf(p_est, sizeof p_est, "%.3g m, cost %.3g", run->plain_error, run->plain_cost);
+  if (run->corrected_found)
+    snprintf(c_est, sizeof c_est, "%.3g m, cost %.3g", run->corrected_error, run->corrected_cost);
+  const int kept = c->static_correction[0] || c->static_correction[1] || c->static_correction[2];
+  f3r_accuracy_append(c->summary, sizeof c->summary,
+                      "basis: %s: the paper's modes %s (%s) against modes %s + static shapes "
+                      "(%s); cost is sqrt(highest linearised frequency) x coordinates\n",
+                      kept ? "the static correction" : "the paper's modes", plain, p_est, corrected,
+                      c_est);
+}
+
 /* The summary's lines on the request, the mode counts and the pilot that checked them. */
 void f3r_summarise_modes(const choice_run* run, f3r_accuracy_choice* c) {
   char* text = c->summary;
@@ -69,13 +94,19 @@ void f3r_summarise_modes(const choice_run* run, f3r_accuracy_choice* c) {
       run->request, F3R_ACCURACY_MODEL_SHARE, F3R_ACCURACY_KINEMATICS_SHARE,
       F3R_ACCURACY_SOLVER_SHARE);
   for (int i = 0; i < 3; ++i) {
+    char shapes[48] = "";
+    if (c->static_correction[i])
+      snprintf(shapes, sizeof shapes, " + %d static shapes",
+               f3r_link_static_shapes(run->scene->links[i].model));
     if (!f3r_is_flexible(run->scene, i))
       f3r_accuracy_append(text, size, "links[%d]: rigid\n", i);
     else if (!(run->chosen >> i & 1))
-      f3r_accuracy_append(text, size, "links[%d]: %d modes, as the scene sets\n", i, c->modes[i]);
+      f3r_accuracy_append(text, size, "links[%d]: %d modes%s, as the scene sets\n", i, c->modes[i],
+                          shapes);
     else
-      f3r_accuracy_append(text, size, "links[%d]: %d modes\n", i, c->modes[i]);
+      f3r_accuracy_append(text, size, "links[%d]: %d modes%s\n", i, c->modes[i], shapes);
   }
+  summarise_basis(run, c);
   if (run->chosen && run->impacts)
     f3r_accuracy_append(
         text, size,
@@ -88,10 +119,10 @@ void f3r_summarise_modes(const choice_run* run, f3r_accuracy_choice* c) {
   else if (run->chosen)
     f3r_accuracy_append(
         text, size,
-        "modes: the %s-order linearised path is within %.3g m of the same with %d modes (path "
+        "modes: the %s-order linearised path is within %.3g m of the same with %d modes%s (path "
         "extent %.3g m, %d linear models)\n",
-        ms->order == 2 ? "second" : "first", run->linear_error, ms->ref_r, c->extent,
-        c->linear_evaluations);
+        ms->order == 2 ? "second" : "first", run->linear_error, ms->ref_r,
+        ms->corrected ? " and the static shapes" : "", c->extent, c->linear_evaluations);
   if (c->pilot && run->pair)
     f3r_accuracy_append(
         text, size,
@@ -218,11 +249,14 @@ void f3r_summarise_estimate(const choice_run* run, f3r_accuracy_choice* c) {
   else if (c->pilot)
     snprintf(how, sizeof how, "linear estimate x %.3g from the pilot", c->pilot_ratio);
   snprintf(c->brief, sizeof c->brief,
-           "accuracy %g m: modes %d/%d/%d (%s), exact kinematics %s, %s %s%s%s rtol %g; "
+           "accuracy %g m: modes %d/%d/%d%s (%s), exact kinematics %s, %s %s%s%s rtol %g; "
            "estimated %.3g m%s",
-           request, c->modes[0], c->modes[1], c->modes[2], how, c->exact_kinematics ? "on" : "off",
-           f3r_formulation_name(c->formulation), f3r_integrator_name(c->integrator),
-           c->table[0] ? " " : "", c->table, c->rtol, total,
+           request, c->modes[0], c->modes[1], c->modes[2],
+           c->static_correction[0] || c->static_correction[1] || c->static_correction[2]
+               ? " + static shapes"
+               : "",
+           how, c->exact_kinematics ? "on" : "off", f3r_formulation_name(c->formulation),
+           f3r_integrator_name(c->integrator), c->table[0] ? " " : "", c->table, c->rtol, total,
            run->impacts ? " without the impacts" : "");
   if (!c->request_met)
     f3r_accuracy_append(c->brief, sizeof c->brief, "; NOT MET (%.3g x the request)",

@@ -118,18 +118,53 @@ void f3r_mode_search_free(f3r_mode_search* ms) {
   memo_clear(ms);
 }
 
+/* r on the chosen links (at least the initial state's, at most what leaves room for the static
+ * shapes), the scene's counts on the others. */
 static void uniform(const f3r_mode_search* ms, int r, int modes[3]) {
+  for (int i = 0; i < 3; ++i) {
+    const int at_least = r > ms->low[i] ? r : ms->low[i];
+    modes[i] =
+        (ms->chosen >> i & 1) ? (at_least < ms->most[i] ? at_least : ms->most[i]) : ms->fixed[i];
+  }
+}
+
+/* The largest count any chosen link may take: the search's own reference. */
+static int top_modes(const f3r_mode_search* ms) {
+  int top = 1;
   for (int i = 0; i < 3; ++i)
-    modes[i] = (ms->chosen >> i & 1) ? (r > ms->low[i] ? r : ms->low[i]) : ms->fixed[i];
+    if ((ms->chosen >> i & 1) && ms->most[i] > top) top = ms->most[i];
+  return top;
 }
 
 void f3r_mode_search_least(const f3r_mode_search* ms, int modes[3]) { uniform(ms, 1, modes); }
+
+int f3r_mode_search_found(const f3r_mode_search* ms, const int modes[3]) {
+  for (int i = 0; i < 3; ++i)
+    if ((ms->chosen >> i & 1) && modes[i] < ms->most[i]) return 1;
+  return !ms->chosen;
+}
+
+f3r_status f3r_mode_search_cost(const f3r_scene* s, const f3r_mode_search* ms, const int modes[3],
+                                double* cost, f3r_error* err) {
+  (void)ms;
+  *cost = 0.0;
+  f3r_model* model = NULL;
+  f3r_linear_model* lin = NULL;
+  f3r_status st = f3r_model_with_modes(s, modes, 0, &model, err);
+  if (st == F3R_OK) st = f3r_linearise(model, &lin, err);
+  if (st == F3R_OK && lin->n > 0)
+    *cost = sqrt(sqrt(fmax(lin->omega2[lin->n - 1], 0.0))) * f3r_model_nq(model);
+  f3r_linear_destroy(lin);
+  f3r_model_destroy(model);
+  return st;
+}
 
 f3r_status f3r_mode_search_path(const f3r_scene* s, f3r_mode_search* ms, const int modes[3],
                                 int order, double* pose, f3r_error* err) {
   const size_t bytes = (size_t)ms->count * 3 * sizeof(double);
   for (int k = 0; k < ms->memo_used; ++k)
-    if (ms->memo[k].order == order && !memcmp(ms->memo[k].modes, modes, sizeof ms->memo[k].modes)) {
+    if (ms->memo[k].order == order && ms->memo[k].corrected == ms->corrected &&
+        !memcmp(ms->memo[k].modes, modes, sizeof ms->memo[k].modes)) {
       memcpy(pose, ms->memo[k].pose, bytes);
       return F3R_OK;
     }
@@ -147,6 +182,7 @@ f3r_status f3r_mode_search_path(const f3r_scene* s, f3r_mode_search* ms, const i
   if (ms->memo[k].pose) { /* without memory the memo just forgets */
     memcpy(ms->memo[k].modes, modes, sizeof ms->memo[k].modes);
     ms->memo[k].order = order;
+    ms->memo[k].corrected = ms->corrected;
     memcpy(ms->memo[k].pose, pose, bytes);
   } else {
     ms->memo[k].order = -1;
@@ -155,7 +191,7 @@ f3r_status f3r_mode_search_path(const f3r_scene* s, f3r_mode_search* ms, const i
 }
 
 static f3r_status reference_for(const f3r_scene* s, f3r_mode_search* ms, int r, f3r_error* err) {
-  const int R = reference_modes(r);
+  const int top = top_modes(ms), R = reference_modes(r) < top ? reference_modes(r) : top;
   if (ms->ref_r == R) return F3R_OK;
   int modes[3];
   uniform(ms, R, modes);
@@ -259,6 +295,9 @@ f3r_status f3r_mode_search_init(const f3r_scene* s, unsigned chosen, f3r_mode_se
     if (!f3r_is_flexible(s, i)) chosen &= ~(1u << i);
     ms->low[i] = lowest_modes(s, i);
     ms->fixed[i] = f3r_is_flexible(s, i) ? s->links[i].modes : 0;
+    const int corrected = f3r_is_flexible(s, i) && s->links[i].static_correction;
+    ms->corrected |= (unsigned)corrected << i;
+    ms->most[i] = F3R_MAX_MODES - (corrected ? f3r_link_static_shapes(s->links[i].model) : 0);
   }
   ms->chosen = chosen;
   ms->order = 1;
@@ -287,7 +326,8 @@ f3r_status f3r_mode_search_init(const f3r_scene* s, unsigned chosen, f3r_mode_se
  * path stays within it (a link the inputs excite less needs fewer). */
 f3r_status f3r_mode_search_run(const f3r_scene* s, f3r_mode_search* ms, double target, int modes[3],
                                double* estimate, f3r_error* err) {
-  uniform(ms, F3R_MAX_MODES, modes);
+  const int top = top_modes(ms);
+  uniform(ms, top, modes);
   *estimate = 0.0;
   if (!ms->chosen) return F3R_OK;
   if (ms->at_rest) {
@@ -296,10 +336,11 @@ f3r_status f3r_mode_search_run(const f3r_scene* s, f3r_mode_search* ms, double t
   }
   f3r_status st = F3R_OK;
   double est = 0.0;
-  int found = F3R_MAX_MODES;
+  int found = top;
   /* r = 1, 2, 3 each against its own reference (3 r + 3); beyond, a bisection of 4..19 against
-   * 20 modes, assuming the difference falls with r (it does, if slowly, for both beam models). */
-  for (int r = 1; r <= 3 && found == F3R_MAX_MODES; ++r) {
+   * 20 modes (17 with the static shapes), assuming the difference falls with r (it does, if
+   * slowly, for both beam models and both bases). */
+  for (int r = 1; r <= 3 && found == top; ++r) {
     int trial[3];
     uniform(ms, r, trial);
     if ((st = reference_for(s, ms, r, err)) != F3R_OK ||
@@ -312,10 +353,10 @@ f3r_status f3r_mode_search_run(const f3r_scene* s, f3r_mode_search* ms, double t
       found = r;
     }
   }
-  if (found == F3R_MAX_MODES) {
-    int lo = 4, hi = F3R_MAX_MODES; /* e(hi) <= target; 20 is the reference itself */
+  if (found == top) {
+    int lo = 4, hi = top; /* e(hi) <= target; top is the reference itself */
     double e_hi = 0.0;
-    if ((st = reference_for(s, ms, F3R_MAX_MODES, err)) != F3R_OK) return st;
+    if ((st = reference_for(s, ms, top, err)) != F3R_OK) return st;
     while (lo < hi) {
       const int mid = (lo + hi) / 2;
       int trial[3];
@@ -333,7 +374,7 @@ f3r_status f3r_mode_search_run(const f3r_scene* s, f3r_mode_search* ms, double t
     est = e_hi;
     uniform(ms, found, modes);
   }
-  if (found == F3R_MAX_MODES) {
+  if (found == top) {
     *estimate = 0.0;
     return F3R_OK;
   }

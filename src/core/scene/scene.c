@@ -358,11 +358,7 @@ static f3r_status validate_static_correction(const f3r_scene* s, int i, f3r_erro
                            "true given for a rigid link, which has no modes (allowed with "
                            "model fixed_free or fixed_pinned)");
   const int shapes = f3r_link_static_shapes(L->model);
-  if (L->modes == F3R_MODES_AUTO || L->modes == 0)
-    return f3r_scene_error(err, name, NULL,
-                           "true needs a number of modes: the accuracy knob does not choose "
-                           "them with the correction (give links[%d].modes 1..%d)",
-                           i, F3R_MAX_MODES - shapes);
+  /* open modes (auto, or left to the accuracy knob): the search adds the shapes to its counts */
   if (L->modes + shapes > F3R_MAX_MODES) {
     snprintf(name, sizeof name, "links[%d].modes", i);
     return f3r_scene_error(err, name, NULL,

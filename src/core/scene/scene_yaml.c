@@ -44,6 +44,7 @@ static f3r_status read_link(loader* L, const yaml_node_t* map, int i) {
       if ((st = f3r_yaml_number(L, value, name, &link->auto_tolerance)) != F3R_OK) return st;
     } else if (!strcmp(key, "static_correction")) {
       if ((st = f3r_yaml_bool(L, value, name, &link->static_correction)) != F3R_OK) return st;
+      L->scene->explicit_settings |= F3R_EXPLICIT_STATIC_CORRECTION << i;
       f3r_yaml_remember(L, name, value);
     } else if (!strcmp(key, "damping_ratio")) {
       if ((st = f3r_yaml_number(L, value, name, &link->damping_ratio)) != F3R_OK) return st;
