@@ -416,14 +416,25 @@ static void add_mass_times_legs(const f3r_model* m, const int* owner, const f3r_
  * nonzero (a skipped term is an exact zero). */
 static void add_leg_columns(const f3r_model* m, const double* X, const double* b, double* o) {
   const int nq = m->nq;
-  for (int c = 0; c < F3R_Q_LEG_JOINTS; ++c) {
-    const double bc = b[c]; /* held: o may alias nothing it reads, but the compiler can't know */
+  /* link by link: its rows take the rho_i column's term, then the theta_i column's, the order of
+   * the dense sum (the other legs' columns do not reach them); both in one pass where both are
+   * nonzero, so that each row is loaded and stored once */
+  for (int i = 0; i < 3; ++i) {
+    const int base = m->link[i].eta_index, modes = m->link[i].modes, t = F3R_Q_THETA + i;
+    const double br = b[i], bt = b[t]; /* held: o may alias nothing it reads */
+    const double *xr = X + (size_t)nq * i, *xt = X + (size_t)nq * t;
+    if (br != 0.0 && bt != 0.0) {
+      o[i] = (o[i] + xr[i] * br) + xt[i] * bt;
+      o[t] = (o[t] + xr[t] * br) + xt[t] * bt;
+      for (int j = base; j < base + modes; ++j) o[j] = (o[j] + xr[j] * br) + xt[j] * bt;
+      continue;
+    }
+    const double bc = br != 0.0 ? br : bt;
     if (bc == 0.0) continue;
-    const int i = c % 3, base = m->link[i].eta_index;
-    const double* x = X + (size_t)nq * c;
+    const double* x = br != 0.0 ? xr : xt;
     o[i] += x[i] * bc;
-    o[F3R_Q_THETA + i] += x[F3R_Q_THETA + i] * bc;
-    for (int j = 0; j < m->link[i].modes; ++j) o[base + j] += x[base + j] * bc;
+    o[t] += x[t] * bc;
+    for (int j = base; j < base + modes; ++j) o[j] += x[j] * bc;
   }
 }
 
