@@ -734,6 +734,19 @@ HEADER = ["name", "stages", "order(embedded)", "measured order", "local-error or
           "y_max per stage", "damping |R(i)|", "notes"]
 
 
+def write_junit(path, failed_tables):
+    """One test case a table: its algebraic order conditions (and, without --quick, its measured
+    order) at the order it claims."""
+    import xml.etree.ElementTree as ET
+    suite = ET.Element("testsuite", name="butcher_tables", tests=str(len(failed_tables)),
+                       failures=str(sum(1 for f in failed_tables.values() if f)), errors="0")
+    for name, failed in failed_tables.items():
+        case = ET.SubElement(suite, "testcase", classname="butcher_tables", name=name)
+        if failed:
+            ET.SubElement(case, "failure", message="; ".join(failed))
+    ET.ElementTree(suite).write(path, encoding="utf-8", xml_declaration=True)
+
+
 def main():
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--csv", metavar="PATH", help="also write the summary table as CSV")
@@ -745,6 +758,9 @@ def main():
     ap.add_argument("--quick", action="store_true", help="skip the measured (integrated) orders")
     ap.add_argument("--only", metavar="NAME", action="append",
                     help="check only this table (repeatable)")
+    ap.add_argument("--junit", metavar="PATH",
+                    help="also write a JUnit XML report, one test case a table (CI's order-condition "
+                         "test: --no-sundials --quick --junit PATH, a few seconds)")
     args = ap.parse_args()
 
     tables = parse_erk_c(args.erk_c)
@@ -761,11 +777,13 @@ def main():
     do_order = not args.quick
     rows = []
     failures = []
+    failed_tables = {}
     for t in tables:
         r = check(t, do_order)
         report_details(t, r)
         sys.stdout.flush()
         rows.append(row(t, r, do_order))
+        before = len(failures)
         if r["alg_b"] < t.q or r["alg_d"] < t.p:
             failures.append("%s: algebraic order %d(%d) below the claimed %d(%d)"
                             % (t.name, r["alg_b"], r["alg_d"], t.q, t.p))
@@ -777,6 +795,9 @@ def main():
                   % (t.name, r["meas_b"], r["meas_d"]), file=sys.stderr)
         if abs(r["sum_b"] - 1) > 1e-14 or abs(r["sum_d"] - 1) > 1e-14 or r["rowsum"] > 1e-14:
             failures.append("%s: weights or row sums inconsistent" % t.name)
+        failed_tables[t.name] = failures[before:]
+    if args.junit:
+        write_junit(args.junit, failed_tables)
     def md(cells):
         return "| " + " | ".join(x.replace("|", "\\|") for x in cells) + " |"
     print(md(HEADER))
