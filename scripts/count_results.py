@@ -1,40 +1,58 @@
 """Counts test cases in the JUnit XML files under one or more folders, each given with the exit
-code of the ctest run that wrote it; prints 'N passed, N failed' last. Exits non-zero when any
-case failed, no case ran, or a ctest run failed.
-usage: count_results.py FOLDER CTEST_RC [FOLDER CTEST_RC ...]"""
+code of the ctest run that wrote it; prints 'N passed, N failed' last. A failed case is printed
+with the name of the folder it was found under (scripts/test gives each CI stage its own folder,
+so the last lines of a CI log name the stage that failed). Exits non-zero when any case failed,
+no case ran, or a ctest run failed.
+usage: count_results.py [--stage NAME] FOLDER CTEST_RC [FOLDER CTEST_RC ...]
+  --stage NAME  prints the last line as 'NAME: N passed, N failed' (one stage's count)"""
 import pathlib
 import sys
 import xml.etree.ElementTree as ET
 
-runs = [(pathlib.Path(f), int(rc)) for f, rc in zip(sys.argv[1::2], sys.argv[2::2])]
+args = sys.argv[1:]
+stage = None
+if args[:1] == ["--stage"]:
+    stage, args = args[1], args[2:]
+runs = [(pathlib.Path(f), int(rc)) for f, rc in zip(args[0::2], args[1::2])]
+
+
+def label(folder):
+    """The folder's name under stage_results/ (the stage, and the workspace within it)."""
+    parts = folder.parts
+    return "/".join(parts[parts.index("stage_results") + 1:]) if "stage_results" in parts else folder.name
+
+
 passed = failed = 0
 shown = set()  # failure messages printed: each once
-for xml in sorted(x for folder, _ in runs for x in folder.rglob("*.xml")):
-    try:
-        root = ET.parse(xml).getroot()
-    except ET.ParseError:
-        print(f"unreadable result file {xml}")
-        failed += 1
-        continue
-    for case in root.iter("testcase"):
-        if case.find("failure") is not None or case.find("error") is not None:
-            failed += 1
-            print(f"FAILED {xml.parent.name}/{xml.name}: {case.get('classname')}.{case.get('name')}")
-            # the first lines of the message, so that a CI log's tail says why
-            node = case.find("failure") if case.find("failure") is not None else case.find("error")
-            text = (node.get("message") or "") + "\n" + (node.text or "")
-            lines = tuple(dict.fromkeys(l.strip() for l in text.splitlines() if l.strip()))[:12]
-            if lines in shown:
-                print("    (the message above)")
-            else:
-                for line in lines:
-                    print(f"    {line[:300]}")
-                shown.add(lines)
-        elif case.find("skipped") is None:
-            passed += 1
 for folder, ctest_rc in runs:
-    if ctest_rc != 0 and failed == 0:
-        failed = 1
-        print(f"ctest in {folder.parent} reported a failure that left no result file (a crash or a timeout)")
-print(f"{passed} passed, {failed} failed")
+    failed_here = failed
+    for xml in sorted(folder.rglob("*.xml")):
+        try:
+            root = ET.parse(xml).getroot()
+        except ET.ParseError:
+            print(f"unreadable result file [{label(folder)}] {xml}")
+            failed += 1
+            continue
+        for case in root.iter("testcase"):
+            if case.find("failure") is not None or case.find("error") is not None:
+                failed += 1
+                print(f"FAILED [{label(folder)}] {xml.parent.name}/{xml.name}: "
+                      f"{case.get('classname')}.{case.get('name')}")
+                # the first lines of the message, so that a CI log's tail says why
+                node = case.find("failure") if case.find("failure") is not None else case.find("error")
+                text = (node.get("message") or "") + "\n" + (node.text or "")
+                lines = tuple(dict.fromkeys(l.strip() for l in text.splitlines() if l.strip()))[:12]
+                if lines in shown:
+                    print("    (the message above)")
+                else:
+                    for line in lines:
+                        print(f"    {line[:300]}")
+                    shown.add(lines)
+            elif case.find("skipped") is None:
+                passed += 1
+    if ctest_rc != 0 and failed == failed_here:
+        failed += 1
+        print(f"FAILED [{label(folder)}] a run exited with {ctest_rc} but left no failed case: "
+              f"a crash or a timeout (see its log under build/)")
+print(f"{stage + ': ' if stage else ''}{passed} passed, {failed} failed")
 sys.exit(1 if failed or passed == 0 else 0)
