@@ -15,7 +15,7 @@ renders it in rviz under Xvfb with scripts/render_bag, and checks the result:
                  two regions, and the platform's centroid moved by the TF's displacement (+-4 px).
 
 Exit 0 when all pass; otherwise 1 with a message per failure. --junit FILE writes JUnit XML
-(for catkin's run_tests.py). Needs a sourced devel/setup.bash, Xvfb, rviz, xdotool, ImageMagick.
+(for catkin's run_tests.py). Needs a sourced devel/setup.bash, Xvfb, rviz, ImageMagick.
 Every process it starts is stopped at exit."""
 import argparse
 import math
@@ -242,9 +242,9 @@ def run(args, checks, work):
     import numpy as np
     from PIL import Image
 
-    for tool in ("roslaunch", "rosmaster", "rostopic", "rosbag", "Xvfb", "rviz", "xdotool", "/usr/bin/import"):
+    for tool in ("roslaunch", "rosmaster", "rostopic", "rosbag", "Xvfb", "rviz", "/usr/bin/import"):
         if not shutil.which(tool):
-            raise RuntimeError(f"{tool} not found (source devel/setup.bash; Debian packages xvfb rviz xdotool imagemagick)")
+            raise RuntimeError(f"{tool} not found (source devel/setup.bash; Debian packages xvfb rviz imagemagick)")
     env = dict(os.environ)
     env["PATH"] = "/usr/bin:/bin:" + env.get("PATH", "")
     env["PYENV_VERSION"] = "system"
