@@ -49,8 +49,8 @@ def markdown_files():
     return sorted(f for f in tracked_files() if f.endswith(".md"))
 
 
-def strip_code(text):
-    """Markdown without its fenced blocks and inline code spans, line count kept."""
+def strip_code(text, inline=True):
+    """Markdown without its fenced blocks and (inline) its code spans, line count kept."""
     out, fence = [], None
     for line in text.split("\n"):
         m = re.match(r"^\s*(```+|~~~+)", line)
@@ -63,7 +63,7 @@ def strip_code(text):
             fence = m.group(1)
             out.append("")
             continue
-        out.append(re.sub(r"(`+)(?:(?!\1).)+?\1", "", line))
+        out.append(re.sub(r"(`+)(?:(?!\1).)+?\1", "", line) if inline else line)
     return "\n".join(out)
 
 
@@ -86,7 +86,7 @@ def anchors(markdown_text):
     """The heading anchors a repository host generates (GitHub's rule: lower case, punctuation
     dropped, spaces to hyphens, repeats numbered)."""
     seen, result = {}, set()
-    for line in strip_code(markdown_text).split("\n"):
+    for line in strip_code(markdown_text, inline=False).split("\n"):
         m = re.match(r"^\s{0,3}#{1,6}\s+(.*?)\s*#*\s*$", line)
         if not m:
             continue
