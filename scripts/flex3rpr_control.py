@@ -24,7 +24,7 @@ import time
 
 import numpy as np
 
-# ---- geometry (README "Conventions"; defaults of the scene's geometry and link sections) ---------
+# ---- geometry (docs/model.md; defaults of the scene's geometry and link sections) ---------
 LEG_ANGLES = (-math.pi / 6, math.pi / 2, 7 * math.pi / 6)
 JOINTS_RHO = ["leg_%d_prismatic" % (i + 1) for i in range(3)]
 JOINTS_THETA = ["leg_%d_revolute" % (i + 1) for i in range(3)]

@@ -99,7 +99,7 @@ def urdf(g, points, prefix):
          '  <material name="orange"><color rgba="1.0 0.5 0.0 1"/></material>\n',
          '  <material name="green"><color rgba="0.1 0.8 0.1 1"/></material>\n',
          link("base", triangle(g["base_joint"], 0.01, "grey"))]
-    # Cylinder inertia about its centre: m_c (L^2/12 + (r_o^2 + r_i^2)/4) (MODEL.md gives it about A_i).
+    # Cylinder inertia about its centre: m_c (L^2/12 + (r_o^2 + r_i^2)/4) (docs/model.md gives it about A_i).
     m_c, L_c = g["cylinder_mass"], g["cylinder_length"]
     ro, ri = g["cylinder_outer_diameter"] / 2, g["cylinder_inner_diameter"] / 2
     i_centre = m_c * (L_c ** 2 / 12 + (ro ** 2 + ri ** 2) / 4)

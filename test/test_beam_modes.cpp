@@ -59,7 +59,7 @@ TEST(BeamModes, RootsMatchBisectionOfThePrintedEquations) {
   EXPECT_NEAR(a[1], 4.694091133, 0.5e-9);
   EXPECT_NEAR(a[2], 7.854757438, 0.5e-9);
   EXPECT_NEAR(a[3], 10.99554073, 0.5e-8);
-  ASSERT_EQ(f3r_beam_roots(F3R_BEAM_FIXED_PINNED, 3, a), 0);  // MODEL.md
+  ASSERT_EQ(f3r_beam_roots(F3R_BEAM_FIXED_PINNED, 3, a), 0);  // docs/model.md
   EXPECT_NEAR(a[0], 3.926602, 0.5e-6);
   EXPECT_NEAR(a[1], 7.068583, 0.5e-6);
   EXPECT_NEAR(a[2], 10.210176, 0.5e-6);

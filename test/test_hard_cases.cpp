@@ -1,4 +1,4 @@
-// The hard-case suite: where a plant model hurts. Each case asserts numbers; the README's
+// The hard-case suite: where a plant model hurts. Each case asserts numbers; docs/testing.md's
 // hard-case table lists them with the measured values (printed here as "measured: ...").
 #include <gtest/gtest.h>
 

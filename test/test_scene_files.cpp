@@ -29,7 +29,8 @@ std::vector<std::string> ShippedScenes() {
 }
 
 // Every scene runs to its end, but two long ones, shortened: free_vibration_long (60 s) to 1 s,
-// and stiff_high_modes, which resolves its 20 modes at a real-time factor of 0.005 (README), to 5 ms.
+// and stiff_high_modes, which resolves its 20 modes at a real-time factor of 0.005
+// (docs/scenes.md), to 5 ms.
 TEST(SceneFiles, EveryShippedSceneLoadsAndRunsToItsEnd) {
   const auto names = ShippedScenes();
   ASSERT_GE(names.size(), 12u);

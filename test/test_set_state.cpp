@@ -74,7 +74,7 @@ TEST_P(SetState, IsConsistentReadsBackExactlyAndRestartsTheEnergyBalance) {
   EXPECT_LT(o->constraint_residual, 1e-15);
   EXPECT_LT(o->velocity_residual, 1e-14);
   // The tip deflections of the links given above: rigid none, fixed-pinned none, fixed-free
-  // sum psi_j(1) eta_j with psi_j(1) = 2 (-1)^j (MODEL.md).
+  // sum psi_j(1) eta_j with psi_j(1) = 2 (-1)^j (docs/model.md).
   EXPECT_EQ(o->tip_deflection[0], 0.0);
   EXPECT_EQ(o->tip_deflection[1], 0.0);
   EXPECT_NEAR(o->tip_deflection[2], -2.0 * modal[3] + 2.0 * modal[4], 1e-15);

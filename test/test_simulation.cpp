@@ -88,7 +88,8 @@ TEST_P(FreeVibration, ConservesMechanicalEnergyUpToTheIntegratorsDamping) {
   const auto model = std::get<0>(GetParam());
   const auto form = std::get<1>(GetParam());
   long steps_loose = 0, steps_tight = 0;
-  // rtol 1e-10, not tighter: the dae formulation's Newton iteration can fail below (README).
+  // rtol 1e-10, not tighter: the dae formulation's Newton iteration can fail below
+  // (docs/solvers.md).
   const double loose = FreeVibrationDrift(model, form, 1e-8, &steps_loose);
   const double tight = FreeVibrationDrift(model, form, 1e-10, &steps_tight);
   EXPECT_LT(tight, 3e-6) << "relative drift of T + V over 0.2 s, " << steps_tight << " steps";
@@ -208,7 +209,7 @@ TEST(ClosedFormLimits, HeavySurroundingsGiveFixedPinnedBeamFrequencies) {
         alpha * alpha * std::sqrt(m->bending_stiffness / (rho_a * l * l * l * l)) / (2 * M_PI);
     EXPECT_NEAR(hz[k], expected, 1e-3 * expected) << "mode " << k;
   }
-  EXPECT_NEAR(hz[3], 869.7, 0.5) << "MODEL.md's first fixed-pinned frequency";
+  EXPECT_NEAR(hz[3], 869.7, 0.5) << "docs/model.md's first fixed-pinned frequency";
 }
 
 TEST(ClosedFormLimits, VeryStiffLinksFollowTheRigidModel) {

@@ -234,7 +234,7 @@ INSTANTIATE_TEST_SUITE_P(AllLinkModels, StagesTest,
 
 TEST(Stages, AppendixCorrectionOfModalCoriolisForce) {
   // The paper's appendix prints F_c_eta = +rho' th' int psi; the derivation gives
-  // -m rho' th' int psi (MODEL.md). h = -F_c, so h_eta must be +m rho' th' b_j.
+  // -m rho' th' int psi (docs/model.md). h = -F_c, so h_eta must be +m rho' th' b_j.
   auto m = MakeModel(
       SceneWithLinks(F3R_LINK_FIXED_FREE, 3, F3R_LINK_FIXED_FREE, 3, F3R_LINK_FIXED_FREE, 3));
   std::vector<double> q(F3R_MAX_Q, 0.0), v(F3R_MAX_Q, 0.0), h(F3R_MAX_Q);

@@ -1,4 +1,4 @@
-/* Assumed modes of a clamped Euler-Bernoulli beam (paper eqs. 3-7, ../shared/MODEL.md).
+/* Assumed modes of a clamped Euler-Bernoulli beam (paper eqs. 3-7, docs/model.md).
  *
  * A link is clamped at B (xi = 0) and either pinned or free at C (xi = 1). Mode j (1-based) is
  *   psi_j(xi) = (cos a xi - cosh a xi) - sigma_j (sin a xi - sinh a xi),   a = alpha_j,

@@ -41,7 +41,7 @@ typedef struct {
  * see its layout in src/core/physics/model_layout.h. */
 typedef struct f3r_model f3r_model;
 
-/* The numbers the shells draw and check a robot with (../shared/MODEL.md). */
+/* The numbers the shells draw and check a robot with (docs/model.md). */
 typedef struct {
   double base_joint[3][2];       /* A_i (m) */
   double platform_angle[3];      /* phi_i of C_i on the platform: -pi/6, pi/2, 7pi/6 */
@@ -75,7 +75,7 @@ const f3r_scene* f3r_model_scene(const f3r_model* model);
 f3r_status f3r_model_create(const f3r_scene* scene, f3r_model** model, f3r_error* err);
 void f3r_model_destroy(f3r_model* model);
 
-/* Closed-form loop closure (../shared/MODEL.md): the full coordinates q (nq) from the platform
+/* Closed-form loop closure (docs/model.md): the full coordinates q (nq) from the platform
  * pose and the modal coordinates in q (which are read), filling rho and theta of each link.
  * Returns F3R_ERR_SINGULAR if a link would need rho_i + l <= 0. */
 f3r_status f3r_model_close_loops(const f3r_model* model, double* q);

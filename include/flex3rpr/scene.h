@@ -1,5 +1,5 @@
 /* f3r_scene: everything one run asks for, as a plain struct with documented defaults.
- * f3r_default_scene() gives Table I of the paper with the conventions of ../shared/MODEL.md,
+ * f3r_default_scene() gives Table I of the paper with the conventions of docs/model.md,
  * rigid links, no inputs, the minimal formulation on IDA at rtol 2e-7; a caller (or the YAML loader) changes only what it needs.
  * All quantities are SI: m, kg, s, N, rad. */
 #ifndef FLEX3RPR_SCENE_H

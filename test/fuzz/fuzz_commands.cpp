@@ -10,7 +10,7 @@
 //    at the indices of model.h's layout, zero elsewhere;
 //  - rejected (a reason returned): the reason is not empty and forces is unchanged (size and
 //    every bit);
-//  - the decision agrees with an independent statement of the rules (README "Inputs"): a
+//  - the decision agrees with an independent statement of the rules (docs/ros.md, "Inputs"): a
 //    message is accepted exactly when its lengths, frame and values are allowed.
 //
 //   scripts/fuzz [SECONDS]   builds this with clang++ -fsanitize=fuzzer,address,undefined

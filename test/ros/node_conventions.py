@@ -9,7 +9,7 @@ ROS user expects of a simulator node.
      TF and its twist is the rate of its pose
   d  commands arrive with TCP_NODELAY
   e  while paused: joint_states still arrive, a late tf2 listener gets the frames, /diagnostics
-  f  the README's rostopic pub examples move the platform and leave the node running
+  f  the rostopic pub examples (README, docs/ros.md) move the platform and leave the node running
 """
 import math
 import os
@@ -210,11 +210,16 @@ class NodeConventions(unittest.TestCase):
             rospy.ServiceProxy(NODE + "/resume", Empty)()
 
     def readme_commands(self, marker, prefix):
-        """The lines starting with prefix in the README's code block after <!-- marker -->."""
-        text = open(os.path.join(PKG, "README.md")).read()
-        block = re.search(r"<!-- %s -->\s*```\n(.*?)```" % marker, text, re.S)
-        self.assertIsNotNone(block, "README: the examples after <!-- %s -->" % marker)
-        return [line for line in block.group(1).splitlines() if line.startswith(prefix)]
+        """The lines starting with prefix in the code blocks after <!-- marker --> in the README
+        and docs/ros.md (each once, in order): the examples a user copies are the ones run."""
+        lines = []
+        for name in ("README.md", os.path.join("docs", "ros.md")):
+            text = open(os.path.join(PKG, name)).read()
+            for block in re.findall(r"<!-- %s -->\s*```\n(.*?)```" % marker, text, re.S):
+                lines += [line for line in block.splitlines()
+                          if line.startswith(prefix) and line not in lines]
+        self.assertTrue(lines, "README.md, docs/ros.md: the examples after <!-- %s -->" % marker)
+        return lines
 
     def test_f_readme_examples_move_the_platform(self):
         commands = self.readme_commands("ros-examples", "rostopic pub")

@@ -63,7 +63,7 @@ LIMIT_FORCE, LIMIT_TORQUE = 1000.0, 100.0
 # ~platform_wrench. fields is a plain dict, turned into a message by to_message().
 
 def random_invalid(rng, topic, n_modal, world):
-    """A command the node must reject, of one of the kinds README's "Inputs" lists."""
+    """A command the node must reject, of one of the kinds docs/ros.md's "Inputs" lists."""
     bad = rng.choice([math.nan, -math.nan, math.inf, -math.inf])
     if topic == 0:
         c = {"leg_force": [0.0] * 3, "cylinder_torque": [0.0] * 3, "platform": [0.0] * 3, "modal": []}

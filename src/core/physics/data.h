@@ -6,7 +6,7 @@
  * field. Private: the public (q, v) functions of stages.h run the stages they need into a local
  * f3r_data and read it.
  *
- * Conventions (../shared/MODEL.md, dynamics.c, constraints.c): per link, e = (c, s) along the
+ * Conventions (docs/model.md, dynamics.c, constraints.c): per link, e = (c, s) along the
  * leg, n = (-s, c) across it, L = rho + l, w the tip deflection; C_i sits at
  * P + r_PC (cc, sc) with (cc, sc) = (cos, sin)(phi_i + phi_p). */
 #ifndef FLEX3RPR_DATA_H

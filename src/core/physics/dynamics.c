@@ -10,7 +10,7 @@
  *   h_rho = -1/2 m (l + 2 rho) th'^2 - (1 + e) m th' s'
  *   h_th  = m (l + 2 rho) rho' th' + (1 - e) m rho' s' + 2 e m th' eta.eta'
  *   h_eta_k = (1 + e) m rho' th' b_k - e m th'^2 eta_k
- * (the paper's F_c = -h, with its F_c_eta corrected as ../shared/MODEL.md says). The platform
+ * (the paper's F_c = -h, with its F_c_eta corrected as docs/model.md says). The platform
  * (eq. 10) adds diag(m_p, m_p, I_p) and no velocity terms. Bending energy (eq. 12):
  *   V = 1/2 sum EI/l^3 alpha_j^4 eta_j^2. */
 #include <math.h>

@@ -36,7 +36,7 @@ struct f3r_model {
   f3r_scene scene; /* the scene the model was built from (validated); its tables are in the
                     * model's buffer */
 
-  /* geometry (../shared/MODEL.md) */
+  /* geometry (docs/model.md) */
   double base_joint[3][2];         /* A_i (m) */
   double platform_angle[3];        /* phi_i of C_i on the platform: -pi/6, pi/2, 7pi/6 */
   double platform_radius;          /* r_PC (m) */

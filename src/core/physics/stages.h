@@ -2,7 +2,7 @@
  * Private (flex3rpr_core_private): the tests, the benchmark and the peer library assemble the
  * same model from them.
  *
- * Equations of motion (paper eq. 18-19, derived from eqs. 8-17, ../shared/MODEL.md):
+ * Equations of motion (paper eq. 18-19, derived from eqs. 8-17, docs/model.md):
  *   M(q) a + h(q, v) + k(q) = Q(t, q, v) + G(q)^T lambda,     g(q) = 0
  * with v = dq/dt, a = dv/dt, M the mass matrix, h = dM/dt v - dT/dq the velocity-dependent
  * (Coriolis and centrifugal) forces, k = dV/dq the elastic forces, Q the generalized forces,

@@ -1,4 +1,4 @@
-/* Scene defaults (Table I, ../shared/MODEL.md), range checks and scripted inputs. */
+/* Scene defaults (Table I, docs/model.md), range checks and scripted inputs. */
 #include <math.h>
 #include <stddef.h>
 #include <stdio.h>
