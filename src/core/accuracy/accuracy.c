@@ -103,14 +103,19 @@ static unsigned correctable_links(const choice_run* run) {
   return links;
 }
 
-/* Both bases' costs, where each found counts within the model's share (0 otherwise). */
-static f3r_status basis_costs(choice_run* run, const f3r_scene* corrected,
-                              const f3r_mode_search* ms, const int* plain_modes, f3r_error* err) {
-  f3r_status st = F3R_OK;
-  if (run->plain_found)
-    st = f3r_mode_search_cost(run->s, &run->ms, plain_modes, &run->plain_cost, err);
-  if (st == F3R_OK && run->corrected_found)
-    st = f3r_mode_search_cost(corrected, ms, run->corrected_modes, &run->corrected_cost, err);
+/* Clears run->correctable when the paper's modes the search found cost no more than the least
+ * corrected basis (its cost only grows with the modes): then no corrected search is needed. On
+ * the shipped scenes where the paper's modes win, that spares 10 to 45 ms of choosing. */
+static f3r_status cheaper_than_any_correction(choice_run* run, const f3r_scene* corrected,
+                                              const f3r_accuracy_choice* c, f3r_error* err) {
+  int least[3];
+  f3r_mode_search_least(&run->ms, least);
+  for (int i = 0; i < 3; ++i)
+    if (run->correctable >> i & 1) least[i] = 1;
+  double least_cost = 0.0;
+  f3r_status st = f3r_mode_search_cost(run->s, &run->ms, c->modes, &run->plain_cost, err);
+  if (st == F3R_OK) st = f3r_mode_search_cost(corrected, &run->ms, least, &least_cost, err);
+  if (st == F3R_OK && run->plain_cost <= least_cost) run->least_corrected_cost = least_cost;
   return st;
 }
 
@@ -130,13 +135,18 @@ static f3r_status compare_correction(choice_run* run, f3r_accuracy_choice* c, f3
   memcpy(run->plain_modes, c->modes, sizeof run->plain_modes);
   run->plain_error = c->model_error;
   run->plain_found = f3r_mode_search_found(&run->ms, c->modes);
-  f3r_status st = f3r_mode_search_init(&corrected, run->chosen, &ms, err);
+  f3r_status st = F3R_OK;
+  if (run->plain_found && (st = cheaper_than_any_correction(run, &corrected, c, err)) != F3R_OK)
+    return st;
+  if (run->least_corrected_cost > 0.0) return F3R_OK;
+  st = f3r_mode_search_init(&corrected, run->chosen, &ms, err);
   if (st == F3R_OK)
     st = f3r_mode_search_run(&corrected, &ms, run->model_target / ratio, run->corrected_modes,
                              &estimate, err);
   run->corrected_error = ratio * estimate;
   run->corrected_found = st == F3R_OK && f3r_mode_search_found(&ms, run->corrected_modes);
-  if (st == F3R_OK) st = basis_costs(run, &corrected, &ms, c->modes, err);
+  if (st == F3R_OK && run->corrected_found)
+    st = f3r_mode_search_cost(&corrected, &ms, run->corrected_modes, &run->corrected_cost, err);
   const int take = st == F3R_OK && run->corrected_found &&
                    (!run->plain_found || run->corrected_cost < run->plain_cost);
   run->ms.evaluations += ms.evaluations;
@@ -154,6 +164,7 @@ static f3r_status compare_correction(choice_run* run, f3r_accuracy_choice* c, f3
   /* the pilot's runs and reference are of the paper's basis: a solver check starts its own */
   f3r_pilot_free(&run->pilot);
   run->pilot_started = 0;
+  run->unmeasured_basis = 1;
   return F3R_OK;
 }
 
@@ -266,6 +277,12 @@ static f3r_status pick_relation(choice_run* run, const f3r_accuracy_choice* c, s
   const double budget = p->budget;
   f3r_status st = F3R_OK;
   p->limit = run->impacts ? budget / IMPACT_AMPLIFICATION : budget;
+  /* The relations were measured on the paper's modes. On the static correction the solver keeps
+   * a tenth of its budget: on resonance.yaml, driven at a resonance for 0.25 s, minimal IDA at
+   * rtol 1e-3 (2.1e-6 m on the benchmark's scenes) left 1 mode + 3 shapes 2.2e-5 m from the
+   * converged path, at rtol 1e-4 2.4e-8 m for the same steps; a pilot over the first tenth of
+   * the run saw nothing of it (the resonance builds up later). */
+  if (run->unmeasured_basis) p->limit *= SOLVER_CHECK_SHARE;
   int most = 0;
   for (int i = 0; i < 3; ++i) most = c->modes[i] > most ? c->modes[i] : most;
   const double explicit_scale =

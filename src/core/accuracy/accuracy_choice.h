@@ -52,11 +52,14 @@ typedef struct {
   int plain_modes[3], corrected_modes[3];
   int plain_found, corrected_found;
   double plain_error, corrected_error, plain_cost, corrected_cost;
-  int impacts;            /* end stops on a path that moves: the most faithful model */
-  int long_run;           /* longer than the benchmark's scenes */
-  double linear_error;    /* m: the search's last linear estimate */
-  int pair, pair_skipped; /* the pilot's pair ran, or was skipped as needless */
-  int kinematics;         /* a pilot measures exact kinematics' effect */
+  double least_corrected_cost; /* > 0: the search was spared, the paper's modes cost no more */
+  int impacts;                 /* end stops on a path that moves: the most faithful model */
+  int long_run;                /* longer than the benchmark's scenes */
+  int unmeasured_basis;        /* the static correction: the relations were measured on the paper's
+                           * modes, so the solver keeps SOLVER_CHECK_SHARE of its budget */
+  double linear_error;         /* m: the search's last linear estimate */
+  int pair, pair_skipped;      /* the pilot's pair ran, or was skipped as needless */
+  int kinematics;              /* a pilot measures exact kinematics' effect */
   int kinematics_linear_only;
   f3r_pilot pilot;
   int pilot_started;

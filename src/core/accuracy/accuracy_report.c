@@ -67,6 +67,16 @@ static void counts(const int* modes, char* text, size_t size) {
  * paper's modes: each one's counts, estimate and relative cost, and which it kept. */
 static void summarise_basis(const choice_run* run, f3r_accuracy_choice* c) {
   if (!run->correctable) return;
+  if (run->least_corrected_cost > 0.0) {
+    char plain[32];
+    counts(run->plain_modes, plain, sizeof plain);
+    f3r_accuracy_append(c->summary, sizeof c->summary,
+                        "basis: the paper's modes %s (cost %.3g) cost no more than the least "
+                        "static correction, 1 mode + static shapes (cost %.3g): not searched; cost "
+                        "is sqrt(highest linearised frequency) x coordinates\n",
+                        plain, run->plain_cost, run->least_corrected_cost);
+    return;
+  }
   char plain[32], corrected[32], p_est[64] = "no count within the share",
                                  c_est[64] = "no count within the share";
   counts(run->plain_modes, plain, sizeof plain);
@@ -192,6 +202,11 @@ void f3r_summarise_relation(const choice_run* run, f3r_accuracy_choice* c, const
       f3r_formulation_name(r->formulation), f3r_integrator_name(r->integrator),
       r->table[0] ? " " : "", r->table, r->rtol, c->atol, p->limit, r->error, r->scenes, r->kind,
       r->cost, f3r_solver_relations_source);
+  if (run->unmeasured_basis)
+    f3r_accuracy_append(text, size,
+                        "solver: the relations were measured on the paper's modes; on the static "
+                        "correction it keeps %g of its budget %.3g m\n",
+                        SOLVER_CHECK_SHARE, p->budget);
   if (run->impacts)
     f3r_accuracy_append(
         text, size,
