@@ -7,9 +7,10 @@ import sys
 import tempfile
 import time
 import unittest
-import xml.etree.ElementTree as ET
 
 ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
+sys.path.insert(0, os.path.join(ROOT, "scripts"))
+import flex3rpr_tools  # noqa: E402  (scripts/: JUnit)
 SWEEP = os.path.join(ROOT, "scripts", "sweep")
 TIMING_COLUMNS = {"cpu_time_s", "wall_time_s", "host"}
 
@@ -70,20 +71,12 @@ def run_junit(test_case_classes, junit_path, suite_name):
     ids = [t.id() for t in suite_tests(suite)]  # the suite lets go of its tests as they run
     result = unittest.TextTestRunner(verbosity=2, stream=sys.stdout).run(suite)
     if junit_path:
-        root = ET.Element("testsuite", name=suite_name, tests=str(result.testsRun),
-                          failures=str(len(result.failures)), errors=str(len(result.errors)))
         bad = {t.id(): text for t, text in result.failures + result.errors}
-        for test_id in ids:
-            parts = test_id.split(".")
-            case = ET.SubElement(root, "testcase", classname=f"{suite_name}.{parts[-2]}", name=parts[-1])
-            if test_id in bad:
-                ET.SubElement(case, "failure", message=bad[test_id][-2000:])
-        for test_id, text in bad.items():  # a failed setUpClass or tearDownClass belongs to no test
-            if test_id not in ids:
-                case = ET.SubElement(root, "testcase", classname=suite_name, name=test_id.split(" ")[0])
-                ET.SubElement(case, "failure", message=text[-2000:])
-        os.makedirs(os.path.dirname(junit_path), exist_ok=True)
-        ET.ElementTree(root).write(junit_path)
+        cases = [(f"{suite_name}.{test_id.split('.')[-2]}", test_id.split(".")[-1], bad.get(test_id))
+                 for test_id in ids]
+        # a failed setUpClass or tearDownClass belongs to no test
+        cases += [(suite_name, test_id.split(" ")[0], text) for test_id, text in bad.items() if test_id not in ids]
+        flex3rpr_tools.write_junit(junit_path, suite_name, cases)
     return 0 if result.wasSuccessful() else 1
 
 
