@@ -8,6 +8,7 @@ docs/benchmarks/.
   error_message(summary, p)   why a run failed, in one line
   yaml_value(v)               a value as `--set FIELD=VALUE` takes it (PyYAML, one line)
   write_junit(path, suite, cases)
+  run_unittest(classes, junit_path, suite)   unittest cases, their report and their JUnit XML
   write_csv(path, rows)
   replace_section(path, begin, end, section)   a generated report between its marker lines
   machine_stamp()             CPU, cores, date and commit, for a report
@@ -23,6 +24,8 @@ import json
 import os
 import shutil
 import subprocess
+import sys
+import unittest
 import xml.etree.ElementTree as ET
 
 HERE = os.path.dirname(os.path.abspath(__file__))
@@ -97,6 +100,31 @@ def write_junit(path, suite, cases):
     os.makedirs(os.path.dirname(os.path.abspath(path)), exist_ok=True)
     ET.ElementTree(root).write(path, encoding="utf-8", xml_declaration=True)
     return failures
+
+
+def run_unittest(test_case_classes, junit_path, suite_name):
+    """Runs the unittest cases, prints unittest's report, writes JUnit XML when junit_path is
+    given (classname SUITE.CLASS); exit code 0 when all pass."""
+    loader = unittest.TestLoader()
+    suite = unittest.TestSuite(loader.loadTestsFromTestCase(c) for c in test_case_classes)
+    ids = [t.id() for t in _suite_tests(suite)]  # the suite lets go of its tests as they run
+    result = unittest.TextTestRunner(verbosity=2, stream=sys.stdout).run(suite)
+    if junit_path:
+        bad = {t.id(): text for t, text in result.failures + result.errors}
+        cases = [(f"{suite_name}.{test_id.split('.')[-2]}", test_id.split(".")[-1], bad.get(test_id))
+                 for test_id in ids]
+        # a failed setUpClass or tearDownClass belongs to no test
+        cases += [(suite_name, test_id.split(" ")[0], text) for test_id, text in bad.items() if test_id not in ids]
+        write_junit(junit_path, suite_name, cases)
+    return 0 if result.wasSuccessful() else 1
+
+
+def _suite_tests(suite):
+    for t in suite:
+        if isinstance(t, unittest.TestSuite):
+            yield from _suite_tests(t)
+        else:
+            yield t
 
 
 def write_csv(path, rows):

@@ -6,7 +6,6 @@ import subprocess
 import sys
 import tempfile
 import time
-import unittest
 
 ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
 sys.path.insert(0, os.path.join(ROOT, "scripts"))
@@ -66,26 +65,7 @@ def wait_for(predicate, timeout=1800, step=0.05):
 
 def run_junit(test_case_classes, junit_path, suite_name):
     """Runs the cases, prints unittest's report, writes JUnit XML; exit code 0 when all pass."""
-    loader = unittest.TestLoader()
-    suite = unittest.TestSuite(loader.loadTestsFromTestCase(c) for c in test_case_classes)
-    ids = [t.id() for t in suite_tests(suite)]  # the suite lets go of its tests as they run
-    result = unittest.TextTestRunner(verbosity=2, stream=sys.stdout).run(suite)
-    if junit_path:
-        bad = {t.id(): text for t, text in result.failures + result.errors}
-        cases = [(f"{suite_name}.{test_id.split('.')[-2]}", test_id.split(".")[-1], bad.get(test_id))
-                 for test_id in ids]
-        # a failed setUpClass or tearDownClass belongs to no test
-        cases += [(suite_name, test_id.split(" ")[0], text) for test_id, text in bad.items() if test_id not in ids]
-        flex3rpr_tools.write_junit(junit_path, suite_name, cases)
-    return 0 if result.wasSuccessful() else 1
-
-
-def suite_tests(suite):
-    for t in suite:
-        if isinstance(t, unittest.TestSuite):
-            yield from suite_tests(t)
-        else:
-            yield t
+    return flex3rpr_tools.run_unittest(test_case_classes, junit_path, suite_name)
 
 
 def parse_args(prefix):
