@@ -2,11 +2,17 @@
 code of the ctest run that wrote it; prints 'N passed, N failed' last. Exits non-zero when any
 case failed, no case ran, or a ctest run failed.
 usage: count_results.py FOLDER CTEST_RC [FOLDER CTEST_RC ...]"""
+import argparse
 import pathlib
 import sys
 import xml.etree.ElementTree as ET
 
-runs = [(pathlib.Path(f), int(rc)) for f, rc in zip(sys.argv[1::2], sys.argv[2::2])]
+ap = argparse.ArgumentParser(description=__doc__.split("\nusage:")[0])
+ap.add_argument("runs", nargs="+", metavar="FOLDER CTEST_RC", help="a results folder and its ctest exit code, in pairs")
+args = ap.parse_args()
+if len(args.runs) % 2:
+    ap.error("FOLDER and CTEST_RC come in pairs")
+runs = [(pathlib.Path(f), int(rc)) for f, rc in zip(args.runs[0::2], args.runs[1::2])]
 passed = failed = 0
 shown = set()  # failure messages printed: each once
 for xml in sorted(x for folder, _ in runs for x in folder.rglob("*.xml")):

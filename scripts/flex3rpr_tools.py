@@ -34,16 +34,24 @@ ROOT = os.path.dirname(HERE)  # the checkout, when this file is scripts/flex3rpr
 
 def find_binary(name="flex3rpr_sim", env="F3R_SIM"):
     """The executable `name`: $env if set, beside this module (an install space), the catkin
-    build's devel space ($F3R_WS or build/ws of the checkout), or on PATH. Raises
-    FileNotFoundError when none is executable."""
-    for candidate in (os.environ.get(env) if env else None,
-                      os.path.join(HERE, name),
-                      os.path.join(os.environ.get("F3R_WS", os.path.join(ROOT, "build", "ws")),
-                                   "devel", "lib", "flex3rpr", name),
-                      shutil.which(name)):
+    build's devel space ($F3R_WS or build/ws of the checkout), what catkin_find finds in the
+    sourced workspaces, or on PATH. Raises FileNotFoundError when none is executable."""
+    for candidate in _binary_candidates(name, env):
         if candidate and os.path.isfile(candidate) and os.access(candidate, os.X_OK):
             return os.path.abspath(candidate)
     raise FileNotFoundError(f"{name} not found: build it (bash scripts/build)" + (f" or set {env}" if env else ""))
+
+
+def _binary_candidates(name, env):
+    yield os.environ.get(env) if env else None
+    yield os.path.join(HERE, name)
+    yield os.path.join(os.environ.get("F3R_WS", os.path.join(ROOT, "build", "ws")), "devel", "lib", "flex3rpr", name)
+    if shutil.which("catkin_find"):
+        try:
+            yield from run(["catkin_find", "--libexec", "flex3rpr", name], timeout=60).stdout.split()
+        except subprocess.SubprocessError:
+            pass
+    yield shutil.which(name)
 
 
 def run(cmd, check=False, **kwargs):
