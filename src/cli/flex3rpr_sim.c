@@ -80,7 +80,7 @@ static void usage(FILE* to) {
  * "io" for the CLI's own) and the message, which fail() also prints. */
 static struct {
   const char* status;
-  char message[512];
+  char message[4096 + 512]; /* a path, and an f3r_error's message */
 } failure;
 
 static void fail(const char* status, const char* format, ...) {
