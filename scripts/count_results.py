@@ -5,15 +5,20 @@ so the last lines of a CI log name the stage that failed). Exits non-zero when a
 no case ran, or a ctest run failed.
 usage: count_results.py [--stage NAME] FOLDER CTEST_RC [FOLDER CTEST_RC ...]
   --stage NAME  prints the last line as 'NAME: N passed, N failed' (one stage's count)"""
+import argparse
 import pathlib
 import sys
 import xml.etree.ElementTree as ET
 
-args = sys.argv[1:]
-stage = None
-if args[:1] == ["--stage"]:
-    stage, args = args[1], args[2:]
-runs = [(pathlib.Path(f), int(rc)) for f, rc in zip(args[0::2], args[1::2])]
+ap = argparse.ArgumentParser(description=__doc__.split("\nusage:")[0])
+ap.add_argument("--stage", metavar="NAME", help="print the last line as 'NAME: N passed, N failed'")
+ap.add_argument("runs", nargs="+", metavar="FOLDER CTEST_RC",
+                help="a results folder and its ctest exit code, in pairs")
+args = ap.parse_args()
+if len(args.runs) % 2:
+    ap.error("FOLDER and CTEST_RC come in pairs")
+stage = args.stage
+runs = [(pathlib.Path(f), int(rc)) for f, rc in zip(args.runs[0::2], args.runs[1::2])]
 
 
 def label(folder):

@@ -16,13 +16,14 @@ import json
 import math
 import os
 import queue
-import shutil
 import subprocess
 import tempfile
 import threading
 import time
 
 import numpy as np
+
+import flex3rpr_tools  # beside this module: finds flex3rpr_sim
 
 # ---- geometry (docs/model.md; defaults of the scene's geometry and link sections) ---------
 LEG_ANGLES = (-math.pi / 6, math.pi / 2, 7 * math.pi / 6)
@@ -117,20 +118,24 @@ def load_plant(path):
     return out
 
 
+def node_arguments(doc):
+    """A controller node's command line: --help prints its docstring; the ROS remappings and
+    roslaunch's __name:=, __log:= arguments pass (rospy.myargv takes them out)."""
+    import argparse
+    import rospy
+    parts = doc.split("\n\n")
+    ap = argparse.ArgumentParser(description=parts[0], epilog="\n\n".join(parts[1:]),
+                                 formatter_class=argparse.RawDescriptionHelpFormatter)
+    return ap.parse_args(rospy.myargv()[1:])
+
+
 def find_cli():
-    """flex3rpr_sim: $F3R_SIM, the devel/install space (catkin_find), or the source tree's build/."""
-    if os.environ.get("F3R_SIM"):
-        return os.environ["F3R_SIM"]
+    """flex3rpr_sim: $F3R_SIM, beside this module (an install space), the source tree's build,
+    catkin_find, or PATH (flex3rpr_tools.find_binary)."""
     try:
-        out = subprocess.run(["catkin_find", "--libexec", "flex3rpr", "flex3rpr_sim"], capture_output=True,
-                             text=True, timeout=60).stdout.split()
-        if out:
-            return out[0]
-    except (OSError, subprocess.SubprocessError):
-        pass
-    here = os.path.dirname(os.path.realpath(__file__))
-    cand = os.path.join(here, "..", "build", "ws", "devel", "lib", "flex3rpr", "flex3rpr_sim")
-    return cand if os.path.exists(cand) else (shutil.which("flex3rpr_sim") or "flex3rpr_sim")
+        return flex3rpr_tools.find_binary("flex3rpr_sim", "F3R_SIM")
+    except FileNotFoundError:
+        return "flex3rpr_sim"
 
 
 def linearise(scene, cli=None):

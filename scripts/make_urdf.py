@@ -25,18 +25,22 @@ import shutil
 import subprocess
 import sys
 
+# beside this file: a devel space's relay script runs it from devel/lib/flex3rpr/, not from here
+sys.path.insert(0, os.path.dirname(os.path.realpath(__file__)))
+import flex3rpr_tools  # noqa: E402
+
 
 def f(x):
     return "%.15g" % x
 
 
 def cli_command():
-    """flex3rpr_sim: beside this script when installed, $F3R_CLI, or through rosrun."""
-    here = os.path.join(os.path.dirname(os.path.abspath(__file__)), "flex3rpr_sim")
-    if os.access(here, os.X_OK):
-        return [here]
-    if os.environ.get("F3R_CLI"):
-        return [os.environ["F3R_CLI"]]
+    """flex3rpr_sim: $F3R_CLI, beside this script when installed, the build (flex3rpr_tools.find_binary),
+    or through rosrun."""
+    try:
+        return [flex3rpr_tools.find_binary("flex3rpr_sim", "F3R_CLI")]
+    except FileNotFoundError:
+        pass
     if shutil.which("rosrun"):
         return ["rosrun", "flex3rpr", "flex3rpr_sim"]
     sys.exit("make_urdf.py: cannot find flex3rpr_sim (set F3R_CLI)")

@@ -4,21 +4,23 @@ evaluations, CPU time per simulated second, real-time factor), and the cost of e
 measured alone against paper simulation 3 (fixed-free) without it. Long scenes are shortened.
 
 usage: scene_table.py FLEX3RPR_SIM SCENES_DIR"""
+import argparse
 import os
-import re
-import subprocess
-import sys
 import tempfile
+
+import flex3rpr_tools as T
 
 SHORTEN = {"free_vibration_long.yaml": 2.0, "stiff_high_modes.yaml": 0.01}
 
 
 def run(sim, scene, *extra):
-    out = subprocess.run([sim, scene, *extra], capture_output=True, text=True, check=True).stdout
-    get = lambda key: re.search(r"^%s\s+(\S+)" % key, out, re.M).group(1)
-    cpu = float(re.search(r"\(integration ([0-9.e+-]+) s\)", out).group(1))
-    return {"dim": get("state dimension"), "steps": int(get("steps")),
-            "evals": int(get("residual evals")), "t": float(get("simulated time")), "cpu": cpu}
+    """The run's numbers from the CLI's JSON summary; "cpu" is its integration time."""
+    summary, p = T.run_sim(sim, scene, *extra)
+    if p.returncode != 0:
+        raise SystemExit(f"scene_table.py: {scene}: {T.error_message(summary, p)}")
+    r = summary["run"]
+    return {"dim": summary["settings"]["state_dimension"], "steps": r["steps"], "evals": r["residual_evals"],
+            "t": r["simulated_time_s"], "cpu": r["integration_wall_time_s"]}
 
 
 def main(sim, scenes):
@@ -58,6 +60,8 @@ def main(sim, scenes):
 
 
 if __name__ == "__main__":
-    if len(sys.argv) != 3:
-        sys.exit(__doc__)
-    main(sys.argv[1], sys.argv[2])
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    ap.add_argument("sim", metavar="FLEX3RPR_SIM", help="the CLI")
+    ap.add_argument("scenes", metavar="SCENES_DIR", help="the scenes, e.g. config/scenes")
+    args = ap.parse_args()
+    main(args.sim, args.scenes)

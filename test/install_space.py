@@ -26,10 +26,11 @@ import subprocess
 import sys
 import tempfile
 import time
-import xml.sax.saxutils
 
 # the repository itself, not the workspace's folder of links to it (catkin_lint does not walk links)
 ROOT = os.path.dirname(os.path.dirname(os.path.realpath(__file__)))
+sys.path.insert(0, os.path.join(ROOT, "scripts"))
+import flex3rpr_tools  # noqa: E402  (scripts/: JUnit)
 # The sanitizers' settings pass into the clean environment (an instrumented node needs them).
 KEEP = ("HOME", "ROS_HOME", "ASAN_OPTIONS", "LSAN_OPTIONS", "UBSAN_OPTIONS")
 # what a devel space's setup sets (catkin's setup_cached.sh)
@@ -245,7 +246,6 @@ def main():
         else:
             print("install_space: catkin_tools is not installed; no catkin build case")
     junit = []
-    failed = 0
     for name, run in cases:
         start = time.time()
         try:
@@ -253,16 +253,9 @@ def main():
         except Exception as e:  # a hung or crashed step is a failure, with its reason
             why = f"{type(e).__name__}: {e}"
         print(f"{'ok  ' if not why else 'FAIL'} {name} ({time.time() - start:.0f} s)" + (f"\n{why}" if why else ""))
-        failed += bool(why)
-        body = "" if not why else f'<failure message="{xml_escape(why[:200])}">{xml_escape(why)}</failure>'
-        junit.append(f'<testcase classname="install_space" name="{name}">{body}</testcase>')
-    with open(args.junit, "w") as f:
-        f.write(f'<testsuite name="install_space" tests="{len(cases)}" errors="0" failures="{failed}" skipped="0">{"".join(junit)}</testsuite>\n')
+        junit.append(("install_space", name, why or None))
+    failed = flex3rpr_tools.write_junit(args.junit, "install_space", junit)
     return 1 if failed else 0
-
-
-def xml_escape(text):
-    return xml.sax.saxutils.escape(text, {'"': "&quot;"})
 
 
 if __name__ == "__main__":

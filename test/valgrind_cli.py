@@ -2,10 +2,13 @@
 """valgrind memcheck on the CLI: no invalid access, no use of uninitialised values, no leak.
 Runs the first 20 ms of a paper scene with both formulations; writes one JUnit case per run."""
 import argparse
+import os
 import subprocess
 import sys
 import tempfile
-from xml.sax.saxutils import escape
+
+sys.path.insert(0, os.path.join(os.path.dirname(os.path.dirname(os.path.abspath(__file__))), "scripts"))
+import flex3rpr_tools  # noqa: E402  (scripts/: JUnit)
 
 ap = argparse.ArgumentParser()
 ap.add_argument("--junit", required=True)
@@ -21,10 +24,6 @@ for formulation in ("minimal", "dae"):
         p = subprocess.run(cmd, capture_output=True, text=True)
     summary = [l for l in p.stderr.splitlines() if "ERROR SUMMARY" in l or "definitely lost" in l]
     print(f"{formulation}: exit {p.returncode}; " + "; ".join(s.split("==", 2)[-1].strip() for s in summary))
-    failure = "" if p.returncode == 0 else f'<failure message="valgrind exit {p.returncode}">{escape(p.stderr[-4000:])}</failure>'
-    cases.append(f'<testcase classname="valgrind" name="cli_{formulation}">{failure}</testcase>')
-with open(args.junit, "w") as f:
-    failures = sum("<failure" in c for c in cases)
-    f.write(f'<testsuite name="valgrind_cli" tests="{len(cases)}" errors="0" failures="{failures}" skipped="0">'
-            f'{"".join(cases)}</testsuite>\n')
-sys.exit(0 if all("failure" not in c for c in cases) else 1)
+    failure = None if p.returncode == 0 else f"valgrind exit {p.returncode}\n{p.stderr[-4000:]}"
+    cases.append(("valgrind", f"cli_{formulation}", failure))
+sys.exit(1 if flex3rpr_tools.write_junit(args.junit, "valgrind_cli", cases) else 0)

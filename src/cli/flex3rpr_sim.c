@@ -6,8 +6,11 @@
  *   flex3rpr_sim --modal SCENE.yaml
  *   flex3rpr_sim SCENE.yaml --linearise FILE.mat [--set ...]   (state-space export, linear.h)
  *   flex3rpr_sim --geometry SCENE.yaml   (JSON for scripts/make_urdf.py)
- *   flex3rpr_sim --check SCENE.yaml [--set ...]   (loads and builds the model only) */
+ *   flex3rpr_sim --check SCENE.yaml [--set ...]   (loads and builds the model only)
+ * --summary-json FILE (or - for stdout, the human summary then on stderr) writes the summary's
+ * numbers as JSON, units in the key names, with the error when the run fails (write_summary). */
 #include <math.h>
+#include <stdarg.h>
 #include <stddef.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -20,6 +23,7 @@
 #include "flex3rpr/beam_modes.h"
 #include "flex3rpr/sim.h"
 #include "model_reports.h"
+#include "summary_json.h"
 
 #define MAX_HOLDS 64
 #define MAX_SETS 64
@@ -45,6 +49,7 @@ typedef struct {
   double rtol, atol, max_order, output_step, duration, accuracy;
   const char* linear_path;
   const char* linearise_path; /* --linearise FILE.mat: the state-space model, and FILE.json */
+  const char* summary_json;   /* --summary-json FILE: the summary as JSON; "-": on stdout */
   int stop_at_outputs;
   int integrator_ida, integrator_erk, integrator_dirk;
   const char* table;
@@ -65,16 +70,40 @@ static void usage(FILE* to) {
       "                    [--stop-at-outputs] [--hold T:INDEX:VALUE ...]\n"
       "                    [--accuracy METRES] [--linear-path FILE.csv] [--linearise FILE.mat]\n"
       "                    [--set FIELD=VALUE ...]   (any scene field: --set links[0].modes=4)\n"
+      "                    [--summary-json FILE|-]   (the summary as JSON; -: on stdout)\n"
       "       flex3rpr_sim --modal SCENE.yaml [--modal-csv FILE.csv] [--set FIELD=VALUE ...]\n"
       "       flex3rpr_sim --geometry SCENE.yaml\n"
       "       flex3rpr_sim --check SCENE.yaml [--set FIELD=VALUE ...]   (load and build only)\n");
 }
 
+/* The first failure, for the JSON summary's error: a status (f3r_status_name, or "usage" and
+ * "io" for the CLI's own) and the message, which fail() also prints. */
+static struct {
+  const char* status;
+  char message[4096 + 512]; /* a path, and an f3r_error's message */
+} failure;
+
+static void fail(const char* status, const char* format, ...) {
+  char text[sizeof failure.message];
+  va_list args;
+  va_start(args, format);
+  vsnprintf(text, sizeof text, format, args);
+  va_end(args);
+  fprintf(stderr, "flex3rpr_sim: %s\n", text);
+  if (!failure.status) {
+    failure.status = status;
+    snprintf(failure.message, sizeof failure.message, "%s", text);
+  }
+}
+
+/* Where the human summary goes: stdout, or stderr when the JSON takes stdout. */
+static FILE* human;
+
 static int parse_number(const char* flag, const char* text, double* out) {
   char* end = NULL;
   const double v = text ? strtod(text, &end) : NAN;
   if (!text || end == text || *end || !isfinite(v) || v <= 0.0) {
-    fprintf(stderr, "flex3rpr_sim: %s needs a positive number, got '%s'\n", flag, text ? text : "");
+    fail("usage", "%s needs a positive number, got '%s'", flag, text ? text : "");
     return 0;
   }
   *out = v;
@@ -107,6 +136,7 @@ static const option_field paths[] = {
     {"--linearise", offsetof(cli_options, linearise_path)},
     {"--modal-csv", offsetof(cli_options, modal_csv)},
     {"--formulation", offsetof(cli_options, formulation)},
+    {"--summary-json", offsetof(cli_options, summary_json)},
 };
 static const option_field numbers[] = {
     {"--accuracy", offsetof(cli_options, accuracy)},
@@ -130,14 +160,14 @@ static int collect_option(const char* a, const char* next, cli_options* o) {
     hold_event* h = &o->holds[o->n_holds];
     if (o->n_holds >= MAX_HOLDS || sscanf(next, "%lf:%d:%lf", &h->t, &h->index, &h->value) != 3 ||
         !(h->t >= 0.0) || h->index < 0 || !isfinite(h->value)) {
-      fprintf(stderr, "flex3rpr_sim: --hold needs T:INDEX:VALUE (T >= 0), got '%s'\n", next);
+      fail("usage", "--hold needs T:INDEX:VALUE (T >= 0), got '%s'", next);
       return 0;
     }
     ++o->n_holds;
     return 1;
   }
   if (o->n_sets >= MAX_SETS) {
-    fprintf(stderr, "flex3rpr_sim: at most %d --set overrides\n", MAX_SETS);
+    fail("usage", "at most %d --set overrides", MAX_SETS);
     return 0;
   }
   o->sets[o->n_sets++] = next;
@@ -174,7 +204,7 @@ static int parse_arg(int argc, char** argv, int* k, cli_options* o) {
     o->scene_path = a;
     return 1;
   }
-  fprintf(stderr, "flex3rpr_sim: unknown or incomplete option '%s'\n", a);
+  fail("usage", "unknown or incomplete option '%s'", a);
   return 0;
 }
 
@@ -183,18 +213,26 @@ static int parse_args(int argc, char** argv, cli_options* o) {
   for (int k = 1; k < argc; ++k)
     if (!parse_arg(argc, argv, &k, o)) return 0;
   if (!o->scene_path) {
-    fprintf(stderr, "flex3rpr_sim: no scene given\n");
+    fail("usage", "no scene given");
     return 0;
   }
   if (o->integrator_ida + o->integrator_erk + o->integrator_dirk > 1) {
-    fprintf(stderr, "flex3rpr_sim: give one of --ida, --erk, --dirk\n");
+    fail("usage", "give one of --ida, --erk, --dirk");
     return 0;
   }
   f3r_formulation formulation;
   if (o->formulation && f3r_formulation_from_name(o->formulation, &formulation) != 0) {
-    fprintf(stderr, "flex3rpr_sim: --formulation must be %s or %s, got '%s'\n",
-            f3r_formulation_name(F3R_FORMULATION_DAE),
-            f3r_formulation_name(F3R_FORMULATION_MINIMAL), o->formulation);
+    fail("usage", "--formulation must be %s or %s, got '%s'",
+         f3r_formulation_name(F3R_FORMULATION_DAE), f3r_formulation_name(F3R_FORMULATION_MINIMAL),
+         o->formulation);
+    return 0;
+  }
+  const int to_stdout = o->geometry || o->modal || o->modal_csv || o->linear_path ||
+                        o->linearise_path; /* what writes its own output on stdout */
+  if (o->summary_json && !strcmp(o->summary_json, "-") && to_stdout) {
+    fail("usage",
+         "--summary-json - needs stdout, which --geometry, --modal, --linear-path and "
+         "--linearise use: give a file");
     return 0;
   }
   return 1;
@@ -302,11 +340,11 @@ static void report_load_error(const cli_options* o, const override_list* l, cons
     char prefix[128];
     const int n = snprintf(prefix, sizeof prefix, "--set %s: ", l->own[k]);
     if (!strncmp(err->message, prefix, (size_t)n)) {
-      fprintf(stderr, "flex3rpr_sim: %s: %s\n", o->scene_path, err->message + n);
+      fail(f3r_status_name(err->code), "%s: %s", o->scene_path, err->message + n);
       return;
     }
   }
-  fprintf(stderr, "flex3rpr_sim: %s\n", err->message);
+  fail(f3r_status_name(err->code), "%s", err->message);
 }
 
 /* The scene (file, options, overrides), what the accuracy knob chose for it in *choose_cpu s,
@@ -335,7 +373,7 @@ static int resolve_model(const cli_options* o, f3r_scene* scene, f3r_accuracy_ch
   *choose_cpu = cpu_seconds() - choose_start;
   if (st == F3R_OK) st = f3r_model_create(scene, model, &err);
   if (st != F3R_OK) {
-    fprintf(stderr, "flex3rpr_sim: %s: %s\n", o->scene_path, err.message);
+    fail(f3r_status_name(st), "%s: %s", o->scene_path, err.message);
     return 0;
   }
   return 1;
@@ -343,23 +381,34 @@ static int resolve_model(const cli_options* o, f3r_scene* scene, f3r_accuracy_ch
 
 static void report_choice(const cli_options* o, const f3r_scene* scene,
                           const f3r_accuracy_choice* choice, double choose_cpu) {
-  if (choice->summary[0]) printf("%s\n", choice->summary);
+  if (choice->summary[0]) fprintf(human, "%s\n", choice->summary);
   if (scene->accuracy > 0 && !choice->request_met)
     fprintf(stderr,
             "flex3rpr_sim: warning: %s: the accuracy request %g m is not met: estimated %.3g m "
             "(see the summary)\n",
             o->scene_path, scene->accuracy, choice->estimated_error);
   if (scene->accuracy > 0)
-    printf("choice cpu time     %.6f s (%d linear models)\n", choose_cpu,
-           choice->linear_evaluations);
+    fprintf(human, "choice cpu time     %.6f s (%d linear models)\n", choose_cpu,
+            choice->linear_evaluations);
 }
 
 /* What a run measures for its summary. */
 typedef struct {
   double max_constraint, max_energy_error, max_energy;
   double max_deflection, max_tip; /* |w| over the beam stations, and at the tips */
-  double cpu_total, cpu_integrating, cpu_outputs;
+  double cpu_total;               /* process CPU time over the run */
+  double cpu_integrating,
+      cpu_outputs;   /* its split, in monotonic (wall) time: see monotonic_seconds */
+  double wall_total; /* monotonic time over the run */
 } run_stats;
+
+/* What a simulation leaves for the JSON summary. */
+typedef struct {
+  int ran;
+  double t, x, y, phi;
+  long steps, residual_evals, jacobian_evals;
+  run_stats stats;
+} run_report;
 
 /* The basis functions of every link at its beam_points stations (beam_points <= 101). */
 static void eval_mode_shapes(const f3r_model* model, int beam_points,
@@ -413,11 +462,11 @@ static int run_outputs(const cli_options* o, const f3r_scene* scene, const f3r_m
   double held[F3R_MAX_Q] = {0};
   f3r_error err = {0};
   int rc = 0;
-  const double start = cpu_seconds();
+  const double start = cpu_seconds(), wall_start = monotonic_seconds();
   for (long k = 1; k <= steps; ++k) {
     const double t = k == steps ? scene->duration : (double)k * scene->output_step;
     if (apply_holds(o, scene->output_step, sim, held, &err) != F3R_OK) {
-      fprintf(stderr, "flex3rpr_sim: %s\n", err.message);
+      fail(f3r_status_name(err.code), "%s", err.message);
       rc = 1;
       break;
     }
@@ -429,77 +478,107 @@ static int run_outputs(const cli_options* o, const f3r_scene* scene, const f3r_m
     r->cpu_integrating += advanced - before;
     if (csv) write_row(csv, model, out);
     if (st != F3R_OK) {
-      fprintf(stderr, "flex3rpr_sim: %s\n", err.message);
+      fail(f3r_status_name(st), "%s", err.message);
       rc = 1;
       break;
     }
     track_maxima(r, model, scene->beam_points, shapes, out);
   }
   r->cpu_total = cpu_seconds() - start;
+  r->wall_total = monotonic_seconds() - wall_start;
   return rc;
+}
+
+/* The integrator as the summary names it. */
+static const char* integrator_text(const cli_options* o, const f3r_scene* scene) {
+  return scene->integrator == F3R_INTEGRATOR_ERK    ? "ARKODE ERKStep"
+         : scene->integrator == F3R_INTEGRATOR_DIRK ? "ARKODE ARKStep, DIRK"
+         : o->fd_jacobian                           ? "IDA, difference-quotient Jacobian"
+                                                    : "IDA, analytic Jacobian";
+}
+
+/* Simulated over integration time, and over integration and outputs (inf when not measurable). */
+static double real_time_factor(double t, const run_stats* r, int with_outputs) {
+  const double time = r->cpu_integrating + (with_outputs ? r->cpu_outputs : 0.0);
+  return time > 0 ? t / time : INFINITY;
+}
+
+static double energy_relative(const run_stats* r) {
+  return r->max_energy > 0 ? r->max_energy_error / r->max_energy : 0.0;
 }
 
 static void print_summary(const cli_options* o, const f3r_scene* scene, const f3r_model* model,
                           const f3r_outputs* out, const run_stats* r) {
-  printf("scene               %s\n", o->scene_path);
-  printf("formulation         %s, rtol %g, atol %g, %s\n", f3r_formulation_name(scene->formulation),
-         scene->rtol, scene->atol,
-         scene->integrator == F3R_INTEGRATOR_ERK    ? "ARKODE ERKStep"
-         : scene->integrator == F3R_INTEGRATOR_DIRK ? "ARKODE ARKStep, DIRK"
-         : o->fd_jacobian                           ? "IDA, difference-quotient Jacobian"
-                                                    : "IDA, analytic Jacobian");
+  fprintf(human, "scene               %s\n", o->scene_path);
+  fprintf(human, "formulation         %s, rtol %g, atol %g, %s\n",
+          f3r_formulation_name(scene->formulation), scene->rtol, scene->atol,
+          integrator_text(o, scene));
   if (scene->integrator != F3R_INTEGRATOR_IDA)
-    printf("butcher table       %s\n", scene->table[0] ? scene->table : "default");
-  if (scene->integrator == F3R_INTEGRATOR_IDA) printf("max BDF order       %d\n", scene->max_order);
-  printf("sundials            %s, %s\n", SUNDIALS_VERSION, F3R_SUNDIALS_BUILD);
+    fprintf(human, "butcher table       %s\n", scene->table[0] ? scene->table : "default");
+  if (scene->integrator == F3R_INTEGRATOR_IDA)
+    fprintf(human, "max BDF order       %d\n", scene->max_order);
+  fprintf(human, "sundials            %s, %s\n", SUNDIALS_VERSION, F3R_SUNDIALS_BUILD);
   char basis[3][96];
   for (int i = 0; i < 3; ++i) f3r_model_link_basis_name(model, i, basis[i], sizeof basis[i]);
-  printf("links               %s; %s; %s\n", basis[0], basis[1], basis[2]);
-  printf("state dimension     %d (nq %d)\n", f3r_state_size(model, scene->formulation),
-         f3r_model_nq(model));
-  printf("simulated time      %.6g s\n", out->t);
-  printf("steps               %ld\n", out->stats.steps);
-  printf("residual evals      %ld\n", out->stats.residual_evals);
-  printf("jacobian evals      %ld\n", out->stats.jacobian_evals);
-  printf("cpu time            %.6f s (integration %.6f s, outputs %.6f s)\n", r->cpu_total,
-         r->cpu_integrating, r->cpu_outputs);
-  printf("real-time factor    %.3g (%.3g with the outputs)\n",
-         r->cpu_integrating > 0 ? out->t / r->cpu_integrating : INFINITY,
-         r->cpu_integrating + r->cpu_outputs > 0 ? out->t / (r->cpu_integrating + r->cpu_outputs)
-                                                 : INFINITY);
-  printf("max constraint res  %.3e m\n", r->max_constraint);
-  printf("energy balance err  %.3e J (%.3e of max T+V)\n", r->max_energy_error,
-         r->max_energy > 0 ? r->max_energy_error / r->max_energy : 0.0);
-  printf("max deflection      %.6e m (largest |w| at %d stations a link; at the tips %.6e m)\n",
-         r->max_deflection, scene->beam_points, r->max_tip);
-  printf("final pose          x_p %.9f y_p %.9f phi_p %.9f\n", out->q[F3R_Q_X], out->q[F3R_Q_Y],
-         out->q[F3R_Q_PHI]);
-  if (o->out_path) printf("csv                 %s\n", o->out_path);
+  fprintf(human, "links               %s; %s; %s\n", basis[0], basis[1], basis[2]);
+  fprintf(human, "state dimension     %d (nq %d)\n", f3r_state_size(model, scene->formulation),
+          f3r_model_nq(model));
+  fprintf(human, "simulated time      %.6g s\n", out->t);
+  fprintf(human, "steps               %ld\n", out->stats.steps);
+  fprintf(human, "residual evals      %ld\n", out->stats.residual_evals);
+  fprintf(human, "jacobian evals      %ld\n", out->stats.jacobian_evals);
+  fprintf(human, "cpu time            %.6f s (integration %.6f s, outputs %.6f s)\n", r->cpu_total,
+          r->cpu_integrating, r->cpu_outputs);
+  fprintf(human, "real-time factor    %.3g (%.3g with the outputs)\n",
+          real_time_factor(out->t, r, 0), real_time_factor(out->t, r, 1));
+  fprintf(human, "max constraint res  %.3e m\n", r->max_constraint);
+  fprintf(human, "energy balance err  %.3e J (%.3e of max T+V)\n", r->max_energy_error,
+          energy_relative(r));
+  fprintf(human,
+          "max deflection      %.6e m (largest |w| at %d stations a link; at the tips %.6e m)\n",
+          r->max_deflection, scene->beam_points, r->max_tip);
+  fprintf(human, "final pose          x_p %.9f y_p %.9f phi_p %.9f\n", out->q[F3R_Q_X],
+          out->q[F3R_Q_Y], out->q[F3R_Q_PHI]);
+  if (o->out_path) fprintf(human, "csv                 %s\n", o->out_path);
 }
 
-/* The simulation with its CSV and summary; returns the exit code. */
-static int simulate(const cli_options* o, const f3r_scene* scene, const f3r_model* model) {
+/* The final state and the counts of a run, for the JSON summary. */
+static void keep_report(const f3r_outputs* out, const run_stats* stats, run_report* report) {
+  report->ran = 1;
+  report->t = out->t;
+  report->x = out->q[F3R_Q_X];
+  report->y = out->q[F3R_Q_Y];
+  report->phi = out->q[F3R_Q_PHI];
+  report->steps = out->stats.steps;
+  report->residual_evals = out->stats.residual_evals;
+  report->jacobian_evals = out->stats.jacobian_evals;
+  report->stats = *stats;
+}
+
+/* The simulation with its CSV and summary (and what it leaves in *report); returns the exit
+ * code. */
+static int simulate(const cli_options* o, const f3r_scene* scene, const f3r_model* model,
+                    run_report* report) {
   f3r_solver_settings settings = f3r_solver_settings_from_scene(scene);
   settings.analytic_jacobian = !o->fd_jacobian;
   settings.dense_linear_solver = o->dense_linear_solver;
   settings.stop_at_outputs = o->stop_at_outputs;
   for (int h = 0; h < o->n_holds; ++h)
     if (o->holds[h].index >= f3r_model_nq(model)) {
-      fprintf(stderr, "flex3rpr_sim: --hold index %d is beyond nq = %d\n", o->holds[h].index,
-              f3r_model_nq(model));
+      fail("usage", "--hold index %d is beyond nq = %d", o->holds[h].index, f3r_model_nq(model));
       return 2;
     }
   f3r_error err = {0};
   f3r_sim* sim = NULL;
   if (f3r_sim_create(model, &settings, &sim, &err) != F3R_OK) {
-    fprintf(stderr, "flex3rpr_sim: %s\n", err.message);
+    fail(f3r_status_name(err.code), "%s", err.message);
     return 1;
   }
   FILE* csv = NULL;
   if (o->out_path) {
     csv = fopen(o->out_path, "w");
     if (!csv) {
-      fprintf(stderr, "flex3rpr_sim: cannot write %s\n", o->out_path);
+      fail("io", "cannot write %s", o->out_path);
       f3r_sim_destroy(sim);
       return 1;
     }
@@ -510,6 +589,7 @@ static int simulate(const cli_options* o, const f3r_scene* scene, const f3r_mode
   const int rc = run_outputs(o, scene, model, sim, csv, &stats);
   if (csv) fclose(csv);
   print_summary(o, scene, model, f3r_sim_outputs(sim), &stats);
+  keep_report(f3r_sim_outputs(sim), &stats, report);
   f3r_sim_destroy(sim);
   return rc;
 }
@@ -517,7 +597,7 @@ static int simulate(const cli_options* o, const f3r_scene* scene, const f3r_mode
 /* --check and --geometry: the model only, before the accuracy knob's report. */
 static int describe_model(const cli_options* o, const f3r_model* model) {
   if (o->check) /* the scene, its overrides and the model are valid: what a sweep checks first */
-    printf("ok: %s, nq %d\n", o->scene_path, f3r_model_nq(model));
+    fprintf(human, "ok: %s, nq %d\n", o->scene_path, f3r_model_nq(model));
   else
     f3r_cli_print_geometry(model);
   return 0;
@@ -532,26 +612,205 @@ static int analyse(const cli_options* o, const f3r_model* model) {
   return -1;
 }
 
+/* --- the JSON summary (--summary-json): the human summary's numbers, units in the key names --- */
+
+/* What the JSON summary is written from; NULL where a failure left it out. */
+typedef struct {
+  const f3r_scene* scene;
+  const f3r_model* model;            /* NULL: the scene did not load or build */
+  const f3r_accuracy_choice* choice; /* NULL: not resolved */
+  double choose_cpu;                 /* s, the accuracy knob's CPU time */
+  const run_report* run;             /* NULL or !ran: no simulation */
+} summary_parts;
+
+static void json_settings(f3r_json* j, const cli_options* o, const f3r_scene* scene,
+                          const f3r_model* model) {
+  const int ida = scene->integrator == F3R_INTEGRATOR_IDA;
+  f3r_json_object(j, "settings");
+  f3r_json_string(j, "formulation", f3r_formulation_name(scene->formulation));
+  f3r_json_string(j, "integrator", f3r_integrator_name(scene->integrator));
+  f3r_json_string(j, "integrator_text", integrator_text(o, scene));
+  f3r_json_string(j, "jacobian", !ida ? NULL : o->fd_jacobian ? "difference_quotient" : "analytic");
+  f3r_json_string(j, "table", ida ? NULL : scene->table[0] ? scene->table : "default");
+  f3r_json_number(j, "rtol", scene->rtol);
+  f3r_json_number(j, "atol", scene->atol);
+  if (ida)
+    f3r_json_integer(j, "max_bdf_order", scene->max_order);
+  else
+    f3r_json_null(j, "max_bdf_order");
+  f3r_json_bool(j, "exact_kinematics", scene->exact_kinematics);
+  f3r_json_string(j, "sundials_version", SUNDIALS_VERSION);
+  f3r_json_string(j, "sundials_build", F3R_SUNDIALS_BUILD);
+  f3r_json_array(j, "link_basis");
+  for (int i = 0; i < 3; ++i) {
+    char basis[96];
+    f3r_json_string(j, NULL, f3r_model_link_basis_name(model, i, basis, sizeof basis));
+  }
+  f3r_json_close(j);
+  f3r_json_integer(j, "state_dimension", f3r_state_size(model, scene->formulation));
+  f3r_json_integer(j, "nq", f3r_model_nq(model));
+  f3r_json_number(j, "duration_s", scene->duration);
+  f3r_json_number(j, "output_step_s", scene->output_step);
+  f3r_json_integer(j, "beam_points", scene->beam_points);
+  f3r_json_close(j);
+}
+
+static void json_run(f3r_json* j, const cli_options* o, const run_report* r) {
+  const run_stats* s = &r->stats;
+  f3r_json_object(j, "run");
+  f3r_json_number(j, "simulated_time_s", r->t);
+  f3r_json_integer(j, "steps", r->steps);
+  f3r_json_integer(j, "residual_evals", r->residual_evals);
+  f3r_json_integer(j, "jacobian_evals", r->jacobian_evals);
+  f3r_json_number(j, "cpu_time_s", s->cpu_total);
+  f3r_json_number(j, "wall_time_s", s->wall_total);
+  f3r_json_number(j, "integration_wall_time_s", s->cpu_integrating);
+  f3r_json_number(j, "outputs_wall_time_s", s->cpu_outputs);
+  f3r_json_number(j, "real_time_factor", real_time_factor(r->t, s, 0));
+  f3r_json_number(j, "real_time_factor_with_outputs", real_time_factor(r->t, s, 1));
+  f3r_json_number(j, "max_constraint_residual_m", s->max_constraint);
+  f3r_json_number(j, "energy_balance_error_J", s->max_energy_error);
+  f3r_json_number(j, "energy_balance_relative", energy_relative(s));
+  f3r_json_number(j, "max_deflection_m", s->max_deflection);
+  f3r_json_number(j, "max_tip_deflection_m", s->max_tip);
+  f3r_json_number(j, "final_x_p_m", r->x);
+  f3r_json_number(j, "final_y_p_m", r->y);
+  f3r_json_number(j, "final_phi_p_rad", r->phi);
+  f3r_json_string(j, "csv", o->out_path);
+  f3r_json_close(j);
+}
+
+/* The mode counts a link, and the static shapes the basis adds to them. */
+static void json_links(f3r_json* j, const f3r_scene* scene, const f3r_accuracy_choice* c) {
+  f3r_json_array(j, "rigid");
+  for (int i = 0; i < 3; ++i) f3r_json_bool(j, NULL, scene->links[i].model == F3R_LINK_RIGID);
+  f3r_json_close(j);
+  f3r_json_array(j, "modes");
+  for (int i = 0; i < 3; ++i) f3r_json_integer(j, NULL, c->modes[i]);
+  f3r_json_close(j);
+  f3r_json_array(j, "static_correction");
+  for (int i = 0; i < 3; ++i) f3r_json_bool(j, NULL, c->static_correction[i]);
+  f3r_json_close(j);
+  f3r_json_array(j, "static_shapes");
+  for (int i = 0; i < 3; ++i)
+    f3r_json_integer(j, NULL,
+                     c->static_correction[i] ? f3r_link_static_shapes(scene->links[i].model) : 0);
+  f3r_json_close(j);
+}
+
+/* The accuracy knob's choice and estimates: with a request (--accuracy, scene accuracy), or the
+ * mode counts of modes: auto alone (request_m null); null when it chose nothing. */
+static void json_choice(f3r_json* j, const f3r_scene* scene, const f3r_accuracy_choice* c,
+                        double choose_cpu) {
+  const int request = scene->accuracy > 0;
+  if (!request && !c->summary[0]) {
+    f3r_json_null(j, "accuracy");
+    return;
+  }
+  f3r_json_object(j, "accuracy");
+  f3r_json_number(j, "request_m", request ? c->request : NAN);
+  json_links(j, scene, c);
+  f3r_json_number(j, "model_error_m", c->model_error);
+  f3r_json_number(j, "extent_m", c->extent);
+  f3r_json_integer(j, "linear_evaluations", c->linear_evaluations);
+  f3r_json_number(j, "choice_cpu_time_s", choose_cpu);
+  if (request) {
+    f3r_json_bool(j, "exact_kinematics", c->exact_kinematics);
+    f3r_json_string(j, "formulation", f3r_formulation_name(c->formulation));
+    f3r_json_string(j, "integrator", f3r_integrator_name(c->integrator));
+    f3r_json_string(j, "table", c->table[0] ? c->table : NULL);
+    f3r_json_number(j, "rtol", c->rtol);
+    f3r_json_number(j, "atol", c->atol);
+    f3r_json_number(j, "kinematics_error_m", c->kinematics_error);
+    f3r_json_number(j, "kinematics_effect_m", c->kinematics_effect);
+    f3r_json_number(j, "kinematics_linear_m", c->kinematics_linear);
+    f3r_json_number(j, "solver_error_m", c->solver_error);
+    f3r_json_bool(j, "pilot", c->pilot);
+    f3r_json_number(j, "pilot_ratio", c->pilot ? c->pilot_ratio : NAN);
+  }
+  f3r_json_number(j, "estimated_error_m", c->estimated_error);
+  f3r_json_bool(j, "request_met", c->request_met);
+  f3r_json_string(j, "summary", c->summary);
+  f3r_json_string(j, "brief", c->brief);
+  f3r_json_close(j);
+}
+
+/* The whole summary into path ("-": stdout); returns rc, or 1 when the file cannot be written. */
+static int write_summary(const char* path, const cli_options* o, const summary_parts* p, int rc) {
+  FILE* f = strcmp(path, "-") ? fopen(path, "w") : stdout;
+  if (!f) {
+    fail("io", "cannot write %s", path);
+    return rc ? rc : 1;
+  }
+  f3r_json j;
+  f3r_json_begin(&j, f);
+  f3r_json_string(&j, "format", "flex3rpr_sim summary 1");
+  f3r_json_string(&j, "scene", o->scene_path);
+  f3r_json_integer(&j, "exit_code", rc);
+  if (rc) {
+    f3r_json_object(&j, "error");
+    f3r_json_string(&j, "status", failure.status ? failure.status : "failed");
+    f3r_json_string(&j, "message", failure.status ? failure.message : "see stderr");
+    f3r_json_close(&j);
+  } else {
+    f3r_json_null(&j, "error");
+  }
+  if (p->model)
+    json_settings(&j, o, p->scene, p->model);
+  else
+    f3r_json_null(&j, "settings");
+  if (p->choice)
+    json_choice(&j, p->scene, p->choice, p->choose_cpu);
+  else
+    f3r_json_null(&j, "accuracy");
+  if (p->run && p->run->ran)
+    json_run(&j, o, p->run);
+  else
+    f3r_json_null(&j, "run");
+  f3r_json_end(&j);
+  if (f != stdout ? fclose(f) != 0 : fflush(f) != 0) {
+    fail("io", "cannot write %s", path);
+    return rc ? rc : 1;
+  }
+  return rc;
+}
+
+/* The --summary-json FILE of a command line that did not parse, if it names one. */
+static const char* summary_json_arg(int argc, char** argv) {
+  for (int k = 1; k + 1 < argc; ++k)
+    if (!strcmp(argv[k], "--summary-json")) return argv[k + 1];
+  return NULL;
+}
+
 int main(int argc, char** argv) {
   cli_options o;
+  human = stdout;
   if (!parse_args(argc, argv, &o)) {
     usage(stderr);
+    const char* path = summary_json_arg(argc, argv);
+    const summary_parts none = {0};
+    if (path) write_summary(path, &o, &none, 2);
     return 2;
   }
+  if (o.summary_json && !strcmp(o.summary_json, "-")) human = stderr;
   f3r_scene scene = f3r_default_scene(); /* the loaded one owns tables: freed at the end */
   f3r_accuracy_choice choice;
-  double choose_cpu = 0.0;
+  run_report report = {0};
+  summary_parts parts = {.scene = &scene, .run = &report};
   f3r_model* model = NULL;
   int rc = 1;
-  if (!resolve_model(&o, &scene, &choice, &choose_cpu, &model)) goto done;
-  if (o.check || o.geometry) {
-    rc = describe_model(&o, model);
-  } else {
-    report_choice(&o, &scene, &choice, choose_cpu);
-    rc = analyse(&o, model);
-    if (rc < 0) rc = simulate(&o, &scene, model);
+  if (resolve_model(&o, &scene, &choice, &parts.choose_cpu, &model)) {
+    parts.model = model;
+    parts.choice = &choice;
+    if (o.check || o.geometry) {
+      rc = describe_model(&o, model);
+    } else {
+      report_choice(&o, &scene, &choice, parts.choose_cpu);
+      rc = analyse(&o, model);
+      if (rc < 0) rc = simulate(&o, &scene, model, &report);
+    }
   }
-done:
+  if (o.summary_json) rc = write_summary(o.summary_json, &o, &parts, rc);
   f3r_model_destroy(model);
   f3r_scene_free(&scene);
   return rc;

@@ -6,10 +6,10 @@ import subprocess
 import sys
 import tempfile
 import time
-import unittest
-import xml.etree.ElementTree as ET
 
 ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
+sys.path.insert(0, os.path.join(ROOT, "scripts"))
+import flex3rpr_tools  # noqa: E402  (scripts/: JUnit)
 SWEEP = os.path.join(ROOT, "scripts", "sweep")
 TIMING_COLUMNS = {"cpu_time_s", "wall_time_s", "host"}
 
@@ -65,34 +65,7 @@ def wait_for(predicate, timeout=1800, step=0.05):
 
 def run_junit(test_case_classes, junit_path, suite_name):
     """Runs the cases, prints unittest's report, writes JUnit XML; exit code 0 when all pass."""
-    loader = unittest.TestLoader()
-    suite = unittest.TestSuite(loader.loadTestsFromTestCase(c) for c in test_case_classes)
-    ids = [t.id() for t in suite_tests(suite)]  # the suite lets go of its tests as they run
-    result = unittest.TextTestRunner(verbosity=2, stream=sys.stdout).run(suite)
-    if junit_path:
-        root = ET.Element("testsuite", name=suite_name, tests=str(result.testsRun),
-                          failures=str(len(result.failures)), errors=str(len(result.errors)))
-        bad = {t.id(): text for t, text in result.failures + result.errors}
-        for test_id in ids:
-            parts = test_id.split(".")
-            case = ET.SubElement(root, "testcase", classname=f"{suite_name}.{parts[-2]}", name=parts[-1])
-            if test_id in bad:
-                ET.SubElement(case, "failure", message=bad[test_id][-2000:])
-        for test_id, text in bad.items():  # a failed setUpClass or tearDownClass belongs to no test
-            if test_id not in ids:
-                case = ET.SubElement(root, "testcase", classname=suite_name, name=test_id.split(" ")[0])
-                ET.SubElement(case, "failure", message=text[-2000:])
-        os.makedirs(os.path.dirname(junit_path), exist_ok=True)
-        ET.ElementTree(root).write(junit_path)
-    return 0 if result.wasSuccessful() else 1
-
-
-def suite_tests(suite):
-    for t in suite:
-        if isinstance(t, unittest.TestSuite):
-            yield from suite_tests(t)
-        else:
-            yield t
+    return flex3rpr_tools.run_unittest(test_case_classes, junit_path, suite_name)
 
 
 def parse_args(prefix):
