@@ -734,19 +734,6 @@ HEADER = ["name", "stages", "order(embedded)", "measured order", "local-error or
           "y_max per stage", "damping |R(i)|", "notes"]
 
 
-def write_junit(path, failed_tables):
-    """One test case a table: its algebraic order conditions (and, without --quick, its measured
-    order) at the order it claims."""
-    import xml.etree.ElementTree as ET
-    suite = ET.Element("testsuite", name="butcher_tables", tests=str(len(failed_tables)),
-                       failures=str(sum(1 for f in failed_tables.values() if f)), errors="0")
-    for name, failed in failed_tables.items():
-        case = ET.SubElement(suite, "testcase", classname="butcher_tables", name=name)
-        if failed:
-            ET.SubElement(case, "failure", message="; ".join(failed))
-    ET.ElementTree(suite).write(path, encoding="utf-8", xml_declaration=True)
-
-
 def main():
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--csv", metavar="PATH", help="also write the summary table as CSV")
@@ -796,8 +783,13 @@ def main():
         if abs(r["sum_b"] - 1) > 1e-14 or abs(r["sum_d"] - 1) > 1e-14 or r["rowsum"] > 1e-14:
             failures.append("%s: weights or row sums inconsistent" % t.name)
         failed_tables[t.name] = failures[before:]
-    if args.junit:
-        write_junit(args.junit, failed_tables)
+    if args.junit:  # one test case a table: its order conditions at the order it claims
+        sys.path.insert(0, os.path.dirname(os.path.realpath(__file__)))
+        import flex3rpr_tools
+
+        flex3rpr_tools.write_junit(args.junit, "butcher_tables",
+                                   [("butcher_tables", name, "; ".join(failed) or None)
+                                    for name, failed in failed_tables.items()])
     def md(cells):
         return "| " + " | ".join(x.replace("|", "\\|") for x in cells) + " |"
     print(md(HEADER))
