@@ -53,6 +53,7 @@ typedef struct {
   int plain_found, corrected_found;
   double plain_error, corrected_error, plain_cost, corrected_cost;
   double least_corrected_cost; /* > 0: the search was spared, the paper's modes cost no more */
+  int correction_too_long;     /* correctable links, but the run is longer than the benchmark's */
   int impacts;                 /* end stops on a path that moves: the most faithful model */
   int long_run;                /* longer than the benchmark's scenes */
   int unmeasured_basis;        /* the static correction: the relations were measured on the paper's
