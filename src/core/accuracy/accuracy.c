@@ -110,6 +110,10 @@ static f3r_status cheaper_than_any_correction(choice_run* run, const f3r_scene* 
                                               const f3r_accuracy_choice* c, f3r_error* err) {
   int least[3];
   f3r_mode_search_least(&run->ms, least);
+  if (!memcmp(least, c->modes, sizeof least)) { /* the paper's least modes: nothing is fewer */
+    run->correctable = 0;
+    return F3R_OK;
+  }
   for (int i = 0; i < 3; ++i)
     if (run->correctable >> i & 1) least[i] = 1;
   double least_cost = 0.0;
@@ -144,7 +148,7 @@ static f3r_status compare_correction(choice_run* run, f3r_accuracy_choice* c, f3
   f3r_status st = F3R_OK;
   if (run->plain_found && (st = cheaper_than_any_correction(run, &corrected, c, err)) != F3R_OK)
     return st;
-  if (run->least_corrected_cost > 0.0) return F3R_OK;
+  if (run->least_corrected_cost > 0.0 || !run->correctable) return F3R_OK;
   st = f3r_mode_search_init(&corrected, run->chosen, &ms, err);
   if (st == F3R_OK)
     st = f3r_mode_search_run(&corrected, &ms, run->model_target / ratio, run->corrected_modes,
