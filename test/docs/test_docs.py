@@ -24,7 +24,8 @@ import sys
 import unittest
 import xml.etree.ElementTree as ET
 
-ROOT = os.path.abspath(os.path.join(os.path.dirname(__file__), "..", ".."))
+# realpath: the catkin workspace links the checkout's folders one by one under build/, which git ignores
+ROOT = os.path.abspath(os.path.join(os.path.dirname(os.path.realpath(__file__)), "..", ".."))
 README_MAX_LINES = 200
 README_COMMANDS = ["bash scripts/demo", "bash scripts/test"]
 MIN_SCENE_KEYS = 30
