@@ -93,6 +93,19 @@ f3r_scene OpenPlainScene(const char* file) {
   return s;
 }
 
+// An independent high-fidelity path of a scene: the corrected basis with three modes on every
+// link (3.6e-8 m from the converged path on paper simulation 3, docs/benchmarks/
+// basis_convergence.md), exact kinematics, rtol 1e-9.
+std::vector<double> CorrectedReferencePath(const f3r_scene& open, int count) {
+  f3r_scene reference = open;
+  for (int i = 0; i < 3; ++i) {
+    reference.links[i].modes = 3;
+    reference.links[i].static_correction = 1;
+  }
+  reference.exact_kinematics = 1;
+  return NonlinearPath(reference, open.output_step, count, 1e-9);
+}
+
 double MaxDistance(const std::vector<double>& a, const std::vector<double>& b) {
   double worst = 0;
   for (size_t k = 0; k < a.size() / 3; ++k)
@@ -702,13 +715,7 @@ TEST(Accuracy, TheKnobTakesTheStaticCorrectionWhereItIsCheaperAndMeetsTheRequest
   open.duration = 0.2;
   open.output_step = 1e-3;
   const int count = static_cast<int>(std::lround(open.duration / open.output_step)) + 1;
-  f3r_scene reference = open;
-  for (int i = 0; i < 3; ++i) {
-    reference.links[i].modes = 3;
-    reference.links[i].static_correction = 1;
-  }
-  reference.exact_kinematics = 1;
-  const std::vector<double> ref = NonlinearPath(reference, open.output_step, count, 1e-9);
+  const std::vector<double> ref = CorrectedReferencePath(open, count);
   f3r_scene s = open;
   s.accuracy = 1e-5;
   f3r_accuracy_choice c;
@@ -783,13 +790,7 @@ TEST(Accuracy, OnTheStaticCorrectionTheSolverKeepsATenthOfItsBudget) {
   f3r_scene open = OpenScene("resonance.yaml");
   open.output_step = 1e-3;
   const int count = static_cast<int>(std::lround(open.duration / open.output_step)) + 1;
-  f3r_scene reference = open;
-  for (int i = 0; i < 3; ++i) {
-    reference.links[i].modes = 3;
-    reference.links[i].static_correction = 1;
-  }
-  reference.exact_kinematics = 1;
-  const std::vector<double> ref = NonlinearPath(reference, open.output_step, count, 1e-9);
+  const std::vector<double> ref = CorrectedReferencePath(open, count);
   f3r_scene s = open;
   s.accuracy = 1e-5;
   f3r_accuracy_choice c;
