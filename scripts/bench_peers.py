@@ -55,7 +55,8 @@ ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 CMAKE_LIB = os.path.join(ROOT, "build/ws/devel/lib/libf3r_peer.so")
 LOCAL_LIB = os.path.join(ROOT, "build/peer/libf3r_peer.so")
 PEER_SOURCE = os.path.join(ROOT, "src/bench/f3r_peer.c")
-CORE_SOURCES = ["beam_modes", "constraints", "dense", "dynamics", "effects", "form_dae", "form_minimal", "forward",
+CORE_SOURCES = ["beam_basis", "beam_modes", "constraints", "dense", "dynamics", "effects", "form_dae", "form_minimal", "form_minimal_jacobian",
+                "forward",
                 "impact", "modal", "model", "residual", "scene", "scene_overrides", "scene_yaml", "scene_yaml_reader", "status"]
 CORE_LAYERS = sorted(os.path.join(ROOT, "src/core", d) for d in os.listdir(os.path.join(ROOT, "src/core"))
                      if os.path.isdir(os.path.join(ROOT, "src/core", d)))

@@ -36,4 +36,11 @@ void f3r_minimal_multipliers(const f3r_model* m, const double* yp, f3r_data* d);
 /* y' with K's low-rank structure, and with K assembled and factored whole (form_minimal.c). */
 f3r_rhs_fn f3r_minimal_rhs, f3r_minimal_rhs_dense;
 
+/* The reduced mass K = B^T M B in its arrow blocks (ws->mass_pp, mass_pe, mass_ee) at the position
+ * stage in ws->data, and scale K added into A (leading dimension ld): the dense right-hand side's
+ * and the Jacobian's (form_minimal.c). */
+void f3r_minimal_reduced_mass_blocks(const f3r_model* m, f3r_workspace* ws);
+void f3r_minimal_add_reduced_mass(const f3r_model* m, const f3r_workspace* ws, double scale,
+                                  double* A, int ld);
+
 #endif

@@ -1,0 +1,373 @@
+/* The analytic Jacobian of the minimal residual (form_minimal.c): the loop closure's B = dq/dz and
+ * its rates, applied to the per-link blocks of the force and constraint derivatives. The equations
+ * are at f3r_minimal_jacobian, at the end. */
+#include <string.h>
+
+#include "dense.h"
+#include "workspace.h"
+
+/* The links a column of B reaches: every link for the pose (owner -1), its own for a modal one. */
+static void links_of_column(int owner, int* first, int* end) {
+  *first = owner < 0 ? 0 : owner;
+  *end = owner < 0 ? 3 : owner + 1;
+}
+
+/* out (6 x nz) = X B for X (6 x nq) of the constraints' derivatives: B is the identity on z
+ * below its dependent rows Bd (6 x nz), so (X B)(:, j) = X(:, z_j) + X(:, legs) Bd(:, j), and
+ * the rows of link i reach only its own legs' columns rho_i, theta_i. A modal column z_j of
+ * link l (owner[j] = l) is zero on the other links' rows: X(:, z_j) and Bd(:, j) both are. */
+static void times_B_constraints(const double* X, const double* Bd, const int* owner, int nz,
+                                double* out) {
+  for (int j = 0; j < nz; ++j) {
+    int first, end;
+    links_of_column(owner[j], &first, &end);
+    for (int r = 0; r < 6; ++r) out[r + 6 * j] = 0.0;
+    for (int i = first; i < end; ++i)
+      for (int r = 2 * i; r < 2 * i + 2; ++r) {
+        double sum = X[r + 6 * (F3R_Q_INDEPENDENT + j)];
+        sum += X[r + 6 * i] * Bd[i + 6 * j];
+        sum += X[r + 6 * (F3R_Q_THETA + i)] * Bd[F3R_Q_THETA + i + 6 * j];
+        out[r + 6 * j] = sum;
+      }
+  }
+}
+
+/* T(:, j) += M x_j for the nz columns x_j of X (nq x nz) that are nonzero on the legs only (as
+ * f3r_data_mass_times gives it: the skipped terms are exact zeros). */
+static void add_mass_times_legs(const f3r_model* m, const int* owner, const f3r_data* d,
+                                const double* X, double* T) {
+  const int nq = m->nq;
+  const double mass = m->link_mass;
+  for (int j = 0; j < m->n_independent; ++j) {
+    const double* x = X + (size_t)nq * j;
+    double* t = T + (size_t)nq * j;
+    for (int i = 0; i < 3; ++i) {
+      if (owner[j] >= 0 && i != owner[j]) continue; /* x is zero on the other links' legs */
+      const f3r_link_data* k = &d->link[i];
+      const double xr = x[i], xt = x[F3R_Q_THETA + i];
+      t[i] += mass * xr + k->m_rho_theta * xt;
+      t[F3R_Q_THETA + i] += k->m_rho_theta * xr + k->m_theta_theta * xt;
+      for (int e = 0; e < m->link[i].modes; ++e)
+        t[m->link[i].eta_index + e] += k->m_theta_eta[e] * xt;
+    }
+  }
+}
+
+/* The nq x nq products Z and H (and the effects' dQ/dq, dQ/dv) couple each link's coordinates
+ * (rho_i, theta_i, eta_i) only among themselves, and the platform's among themselves (the terms
+ * of dynamics.c, constraints.c and effects.c; test_residual_jacobian checks the result against
+ * finite differences). So column rho_i or theta_i of X reaches link i's rows only, and
+ * o += X(:, legs) b adds, row by row in the dense sum's order, only the terms that can be
+ * nonzero (a skipped term is an exact zero). */
+static void add_leg_columns(const f3r_model* m, const double* X, const double* b, double* o) {
+  const int nq = m->nq;
+  /* link by link: its rows take the rho_i column's term, then the theta_i column's, the order of
+   * the dense sum (the other legs' columns do not reach them); both in one pass where both are
+   * nonzero, so that each row is loaded and stored once */
+  for (int i = 0; i < 3; ++i) {
+    const int base = m->link[i].eta_index, modes = m->link[i].modes, t = F3R_Q_THETA + i;
+    const double br = b[i], bt = b[t]; /* held: o may alias nothing it reads */
+    const double *xr = X + (size_t)nq * i, *xt = X + (size_t)nq * t;
+    if (br != 0.0 && bt != 0.0) {
+      o[i] = (o[i] + xr[i] * br) + xt[i] * bt;
+      o[t] = (o[t] + xr[t] * br) + xt[t] * bt;
+      for (int j = base; j < base + modes; ++j) o[j] = (o[j] + xr[j] * br) + xt[j] * bt;
+      continue;
+    }
+    const double bc = br != 0.0 ? br : bt;
+    if (bc == 0.0) continue;
+    const double* x = br != 0.0 ? xr : xt;
+    o[i] += x[i] * bc;
+    o[t] += x[t] * bc;
+    for (int j = base; j < base + modes; ++j) o[j] += x[j] * bc;
+  }
+}
+
+/* owner[j]: the link whose modal coordinate z_j is, or -1 for the pose. A product's column of a
+ * modal coordinate of link l is nonzero on link l's rows only (its B column moves only link l's
+ * legs), so only those rows of it are formed and read. */
+static void column_owners(const f3r_model* m, int* owner) {
+  for (int j = 0; j < 3; ++j) owner[j] = -1;
+  for (int l = 0; l < 3; ++l)
+    for (int e = 0; e < m->link[l].modes; ++e)
+      owner[m->link[l].eta_index - F3R_Q_INDEPENDENT + e] = l;
+}
+
+/* out (nq x nz) = X B for X (nq x nq) of that structure; a modal column on its link's rows. */
+static void times_B_links(const f3r_model* m, const int* owner, const double* X, const double* Bd,
+                          double* out) {
+  const int nq = m->nq;
+  for (int j = 0; j < m->n_independent; ++j) {
+    double* o = out + (size_t)nq * j;
+    const double* x = X + (size_t)nq * (F3R_Q_INDEPENDENT + j);
+    const int l = owner[j];
+    if (l < 0) {
+      memcpy(o, x, (size_t)nq * sizeof(double));
+    } else {
+      o[l] = x[l];
+      o[F3R_Q_THETA + l] = x[F3R_Q_THETA + l];
+      for (int e = 0; e < m->link[l].modes; ++e)
+        o[m->link[l].eta_index + e] = x[m->link[l].eta_index + e];
+    }
+    add_leg_columns(m, X, Bd + 6 * j, o);
+  }
+}
+
+/* J(rows0.., cols0..) += scale B^T Y for Y (nq x nz) as times_B_links forms it. Column z_i of Bd
+ * is nonzero on every leg for the pose and on its own link's legs only for a modal coordinate;
+ * the rows of two different links' modal coordinates stay zero. */
+static void add_B_transpose_times(const f3r_model* m, const int* owner, const double* Bd,
+                                  const double* Y, double scale, double* J, int ld) {
+  const int nq = m->nq, nz = m->n_independent;
+  for (int j = 0; j < nz; ++j) {
+    const double* y = Y + (size_t)nq * j;
+    const int lj = owner[j];
+    for (int i = 0; i < 3; ++i) {
+      double sum;
+      if (lj < 0) {
+        sum = y[F3R_Q_INDEPENDENT + i];
+        for (int c = 0; c < F3R_Q_LEG_JOINTS; ++c) sum += Bd[c + 6 * i] * y[c];
+      } else { /* y is zero on the pose and the other links' legs */
+        sum = 0.0 + Bd[lj + 6 * i] * y[lj];
+        sum += Bd[F3R_Q_THETA + lj + 6 * i] * y[F3R_Q_THETA + lj];
+      }
+      F3R_AT(J, ld, i, j) += scale * sum;
+    }
+    for (int l = 0; l < 3; ++l) {
+      if (lj >= 0 && l != lj) continue;
+      for (int e = 0; e < m->link[l].modes; ++e) {
+        const int i = m->link[l].eta_index - F3R_Q_INDEPENDENT + e;
+        double sum = y[F3R_Q_INDEPENDENT + i];
+        sum += Bd[l + 6 * i] * y[l];
+        sum += Bd[F3R_Q_THETA + l + 6 * i] * y[F3R_Q_THETA + l];
+        F3R_AT(J, ld, i, j) += scale * sum;
+      }
+    }
+  }
+}
+
+/* The legs' rows of -G_d^{-1} X for each of the nz columns of X (6 x nz), into out (6 x nz),
+ * which may be X; a modal column's only on its own link (the other links' rows stay zero). */
+static void minus_dependent_solve(const f3r_data* d, const int* owner, const double* X, int nz,
+                                  double* out) {
+  for (int j = 0; j < nz; ++j) {
+    int first, end;
+    links_of_column(owner[j], &first, &end);
+    const double* x = X + 6 * j;
+    double rho[3] = {0.0, 0.0, 0.0}, theta[3] = {0.0, 0.0, 0.0}; /* read before out is written */
+    for (int i = first; i < end; ++i)
+      f3r_link_solve_dependent(&d->link[i], x[2 * i], x[2 * i + 1], &rho[i], &theta[i]);
+    for (int i = 0; i < 3; ++i) {
+      out[i + 6 * j] = -rho[i];
+      out[F3R_Q_THETA + i + 6 * j] = -theta[i];
+    }
+  }
+}
+
+/* The Jacobian's products, column-major, in ws->jac_work (cleared per evaluation) and ws->dQ. */
+typedef struct {
+  double* Z;   /* nq x nq: d(M a)/dq + dh/dq + dk/dq - dQ/dq - d(G^T lambda)/dq */
+  double* H;   /* nq x nq: dh/dv - dQ/dv */
+  double* Gvq; /* 6 x nq: d(G v)/dq */
+  double* Caq; /* 6 x nq: d(G a)/dq + dgamma/dq */
+  double* gv;  /* 6 x nq: dgamma/dv */
+  double* Bd;  /* 6 x nz: B's dependent rows */
+  double* Vz;  /* nq x nz */
+  double* Az;  /* nq x nz */
+  double* Au;  /* nq x nz */
+  double* T;   /* nq x nz */
+  double* S6;  /* 6 x nz */
+  double* Qq;  /* nq x nq: dQ/dq */
+  double* Qv;  /* nq x nq: dQ/dv */
+} jacobian_products;
+
+static jacobian_products jacobian_products_in(f3r_workspace* ws, int nq, int nz) {
+  jacobian_products p;
+  p.Z = ws->jac_work;
+  p.H = p.Z + (size_t)nq * nq;
+  p.Gvq = p.H + (size_t)nq * nq;
+  p.Caq = p.Gvq + 6 * nq;
+  p.gv = p.Caq + 6 * nq;
+  p.Bd = p.gv + 6 * nq;
+  p.Vz = p.Bd + 6 * nz;
+  p.Az = p.Vz + (size_t)nq * nz;
+  p.Au = p.Az + (size_t)nq * nz;
+  p.T = p.Au + (size_t)nq * nz;
+  p.S6 = p.T + (size_t)nq * nz;
+  p.Qq = ws->dQ;
+  p.Qv = ws->dQ + (size_t)nq * nq;
+  return p;
+}
+
+/* Z and H are nonzero only in the links' blocks and at (phi_p, phi_p) (add_leg_columns): only
+ * those are cleared per evaluation; the rest was cleared when the workspace was created, and
+ * nothing writes it (the effects' dQ is zero there too). */
+static void clear_link_blocks(const f3r_model* m, double* X) {
+  const int nq = m->nq;
+  for (int i = 0; i < 3; ++i) {
+    const f3r_link_params* lp = &m->link[i];
+    int rows[2 + F3R_MAX_MODES], n = 0;
+    rows[n++] = i;
+    rows[n++] = F3R_Q_THETA + i;
+    for (int e = 0; e < lp->modes; ++e) rows[n++] = lp->eta_index + e;
+    for (int c = 0; c < n; ++c)
+      for (int r = 0; r < n; ++r) X[rows[r] + (size_t)nq * rows[c]] = 0.0;
+  }
+  X[F3R_Q_PHI + (size_t)nq * F3R_Q_PHI] = 0.0;
+}
+
+/* Z, H, dQ/dq, dQ/dv and the constraints' derivatives at the state the residual left in ws,
+ * with the loop forces lambda held. */
+static void force_derivatives(const f3r_model* m, f3r_workspace* ws, const jacobian_products* p) {
+  const int nq = m->nq;
+  const f3r_data* d = &ws->data;
+  const double *q = d->q, *v = d->v, *a = d->a;
+  double *Z = p->Z, *H = p->H, *Qq = p->Qq, *Qv = p->Qv;
+  clear_link_blocks(m, Z);
+  clear_link_blocks(m, H);
+  memset(p->Gvq, 0, 18 * (size_t)nq * sizeof(double)); /* Gvq, Caq, gv */
+  const int effects = f3r_effects_have_derivatives(m);
+  if (effects) {
+    memset(ws->dQ, 0, 2 * (size_t)nq * nq * sizeof(double));
+    f3r_effects_add_derivatives(m, d, 1.0, Qq, Qv, nq);
+  }
+  f3r_add_mass_times_dq(m, q, a, 1.0, Z, nq);
+  f3r_add_velocity_forces_dq(m, q, v, 1.0, Z, nq);
+  f3r_add_elastic_forces_dq(m, 1.0, Z, nq);
+  f3r_data_add_constraint_transpose_times_dq(m, d, d->lambda, -1.0, Z, nq);
+  f3r_data_add_velocity_forces_dv(m, d, q, 1.0, H, nq);
+  if (effects)
+    for (size_t k = 0; k < (size_t)nq * nq; ++k) Z[k] -= Qq[k], H[k] -= Qv[k];
+  f3r_data_add_constraint_times_dq(m, d, v, 1.0, p->Gvq, 6);
+  f3r_data_add_constraint_times_dq(m, d, a, 1.0, p->Caq, 6);
+  f3r_data_add_constraint_bias_dq(m, d, v, 1.0, p->Caq, 6);
+  f3r_data_add_constraint_bias_dv(m, d, v, 1.0, p->gv, 6);
+}
+
+/* B's dependent rows (6 x nz): G_d^{-1} applied to -G_z's columns. */
+static void dependent_rows_of_B(const f3r_model* m, const f3r_data* d, const int* owner, int nz,
+                                double* Bd) {
+  double G[F3R_NCON * F3R_MAX_Q] = {0};
+  f3r_data_add_constraint_jacobian(m, d, -1.0, G, F3R_NCON);
+  minus_dependent_solve(d, owner, G + F3R_NCON * F3R_Q_INDEPENDENT, nz, Bd);
+  for (size_t k = 0; k < 6 * (size_t)nz; ++k) Bd[k] = -Bd[k];
+}
+
+/* The legs' rows of out (nq x nz) from S6 (6 x nz). */
+static void set_leg_rows(const double* S6, int nq, int nz, double* out) {
+  for (int j = 0; j < nz; ++j)
+    for (int c = 0; c < F3R_Q_LEG_JOINTS; ++c) out[c + nq * j] = S6[c + 6 * j];
+}
+
+/* V_z, A_u, A_z: only their legs' rows are nonzero. */
+static void dependent_rates(const f3r_data* d, const int* owner, int nq, int nz,
+                            const jacobian_products* p) {
+  const double *Bd = p->Bd, *gv = p->gv, *Vz = p->Vz;
+  double* S6 = p->S6;
+  times_B_constraints(p->Gvq, Bd, owner, nz, S6);
+  minus_dependent_solve(d, owner, S6, nz, S6);
+  set_leg_rows(S6, nq, nz, p->Vz);
+  times_B_constraints(gv, Bd, owner, nz, S6);
+  minus_dependent_solve(d, owner, S6, nz, S6);
+  set_leg_rows(S6, nq, nz, p->Au);
+  times_B_constraints(p->Caq, Bd, owner, nz, S6);
+  for (int j = 0; j < nz; ++j) { /* + dgamma/dv V_z: link i's rows reach its own legs only */
+    int first, end;
+    links_of_column(owner[j], &first, &end);
+    for (int r = 2 * first; r < 2 * end; ++r) {
+      const int i = r / 2;
+      S6[r + 6 * j] += gv[r + 6 * i] * Vz[i + nq * j];
+      S6[r + 6 * j] += gv[r + 6 * (F3R_Q_THETA + i)] * Vz[F3R_Q_THETA + i + nq * j];
+    }
+  }
+  minus_dependent_solve(d, owner, S6, nz, S6);
+  set_leg_rows(S6, nq, nz, p->Az);
+}
+
+/* The reduced equations' rows in z and u: dF_u/dz = B^T (Z B + H V_z + M A_z) and
+ * dF_u/du = B^T (H B + M A_u), added into J. */
+static void add_force_blocks(const f3r_model* m, const f3r_data* d, const int* owner,
+                             const jacobian_products* p, double* J, int ld) {
+  const int nq = m->nq, nz = m->n_independent;
+  const double *H = p->H, *Bd = p->Bd, *Vz = p->Vz;
+  double* T = p->T;
+  times_B_links(m, owner, p->Z, Bd, T);
+  for (int j = 0; j < nz; ++j) add_leg_columns(m, H, Vz + (size_t)nq * j, T + (size_t)nq * j);
+  add_mass_times_legs(m, owner, d, p->Az, T);
+  add_B_transpose_times(m, owner, Bd, T, 1.0, &F3R_AT(J, ld, nz, 0), ld);
+  times_B_links(m, owner, H, Bd, T);
+  add_mass_times_legs(m, owner, d, p->Au, T);
+  add_B_transpose_times(m, owner, Bd, T, 1.0, &F3R_AT(J, ld, nz, nz), ld);
+}
+
+/* cj dF/dy' for z (identity), u (B^T M B) and the lag states (tau, with their own 1), and
+ * F_z = z' - u; the lag states enter R_rho with -1 and F_W with -rho'. */
+static void add_rate_and_lag_blocks(const f3r_model* m, f3r_workspace* ws, double cj,
+                                    const double* Bd, int w_at, double* J, int ld) {
+  const int nz = m->n_independent, lag_at = 2 * nz;
+  const double* v = ws->data.v;
+  for (int j = 0; j < nz; ++j) {
+    F3R_AT(J, ld, j, j) += cj;
+    F3R_AT(J, ld, j, nz + j) -= 1.0;
+  }
+  f3r_minimal_reduced_mass_blocks(m, ws);
+  f3r_minimal_add_reduced_mass(m, ws, cj, &F3R_AT(J, ld, nz, nz), ld);
+  for (int i = 0; i < m->n_lag; ++i) {
+    F3R_AT(J, ld, lag_at + i, lag_at + i) += 1.0 + cj * m->lag_time_constant;
+    for (int r = 0; r < nz; ++r) F3R_AT(J, ld, nz + r, lag_at + i) -= Bd[F3R_Q_RHO + i + 6 * r];
+    F3R_AT(J, ld, w_at, lag_at + i) -= v[F3R_Q_RHO + i];
+  }
+}
+
+/* The work row F_W = W' - Q . v: dF_W/dz = -(v^T dQ/dq B + (v^T dQ/dv + Q^T) V_z),
+ * dF_W/du = -(v^T dQ/dv + Q^T) B, dF_W/dW' = 1. */
+static void add_work_row(const f3r_model* m, const f3r_workspace* ws, double cj,
+                         const jacobian_products* p, int w_at, double* J, int ld) {
+  const int nq = m->nq, nz = m->n_independent;
+  const double *v = ws->data.v, *Qq = p->Qq, *Qv = p->Qv, *Bd = p->Bd, *Vz = p->Vz;
+  double wq[F3R_MAX_Q], wv[F3R_MAX_Q];                 /* v^T dQ/dq and v^T dQ/dv + Q^T, as rows */
+  const int effects = f3r_effects_have_derivatives(m); /* without, dQ/dq and dQ/dv are zero */
+  for (int c = 0; c < nq; ++c) {
+    double sq = 0.0, sv = ws->data.Q[c];
+    if (effects)
+      for (int r = 0; r < nq; ++r) sq += v[r] * Qq[r + nq * c], sv += v[r] * Qv[r + nq * c];
+    wq[c] = sq, wv[c] = sv;
+  }
+  for (int j = 0; j < nz; ++j) {
+    double dz = wq[F3R_Q_INDEPENDENT + j], du = wv[F3R_Q_INDEPENDENT + j];
+    for (int c = 0; c < F3R_Q_LEG_JOINTS; ++c)
+      dz += wq[c] * Bd[c + 6 * j] + wv[c] * Vz[c + nq * j], du += wv[c] * Bd[c + 6 * j];
+    F3R_AT(J, ld, w_at, j) -= dz;
+    F3R_AT(J, ld, w_at, nz + j) -= du;
+  }
+  F3R_AT(J, ld, w_at, w_at) += cj;
+}
+
+/* The analytic Jacobian of the minimal residual. With the loop forces lambda held, the reduced
+ * equations vary as dF_u = B^T (dR - d(G^T lambda)/dq dq), R = M a + h + k - Q, and the loop
+ * closure gives dq/dz = B, dv/dz = V_z, dv/du = B, da/dz = A_z, da/du = A_u, da/du' = B, whose
+ * dependent rows follow from G v = 0 and G a + gamma = 0 (their z rows are zero):
+ *   V_z = -G_d^{-1} d(G v)/dq B,
+ *   A_z = -G_d^{-1} [(d(G a)/dq + dgamma/dq) B + dgamma/dv V_z],   A_u = -G_d^{-1} dgamma/dv B.
+ * Hence, with Z = d(M a)/dq + dh/dq + dk/dq - dQ/dq - d(G^T lambda)/dq and H = dh/dv - dQ/dv,
+ *   dF_u/dz = B^T (Z B + H V_z + M A_z),  dF_u/du = B^T (H B + M A_u),  dF_u/du' = B^T M B;
+ * the lag states enter R_rho with -1; F_W = W' - Q.v gives dF_W/dz = -(v^T dQ/dq B +
+ * (v^T dQ/dv + Q^T) V_z), dF_W/du = -(v^T dQ/dv + Q^T) B, dF_W/dF_a = -rho'. */
+f3r_status f3r_minimal_jacobian(const f3r_model* m, double t, double cj, const double* y,
+                                const double* yp, const double* held, double* J, int ld,
+                                f3r_workspace* ws) {
+  const int nq = m->nq, nz = m->n_independent, ny = f3r_state_size(m, F3R_FORMULATION_MINIMAL);
+  const int w_at = ny - 1;
+  f3r_status st = f3r_minimal_residual(m, t, y, yp, held, ws->res_base, ws);
+  if (st != F3R_OK) return st;
+  const jacobian_products p = jacobian_products_in(ws, nq, nz);
+  force_derivatives(m, ws, &p);
+  int owner[F3R_MAX_Q];
+  column_owners(m, owner);
+  dependent_rows_of_B(m, &ws->data, owner, nz, p.Bd);
+  dependent_rates(&ws->data, owner, nq, nz, &p);
+  add_force_blocks(m, &ws->data, owner, &p, J, ld);
+  add_rate_and_lag_blocks(m, ws, cj, p.Bd, w_at, J, ld);
+  add_work_row(m, ws, cj, &p, w_at, J, ld);
+  return F3R_OK;
+}
