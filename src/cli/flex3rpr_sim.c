@@ -22,221 +22,12 @@
 #include "flex3rpr/accuracy.h"
 #include "flex3rpr/beam_modes.h"
 #include "flex3rpr/sim.h"
+#include "cli_options.h"
 #include "model_reports.h"
 #include "summary_json.h"
 
-#define MAX_HOLDS 64
-#define MAX_SETS 64
-
-/* A held generalized force from a time on, as a node command would give it. */
-typedef struct {
-  double t;
-  int index;
-  double value;
-} hold_event;
-
-typedef struct {
-  const char* scene_path;
-  const char* out_path;
-  int modal;
-  const char* modal_csv; /* --modal-csv FILE: the frequencies as CSV, to 17 digits */
-  int geometry;
-  int check;
-  int fd_jacobian;
-  int dense_linear_solver;
-  int exact_kinematics;
-  const char* formulation;
-  double rtol, atol, max_order, output_step, duration, accuracy;
-  const char* linear_path;
-  const char* linearise_path; /* --linearise FILE.mat: the state-space model, and FILE.json */
-  const char* summary_json;   /* --summary-json FILE: the summary as JSON; "-": on stdout */
-  int stop_at_outputs;
-  int integrator_ida, integrator_erk, integrator_dirk;
-  const char* table;
-  int n_holds;
-  hold_event holds[MAX_HOLDS];
-  int n_sets;
-  const char* sets[MAX_SETS]; /* "FIELD=VALUE" scene overrides, in order */
-} cli_options;
-
-static void usage(FILE* to) {
-  fprintf(
-      to,
-      "usage: flex3rpr_sim SCENE.yaml [--out FILE.csv] [--formulation dae|minimal]\n"
-      "                    [--rtol R] [--atol A] [--max-order K] [--output-step DT] [--duration "
-      "T]\n"
-      "                    [--fd-jacobian] [--dense-linear-solver] [--exact-kinematics]\n"
-      "                    [--ida | --erk | --dirk] [--table NAME]\n"
-      "                    [--stop-at-outputs] [--hold T:INDEX:VALUE ...]\n"
-      "                    [--accuracy METRES] [--linear-path FILE.csv] [--linearise FILE.mat]\n"
-      "                    [--set FIELD=VALUE ...]   (any scene field: --set links[0].modes=4)\n"
-      "                    [--summary-json FILE|-]   (the summary as JSON; -: on stdout)\n"
-      "       flex3rpr_sim --modal SCENE.yaml [--modal-csv FILE.csv] [--set FIELD=VALUE ...]\n"
-      "       flex3rpr_sim --geometry SCENE.yaml\n"
-      "       flex3rpr_sim --check SCENE.yaml [--set FIELD=VALUE ...]   (load and build only)\n");
-}
-
-/* The first failure, for the JSON summary's error: a status (f3r_status_name, or "usage" and
- * "io" for the CLI's own) and the message, which fail() also prints. */
-static struct {
-  const char* status;
-  char message[4096 + 512]; /* a path, and an f3r_error's message */
-} failure;
-
-static void fail(const char* status, const char* format, ...) {
-  char text[sizeof failure.message];
-  va_list args;
-  va_start(args, format);
-  vsnprintf(text, sizeof text, format, args);
-  va_end(args);
-  fprintf(stderr, "flex3rpr_sim: %s\n", text);
-  if (!failure.status) {
-    failure.status = status;
-    snprintf(failure.message, sizeof failure.message, "%s", text);
-  }
-}
-
 /* Where the human summary goes: stdout, or stderr when the JSON takes stdout. */
 static FILE* human;
-
-static int parse_number(const char* flag, const char* text, double* out) {
-  char* end = NULL;
-  const double v = text ? strtod(text, &end) : NAN;
-  if (!text || end == text || *end || !isfinite(v) || v <= 0.0) {
-    fail("usage", "%s needs a positive number, got '%s'", flag, text ? text : "");
-    return 0;
-  }
-  *out = v;
-  return 1;
-}
-
-/* The options, by kind: a switch sets an int to 1, a path keeps its argument, a number takes a
- * positive one (parse_number). */
-typedef struct {
-  const char* flag;
-  size_t offset;
-} option_field;
-
-static const option_field switches[] = {
-    {"--modal", offsetof(cli_options, modal)},
-    {"--geometry", offsetof(cli_options, geometry)},
-    {"--check", offsetof(cli_options, check)},
-    {"--fd-jacobian", offsetof(cli_options, fd_jacobian)},
-    {"--dense-linear-solver", offsetof(cli_options, dense_linear_solver)},
-    {"--exact-kinematics", offsetof(cli_options, exact_kinematics)},
-    {"--stop-at-outputs", offsetof(cli_options, stop_at_outputs)},
-    {"--ida", offsetof(cli_options, integrator_ida)},
-    {"--erk", offsetof(cli_options, integrator_erk)},
-    {"--dirk", offsetof(cli_options, integrator_dirk)},
-};
-static const option_field paths[] = {
-    {"--table", offsetof(cli_options, table)},
-    {"--out", offsetof(cli_options, out_path)},
-    {"--linear-path", offsetof(cli_options, linear_path)},
-    {"--linearise", offsetof(cli_options, linearise_path)},
-    {"--modal-csv", offsetof(cli_options, modal_csv)},
-    {"--formulation", offsetof(cli_options, formulation)},
-    {"--summary-json", offsetof(cli_options, summary_json)},
-};
-static const option_field numbers[] = {
-    {"--accuracy", offsetof(cli_options, accuracy)},
-    {"--rtol", offsetof(cli_options, rtol)},
-    {"--atol", offsetof(cli_options, atol)},
-    {"--max-order", offsetof(cli_options, max_order)},
-    {"--output-step", offsetof(cli_options, output_step)},
-    {"--duration", offsetof(cli_options, duration)},
-};
-#define COUNT(a) (sizeof(a) / sizeof((a)[0]))
-
-static const option_field* find_option(const option_field* table, size_t n, const char* flag) {
-  for (size_t k = 0; k < n; ++k)
-    if (!strcmp(table[k].flag, flag)) return &table[k];
-  return NULL;
-}
-
-/* --hold T:INDEX:VALUE and --set FIELD=VALUE, which collect. 1 taken, 0 an error (said). */
-static int collect_option(const char* a, const char* next, cli_options* o) {
-  if (!strcmp(a, "--hold")) {
-    hold_event* h = &o->holds[o->n_holds];
-    if (o->n_holds >= MAX_HOLDS || sscanf(next, "%lf:%d:%lf", &h->t, &h->index, &h->value) != 3 ||
-        !(h->t >= 0.0) || h->index < 0 || !isfinite(h->value)) {
-      fail("usage", "--hold needs T:INDEX:VALUE (T >= 0), got '%s'", next);
-      return 0;
-    }
-    ++o->n_holds;
-    return 1;
-  }
-  if (o->n_sets >= MAX_SETS) {
-    fail("usage", "at most %d --set overrides", MAX_SETS);
-    return 0;
-  }
-  o->sets[o->n_sets++] = next;
-  return 1;
-}
-
-/* One argument (and its value, which *k then passes): 1 taken, 0 an error (said). */
-static int parse_arg(int argc, char** argv, int* k, cli_options* o) {
-  const char* a = argv[*k];
-  const char* next = *k + 1 < argc ? argv[*k + 1] : NULL;
-  const option_field* f;
-  if ((f = find_option(switches, COUNT(switches), a))) {
-    *(int*)((char*)o + f->offset) = 1;
-    return 1;
-  }
-  if (next && (f = find_option(paths, COUNT(paths), a))) {
-    *(const char**)((char*)o + f->offset) = next;
-    ++*k;
-    return 1;
-  }
-  if ((f = find_option(numbers, COUNT(numbers), a))) {
-    ++*k;
-    return parse_number(a, next, (double*)((char*)o + f->offset));
-  }
-  if (next && (!strcmp(a, "--hold") || !strcmp(a, "--set"))) {
-    ++*k;
-    return collect_option(a, next, o);
-  }
-  if (!strcmp(a, "--help") || !strcmp(a, "-h")) {
-    usage(stdout);
-    exit(0);
-  }
-  if (a[0] != '-' && !o->scene_path) {
-    o->scene_path = a;
-    return 1;
-  }
-  fail("usage", "unknown or incomplete option '%s'", a);
-  return 0;
-}
-
-static int parse_args(int argc, char** argv, cli_options* o) {
-  memset(o, 0, sizeof *o);
-  for (int k = 1; k < argc; ++k)
-    if (!parse_arg(argc, argv, &k, o)) return 0;
-  if (!o->scene_path) {
-    fail("usage", "no scene given");
-    return 0;
-  }
-  if (o->integrator_ida + o->integrator_erk + o->integrator_dirk > 1) {
-    fail("usage", "give one of --ida, --erk, --dirk");
-    return 0;
-  }
-  f3r_formulation formulation;
-  if (o->formulation && f3r_formulation_from_name(o->formulation, &formulation) != 0) {
-    fail("usage", "--formulation must be %s or %s, got '%s'",
-         f3r_formulation_name(F3R_FORMULATION_DAE), f3r_formulation_name(F3R_FORMULATION_MINIMAL),
-         o->formulation);
-    return 0;
-  }
-  const int to_stdout = o->geometry || o->modal || o->modal_csv || o->linear_path ||
-                        o->linearise_path; /* what writes its own output on stdout */
-  if (o->summary_json && !strcmp(o->summary_json, "-") && to_stdout) {
-    fail("usage",
-         "--summary-json - needs stdout, which --geometry, --modal, --linear-path and "
-         "--linearise use: give a file");
-    return 0;
-  }
-  return 1;
-}
 
 static void write_header(FILE* f, const f3r_model* m) {
   static const char* rigid[9] = {"rho_1",   "rho_2", "rho_3", "theta_1", "theta_2",
@@ -340,11 +131,11 @@ static void report_load_error(const cli_options* o, const override_list* l, cons
     char prefix[128];
     const int n = snprintf(prefix, sizeof prefix, "--set %s: ", l->own[k]);
     if (!strncmp(err->message, prefix, (size_t)n)) {
-      fail(f3r_status_name(err->code), "%s: %s", o->scene_path, err->message + n);
+      cli_fail(f3r_status_name(err->code), "%s: %s", o->scene_path, err->message + n);
       return;
     }
   }
-  fail(f3r_status_name(err->code), "%s", err->message);
+  cli_fail(f3r_status_name(err->code), "%s", err->message);
 }
 
 /* The scene (file, options, overrides), what the accuracy knob chose for it in *choose_cpu s,
@@ -373,7 +164,7 @@ static int resolve_model(const cli_options* o, f3r_scene* scene, f3r_accuracy_ch
   *choose_cpu = cpu_seconds() - choose_start;
   if (st == F3R_OK) st = f3r_model_create(scene, model, &err);
   if (st != F3R_OK) {
-    fail(f3r_status_name(st), "%s: %s", o->scene_path, err.message);
+    cli_fail(f3r_status_name(st), "%s: %s", o->scene_path, err.message);
     return 0;
   }
   return 1;
@@ -466,7 +257,7 @@ static int run_outputs(const cli_options* o, const f3r_scene* scene, const f3r_m
   for (long k = 1; k <= steps; ++k) {
     const double t = k == steps ? scene->duration : (double)k * scene->output_step;
     if (apply_holds(o, scene->output_step, sim, held, &err) != F3R_OK) {
-      fail(f3r_status_name(err.code), "%s", err.message);
+      cli_fail(f3r_status_name(err.code), "%s", err.message);
       rc = 1;
       break;
     }
@@ -478,7 +269,7 @@ static int run_outputs(const cli_options* o, const f3r_scene* scene, const f3r_m
     r->cpu_integrating += advanced - before;
     if (csv) write_row(csv, model, out);
     if (st != F3R_OK) {
-      fail(f3r_status_name(st), "%s", err.message);
+      cli_fail(f3r_status_name(st), "%s", err.message);
       rc = 1;
       break;
     }
@@ -565,20 +356,21 @@ static int simulate(const cli_options* o, const f3r_scene* scene, const f3r_mode
   settings.stop_at_outputs = o->stop_at_outputs;
   for (int h = 0; h < o->n_holds; ++h)
     if (o->holds[h].index >= f3r_model_nq(model)) {
-      fail("usage", "--hold index %d is beyond nq = %d", o->holds[h].index, f3r_model_nq(model));
+      cli_fail("usage", "--hold index %d is beyond nq = %d", o->holds[h].index,
+               f3r_model_nq(model));
       return 2;
     }
   f3r_error err = {0};
   f3r_sim* sim = NULL;
   if (f3r_sim_create(model, &settings, &sim, &err) != F3R_OK) {
-    fail(f3r_status_name(err.code), "%s", err.message);
+    cli_fail(f3r_status_name(err.code), "%s", err.message);
     return 1;
   }
   FILE* csv = NULL;
   if (o->out_path) {
     csv = fopen(o->out_path, "w");
     if (!csv) {
-      fail("io", "cannot write %s", o->out_path);
+      cli_fail("io", "cannot write %s", o->out_path);
       f3r_sim_destroy(sim);
       return 1;
     }
@@ -739,7 +531,7 @@ static void json_choice(f3r_json* j, const f3r_scene* scene, const f3r_accuracy_
 static int write_summary(const char* path, const cli_options* o, const summary_parts* p, int rc) {
   FILE* f = strcmp(path, "-") ? fopen(path, "w") : stdout;
   if (!f) {
-    fail("io", "cannot write %s", path);
+    cli_fail("io", "cannot write %s", path);
     return rc ? rc : 1;
   }
   f3r_json j;
@@ -749,8 +541,8 @@ static int write_summary(const char* path, const cli_options* o, const summary_p
   f3r_json_integer(&j, "exit_code", rc);
   if (rc) {
     f3r_json_object(&j, "error");
-    f3r_json_string(&j, "status", failure.status ? failure.status : "failed");
-    f3r_json_string(&j, "message", failure.status ? failure.message : "see stderr");
+    f3r_json_string(&j, "status", cli_failure_status() ? cli_failure_status() : "failed");
+    f3r_json_string(&j, "message", cli_failure_status() ? cli_failure_message() : "see stderr");
     f3r_json_close(&j);
   } else {
     f3r_json_null(&j, "error");
@@ -769,7 +561,7 @@ static int write_summary(const char* path, const cli_options* o, const summary_p
     f3r_json_null(&j, "run");
   f3r_json_end(&j);
   if (f != stdout ? fclose(f) != 0 : fflush(f) != 0) {
-    fail("io", "cannot write %s", path);
+    cli_fail("io", "cannot write %s", path);
     return rc ? rc : 1;
   }
   return rc;
@@ -785,8 +577,8 @@ static const char* summary_json_arg(int argc, char** argv) {
 int main(int argc, char** argv) {
   cli_options o;
   human = stdout;
-  if (!parse_args(argc, argv, &o)) {
-    usage(stderr);
+  if (!cli_parse_args(argc, argv, &o)) {
+    cli_usage(stderr);
     const char* path = summary_json_arg(argc, argv);
     const summary_parts none = {0};
     if (path) write_summary(path, &o, &none, 2);
