@@ -8,7 +8,7 @@
  *    duration and initial state; r is raised uniformly until it fits, then trimmed per link.
  *    Where the scene leaves links[i].static_correction open on a fixed-free link, the same search
  *    runs with the static shapes added (against the corrected basis with more modes), and the
- *    cheaper basis that fits is kept (f3r_mode_search_cost: steps from the highest frequency);
+ *    cheaper basis that fits is kept (f3r_basis_cost: steps from the highest frequency);
  *  - pilot check: when the linear path leaves the initial pose far, short nonlinear runs at the
  *    least mode counts and one more measure what the linearisation cannot, unless the linear
  *    estimate lies far below its share; with end stops the knob takes 20 modes instead;

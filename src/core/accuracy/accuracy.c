@@ -117,8 +117,8 @@ static f3r_status cheaper_than_any_correction(choice_run* run, const f3r_scene* 
   for (int i = 0; i < 3; ++i)
     if (run->correctable >> i & 1) least[i] = 1;
   double least_cost = 0.0;
-  f3r_status st = f3r_mode_search_cost(run->s, &run->ms, c->modes, &run->plain_cost, err);
-  if (st == F3R_OK) st = f3r_mode_search_cost(corrected, &run->ms, least, &least_cost, err);
+  f3r_status st = f3r_basis_cost(run->s, c->modes, &run->plain_cost, err);
+  if (st == F3R_OK) st = f3r_basis_cost(corrected, least, &least_cost, err);
   if (st == F3R_OK && run->plain_cost <= least_cost) run->least_corrected_cost = least_cost;
   return st;
 }
@@ -156,7 +156,7 @@ static f3r_status compare_correction(choice_run* run, f3r_accuracy_choice* c, f3
   run->corrected_error = ratio * estimate;
   run->corrected_found = st == F3R_OK && f3r_mode_search_found(&ms, run->corrected_modes);
   if (st == F3R_OK && run->corrected_found)
-    st = f3r_mode_search_cost(&corrected, &ms, run->corrected_modes, &run->corrected_cost, err);
+    st = f3r_basis_cost(&corrected, run->corrected_modes, &run->corrected_cost, err);
   const int take = st == F3R_OK && run->corrected_found &&
                    (!run->plain_found || run->corrected_cost < run->plain_cost);
   run->ms.evaluations += ms.evaluations;

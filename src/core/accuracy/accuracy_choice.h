@@ -47,7 +47,7 @@ typedef struct {
   int kinematics_open, kinematics_off, solver_open;
   f3r_mode_search ms;
   /* The static correction against the paper's modes, where the knob may choose it: the links it
-   * may go on, each basis's counts, linear estimate and relative cost (f3r_mode_search_cost) */
+   * may go on, each basis's counts, linear estimate and relative cost (f3r_basis_cost) */
   unsigned correctable;
   int plain_modes[3], corrected_modes[3];
   int plain_found, corrected_found;

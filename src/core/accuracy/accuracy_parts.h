@@ -78,8 +78,7 @@ int f3r_mode_search_found(const f3r_mode_search* ms, const int modes[3]);
  * coordinates. IDA's steps grow as the square root of the highest frequency and a step's cost
  * with the coordinates (docs/benchmarks/practical_tolerances.md: 105 000, 142 000 and 262 000
  * steps for 6.8, 16 and 49 kHz; 0.15, 0.26 and 0.67 s against 1 : 2.0 : 5.0 here). */
-f3r_status f3r_mode_search_cost(const f3r_scene* s, const f3r_mode_search* ms, const int modes[3],
-                                double* cost, f3r_error* err);
+f3r_status f3r_basis_cost(const f3r_scene* s, const int modes[3], double* cost, f3r_error* err);
 /* The effect of exact kinematics on the end-effector path at the given modes, to first order:
  * the linear response to its added forces along the first-order linear path, at the search's
  * sampling (linear.h: f3r_linear_difference_response). */

@@ -144,9 +144,7 @@ int f3r_mode_search_found(const f3r_mode_search* ms, const int modes[3]) {
   return !ms->chosen;
 }
 
-f3r_status f3r_mode_search_cost(const f3r_scene* s, const f3r_mode_search* ms, const int modes[3],
-                                double* cost, f3r_error* err) {
-  (void)ms;
+f3r_status f3r_basis_cost(const f3r_scene* s, const int modes[3], double* cost, f3r_error* err) {
   *cost = 0.0;
   f3r_model* model = NULL;
   f3r_linear_model* lin = NULL;
