@@ -81,13 +81,15 @@ f3r_status f3r_arkode_configure(f3r_stepper* st, const f3r_arkode_calls* calls, 
   CHECK(calls->ss_tolerances(st->mem, st->settings.rtol, st->settings.atol));
   CHECK(calls->set_user_data(st->mem, st));
   CHECK(calls->set_max_num_steps(st->mem, 100000000L));
-  /* Cubic Hermite output from y and f at both ends of a step, which the stepper has anyway.
-   * Degree 5 (ARKODE's default) costs extra right-hand sides at every output: 40 k of 216 k on
-   * paper simulation 3 with output every 0.1 ms, for the same digits (rtol 1e-5..1e-9). Where
-   * steps are long against the output spacing the output's own error shows: on rigid.yaml (10 ms
-   * steps, 1 ms outputs, rtol 1e-7) 3.9 digits with degree 3, 4.3 with degree 5 at 8 right-hand
-   * sides per output; stop_at_outputs (the node's) makes every output a step end, exact. */
-  CHECK(calls->set_interpolant_degree(st->mem, 3));
+  /* Quartic Hermite output: y and f at both ends of the step and one more right-hand side inside
+   * it, at each of ARKODE's two interpolations per output (the root check at tout, then y(tout)).
+   * Measured against stop-at-outputs references (docs/solvers.md, "Outputs between steps"):
+   * cubic loses up to a digit where steps are long against the outputs (rigid.yaml, rtol 1e-9,
+   * 1 ms outputs: 1.6e-7 m cubic, 5.9e-8 m quartic; paper simulation 3 at 0.1 ms outputs,
+   * rtol 1e-5: energy balance 6.4e-7 J cubic, 2.8e-8 J quartic, for 3 % more CPU). Quintic
+   * (ARKODE's default) is no better in any of them and costs four right-hand sides an
+   * interpolation; stop_at_outputs (the node's) makes every output a step end. */
+  CHECK(calls->set_interpolant_degree(st->mem, 4));
   if (st->settings.max_step > 0.0) CHECK(calls->set_max_step(st->mem, st->settings.max_step));
   int directions[F3R_NROOTS];
   f3r_stepper_root_directions(directions);

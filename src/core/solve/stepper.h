@@ -134,7 +134,7 @@ struct f3r_arkode_calls {
         prefix##GetNumErrTestFails, prefix##GetLastStep, stats                                   \
   }
 /* The options both ARKODE back ends set once their memory and table exist: the error handler,
- * tolerances, user data, step limits, cubic Hermite output and the roots. */
+ * tolerances, user data, step limits, quartic Hermite output and the roots. */
 f3r_status f3r_arkode_configure(f3r_stepper* st, const f3r_arkode_calls* calls, f3r_error* err);
 /* ops->restart and ops->advance of both ARKODE back ends, through st->arkode. */
 f3r_status f3r_arkode_restart(f3r_stepper* st, N_Vector y, N_Vector yp, double t, f3r_error* err);
