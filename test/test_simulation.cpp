@@ -49,6 +49,24 @@ RunResult RunScene(const f3r_scene& scene, double output_step, double duration) 
   return r;
 }
 
+// (x_p, y_p) at `outputs` outputs `step` apart, and the run's final counts.
+std::vector<double> PlatformPath(const f3r_model* m, const f3r_solver_settings& set, int outputs,
+                                 double step, f3r_sim_stats* stats) {
+  f3r_sim* raw = nullptr;
+  f3r_error err{};
+  if (f3r_sim_create(m, &set, &raw, &err) != F3R_OK) throw std::runtime_error(err.message);
+  SimPtr sim(raw);
+  std::vector<double> path;
+  for (int k = 1; k <= outputs; ++k) {
+    if (f3r_sim_advance(sim.get(), k * step, &err) != F3R_OK) throw std::runtime_error(err.message);
+    const f3r_outputs* o = f3r_sim_outputs(sim.get());
+    path.push_back(o->q[F3R_Q_X]);
+    path.push_back(o->q[F3R_Q_Y]);
+    *stats = o->stats;
+  }
+  return path;
+}
+
 f3r_scene Scene(const std::string& name) {
   f3r_scene s;
   f3r_error err{};
@@ -442,20 +460,7 @@ TEST(Simulation, EveryIntegratorAndTableFollowsTheSamePath) {
     std::snprintf(set.rk_table, sizeof set.rk_table, "%s", table ? table : "");
     set.rtol = rtol;
     set.atol = rtol * 1e-2;
-    f3r_sim* raw = nullptr;
-    f3r_error err{};
-    if (f3r_sim_create(m.get(), &set, &raw, &err) != F3R_OK) throw std::runtime_error(err.message);
-    SimPtr sim(raw);
-    std::vector<double> path;
-    for (int k = 1; k <= 300; ++k) {
-      if (f3r_sim_advance(sim.get(), k * 1e-4, &err) != F3R_OK)
-        throw std::runtime_error(err.message);
-      const f3r_outputs* o = f3r_sim_outputs(sim.get());
-      path.push_back(o->q[F3R_Q_X]);
-      path.push_back(o->q[F3R_Q_Y]);
-      *stats = o->stats;
-    }
-    return path;
+    return PlatformPath(m.get(), set, 300, 1e-4, stats);
   };
   f3r_sim_stats ref_stats{};
   const std::vector<double> ref = run(F3R_INTEGRATOR_IDA, nullptr, 1e-11, &ref_stats);
@@ -520,20 +525,7 @@ TEST(Simulation, ExplicitOutputsBetweenStepsKeepTheStepsDigits) {
     set.rtol = rtol;
     set.atol = rtol * 1e-2;
     set.stop_at_outputs = stop_at_outputs;
-    f3r_sim* raw = nullptr;
-    f3r_error err{};
-    if (f3r_sim_create(m.get(), &set, &raw, &err) != F3R_OK) throw std::runtime_error(err.message);
-    SimPtr sim(raw);
-    std::vector<double> path;
-    for (int k = 1; k <= 250; ++k) {
-      if (f3r_sim_advance(sim.get(), k * 1e-3, &err) != F3R_OK)
-        throw std::runtime_error(err.message);
-      const f3r_outputs* o = f3r_sim_outputs(sim.get());
-      path.push_back(o->q[F3R_Q_X]);
-      path.push_back(o->q[F3R_Q_Y]);
-      *stats = o->stats;
-    }
-    return path;
+    return PlatformPath(m.get(), set, 250, 1e-3, stats);
   };
   f3r_sim_stats ref_stats{}, stats{};
   const std::vector<double> ref = run(1e-12, 1, &ref_stats);

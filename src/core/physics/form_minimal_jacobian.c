@@ -247,7 +247,8 @@ static void force_derivatives(const f3r_model* m, f3r_workspace* ws, const jacob
 /* B's dependent rows (6 x nz): G_d^{-1} applied to -G_z's columns. */
 static void dependent_rows_of_B(const f3r_model* m, const f3r_data* d, const int* owner, int nz,
                                 double* Bd) {
-  double G[F3R_NCON * F3R_MAX_Q] = {0};
+  double G[F3R_NCON * F3R_MAX_Q];
+  memset(G, 0, F3R_NCON * (size_t)m->nq * sizeof(double)); /* the model's columns, not the most */
   f3r_data_add_constraint_jacobian(m, d, -1.0, G, F3R_NCON);
   minus_dependent_solve(d, owner, G + F3R_NCON * F3R_Q_INDEPENDENT, nz, Bd);
   for (size_t k = 0; k < 6 * (size_t)nz; ++k) Bd[k] = -Bd[k];
