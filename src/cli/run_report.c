@@ -1,0 +1,181 @@
+/* The summaries' shared numbers and the JSON summary (run_report.h). */
+#include "run_report.h"
+
+#include <math.h>
+#include <string.h>
+
+#include <sundials/sundials_config.h>
+
+#include "summary_json.h"
+
+const char* cli_integrator_text(const cli_options* o, const f3r_scene* scene) {
+  return scene->integrator == F3R_INTEGRATOR_ERK    ? "ARKODE ERKStep"
+         : scene->integrator == F3R_INTEGRATOR_DIRK ? "ARKODE ARKStep, DIRK"
+         : o->fd_jacobian                           ? "IDA, difference-quotient Jacobian"
+                                                    : "IDA, analytic Jacobian";
+}
+
+/* Simulated time over a measured time (inf when not measurable). */
+static double per_second(double t, double time) { return time > 0 ? t / time : INFINITY; }
+
+real_time_factors cli_real_time_factor(double t, const run_stats* r) {
+  return (real_time_factors){per_second(t, r->cpu_total), per_second(t, r->wall_integrating),
+                             per_second(t, r->wall_integrating + r->wall_outputs)};
+}
+
+double cli_energy_relative(const run_stats* r) {
+  return r->max_energy > 0 ? r->max_energy_error / r->max_energy : 0.0;
+}
+
+static void json_settings(f3r_json* j, const cli_options* o, const f3r_scene* scene,
+                          const f3r_model* model) {
+  const int ida = scene->integrator == F3R_INTEGRATOR_IDA;
+  f3r_json_object(j, "settings");
+  f3r_json_string(j, "formulation", f3r_formulation_name(scene->formulation));
+  f3r_json_string(j, "integrator", f3r_integrator_name(scene->integrator));
+  f3r_json_string(j, "integrator_text", cli_integrator_text(o, scene));
+  f3r_json_string(j, "jacobian", !ida ? NULL : o->fd_jacobian ? "difference_quotient" : "analytic");
+  f3r_json_string(j, "table", ida ? NULL : scene->table[0] ? scene->table : "default");
+  f3r_json_number(j, "rtol", scene->rtol);
+  f3r_json_number(j, "atol", scene->atol);
+  if (ida)
+    f3r_json_integer(j, "max_bdf_order", scene->max_order);
+  else
+    f3r_json_null(j, "max_bdf_order");
+  f3r_json_bool(j, "exact_kinematics", scene->exact_kinematics);
+  f3r_json_string(j, "sundials_version", SUNDIALS_VERSION);
+  f3r_json_string(j, "sundials_build", F3R_SUNDIALS_BUILD);
+  f3r_json_array(j, "link_basis");
+  for (int i = 0; i < 3; ++i) {
+    char basis[96];
+    f3r_json_string(j, NULL, f3r_model_link_basis_name(model, i, basis, sizeof basis));
+  }
+  f3r_json_close(j);
+  f3r_json_integer(j, "state_dimension", f3r_state_size(model, scene->formulation));
+  f3r_json_integer(j, "nq", f3r_model_nq(model));
+  f3r_json_number(j, "duration_s", scene->duration);
+  f3r_json_number(j, "output_step_s", scene->output_step);
+  f3r_json_integer(j, "beam_points", scene->beam_points);
+  f3r_json_close(j);
+}
+
+static void json_run(f3r_json* j, const cli_options* o, const run_report* r) {
+  const run_stats* s = &r->stats;
+  f3r_json_object(j, "run");
+  f3r_json_number(j, "simulated_time_s", r->t);
+  f3r_json_integer(j, "steps", r->steps);
+  f3r_json_integer(j, "residual_evals", r->residual_evals);
+  f3r_json_integer(j, "jacobian_evals", r->jacobian_evals);
+  f3r_json_number(j, "cpu_time_s", s->cpu_total);
+  f3r_json_number(j, "wall_time_s", s->wall_total);
+  f3r_json_number(j, "integration_wall_time_s", s->wall_integrating);
+  f3r_json_number(j, "outputs_wall_time_s", s->wall_outputs);
+  const real_time_factors rtf = cli_real_time_factor(r->t, s);
+  f3r_json_number(j, "real_time_factor_cpu", rtf.cpu);
+  f3r_json_number(j, "real_time_factor_wall_integration", rtf.wall_integration);
+  f3r_json_number(j, "real_time_factor_wall", rtf.wall);
+  f3r_json_number(j, "max_constraint_residual_m", s->max_constraint);
+  f3r_json_number(j, "energy_balance_error_J", s->max_energy_error);
+  f3r_json_number(j, "energy_balance_relative", cli_energy_relative(s));
+  f3r_json_number(j, "max_deflection_m", s->max_deflection);
+  f3r_json_number(j, "max_tip_deflection_m", s->max_tip);
+  f3r_json_number(j, "final_x_p_m", r->x);
+  f3r_json_number(j, "final_y_p_m", r->y);
+  f3r_json_number(j, "final_phi_p_rad", r->phi);
+  f3r_json_string(j, "csv", o->out_path);
+  f3r_json_close(j);
+}
+
+/* The mode counts a link, and the static shapes the basis adds to them. */
+static void json_links(f3r_json* j, const f3r_scene* scene, const f3r_accuracy_choice* c) {
+  f3r_json_array(j, "rigid");
+  for (int i = 0; i < 3; ++i) f3r_json_bool(j, NULL, scene->links[i].model == F3R_LINK_RIGID);
+  f3r_json_close(j);
+  f3r_json_array(j, "modes");
+  for (int i = 0; i < 3; ++i) f3r_json_integer(j, NULL, c->modes[i]);
+  f3r_json_close(j);
+  f3r_json_array(j, "static_correction");
+  for (int i = 0; i < 3; ++i) f3r_json_bool(j, NULL, c->static_correction[i]);
+  f3r_json_close(j);
+  f3r_json_array(j, "static_shapes");
+  for (int i = 0; i < 3; ++i)
+    f3r_json_integer(j, NULL,
+                     c->static_correction[i] ? f3r_link_static_shapes(scene->links[i].model) : 0);
+  f3r_json_close(j);
+}
+
+/* The accuracy knob's choice and estimates: with a request (--accuracy, scene accuracy), or the
+ * mode counts of modes: auto alone (request_m null); null when it chose nothing. */
+static void json_choice(f3r_json* j, const f3r_scene* scene, const f3r_accuracy_choice* c,
+                        double choose_cpu) {
+  const int request = scene->accuracy > 0;
+  if (!request && !c->summary[0]) {
+    f3r_json_null(j, "accuracy");
+    return;
+  }
+  f3r_json_object(j, "accuracy");
+  f3r_json_number(j, "request_m", request ? c->request : NAN);
+  json_links(j, scene, c);
+  f3r_json_number(j, "model_error_m", c->model_error);
+  f3r_json_number(j, "extent_m", c->extent);
+  f3r_json_integer(j, "linear_evaluations", c->linear_evaluations);
+  f3r_json_number(j, "choice_cpu_time_s", choose_cpu);
+  if (request) {
+    f3r_json_bool(j, "exact_kinematics", c->exact_kinematics);
+    f3r_json_string(j, "formulation", f3r_formulation_name(c->formulation));
+    f3r_json_string(j, "integrator", f3r_integrator_name(c->integrator));
+    f3r_json_string(j, "table", c->table[0] ? c->table : NULL);
+    f3r_json_number(j, "rtol", c->rtol);
+    f3r_json_number(j, "atol", c->atol);
+    f3r_json_number(j, "kinematics_error_m", c->kinematics_error);
+    f3r_json_number(j, "kinematics_effect_m", c->kinematics_effect);
+    f3r_json_number(j, "kinematics_linear_m", c->kinematics_linear);
+    f3r_json_number(j, "solver_error_m", c->solver_error);
+    f3r_json_bool(j, "pilot", c->pilot);
+    f3r_json_number(j, "pilot_ratio", c->pilot ? c->pilot_ratio : NAN);
+  }
+  f3r_json_number(j, "estimated_error_m", c->estimated_error);
+  f3r_json_bool(j, "request_met", c->request_met);
+  f3r_json_string(j, "summary", c->summary);
+  f3r_json_string(j, "brief", c->brief);
+  f3r_json_close(j);
+}
+
+int cli_write_summary(const char* path, const cli_options* o, const summary_parts* p, int rc) {
+  FILE* f = strcmp(path, "-") ? fopen(path, "w") : stdout;
+  if (!f) {
+    cli_fail("io", "cannot write %s", path);
+    return rc ? rc : 1;
+  }
+  f3r_json j;
+  f3r_json_begin(&j, f);
+  f3r_json_string(&j, "format", "flex3rpr_sim summary 1");
+  f3r_json_string(&j, "scene", o->scene_path);
+  f3r_json_integer(&j, "exit_code", rc);
+  if (rc) {
+    f3r_json_object(&j, "error");
+    f3r_json_string(&j, "status", cli_failure_status() ? cli_failure_status() : "failed");
+    f3r_json_string(&j, "message", cli_failure_status() ? cli_failure_message() : "see stderr");
+    f3r_json_close(&j);
+  } else {
+    f3r_json_null(&j, "error");
+  }
+  if (p->model)
+    json_settings(&j, o, p->scene, p->model);
+  else
+    f3r_json_null(&j, "settings");
+  if (p->choice)
+    json_choice(&j, p->scene, p->choice, p->choose_cpu);
+  else
+    f3r_json_null(&j, "accuracy");
+  if (p->run && p->run->ran)
+    json_run(&j, o, p->run);
+  else
+    f3r_json_null(&j, "run");
+  f3r_json_end(&j);
+  if (f != stdout ? fclose(f) != 0 : fflush(f) != 0) {
+    cli_fail("io", "cannot write %s", path);
+    return rc ? rc : 1;
+  }
+  return rc;
+}

@@ -1,0 +1,53 @@
+/* What a run of flex3rpr_sim measures, and its JSON summary (--summary-json): the human
+ * summary's numbers, units in the key names, with the error when the run fails. */
+#ifndef FLEX3RPR_CLI_RUN_REPORT_H
+#define FLEX3RPR_CLI_RUN_REPORT_H
+
+#include "cli_options.h"
+#include "flex3rpr/accuracy.h"
+#include "flex3rpr/model.h"
+#include "flex3rpr/scene.h"
+
+/* What a run measures for its summary. */
+typedef struct {
+  double max_constraint, max_energy_error, max_energy;
+  double max_deflection, max_tip;        /* |w| over the beam stations, and at the tips */
+  double cpu_total;                      /* process CPU time over the run */
+  double wall_total;                     /* monotonic (wall) time over the run */
+  double wall_integrating, wall_outputs; /* its split, also wall time (flex3rpr_sim.c) */
+} run_stats;
+
+/* What a simulation leaves for the JSON summary. */
+typedef struct {
+  int ran;
+  double t, x, y, phi;
+  long steps, residual_evals, jacobian_evals;
+  run_stats stats;
+} run_report;
+
+/* The real-time factors the summaries print, each named by its clock: the process CPU clock over
+ * the whole run (steady under load), and the wall clock over the integration alone and with the
+ * outputs (what a user waiting for the run sees). */
+typedef struct {
+  double cpu, wall_integration, wall;
+} real_time_factors;
+
+/* What the JSON summary is written from; NULL where a failure left it out. */
+typedef struct {
+  const f3r_scene* scene;
+  const f3r_model* model;            /* NULL: the scene did not load or build */
+  const f3r_accuracy_choice* choice; /* NULL: not resolved */
+  double choose_cpu;                 /* s, the accuracy knob's CPU time */
+  const run_report* run;             /* NULL or !ran: no simulation */
+} summary_parts;
+
+/* The integrator as the summaries name it. */
+const char* cli_integrator_text(const cli_options* o, const f3r_scene* scene);
+/* Simulated time t over each clock's time. */
+real_time_factors cli_real_time_factor(double t, const run_stats* r);
+/* The largest energy-balance error over the largest T + V (0 when T + V stayed 0). */
+double cli_energy_relative(const run_stats* r);
+/* The whole summary into path ("-": stdout); returns rc, or 1 when the file cannot be written. */
+int cli_write_summary(const char* path, const cli_options* o, const summary_parts* p, int rc);
+
+#endif
