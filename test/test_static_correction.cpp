@@ -97,6 +97,35 @@ TEST(StaticCorrection, ModelKeepsTheModesAndAddsTheShapes) {
   }
 }
 
+// Links with the same basis share one build (model.c, same_basis_as); every link still gets the
+// numbers of its own basis, bit for bit those of a model whose three links all have it.
+TEST(StaticCorrection, EachLinkGetsItsOwnBasisWhenTheLinksDiffer) {
+  f3r_scene mixed = Sim3(2, true);
+  mixed.links[1].static_correction = 0;  // links 0 and 2 alike, link 1 its own
+  mixed.links[2].modes = 3;              // and link 2 now differs from link 0 too
+  auto model = MakeModel(mixed);
+  const int modes[3] = {2, 2, 3};
+  const bool corrected[3] = {true, false, true};
+  for (int i = 0; i < 3; ++i) {
+    auto alone = MakeModel(Sim3(modes[i], corrected[i]));
+    const f3r_link_params *a = f3r_model_link(model.get(), i), *b = f3r_model_link(alone.get(), i);
+    ASSERT_EQ(a->modes, b->modes) << i;
+    EXPECT_EQ(a->static_shapes, b->static_shapes) << i;
+    for (int j = 0; j < a->modes; ++j) {  // EXPECT_EQ on doubles: bit for bit
+      EXPECT_EQ(a->alpha[j], b->alpha[j]) << i << " " << j;
+      EXPECT_EQ(a->mean[j], b->mean[j]) << i << " " << j;
+      EXPECT_EQ(a->first_moment[j], b->first_moment[j]) << i << " " << j;
+      EXPECT_EQ(a->tip[j], b->tip[j]) << i << " " << j;
+      EXPECT_EQ(a->stiffness[j], b->stiffness[j]) << i << " " << j;
+      double pa, pb;
+      f3r_model_link_shape(model.get(), i, j, 0.61, &pa, nullptr);
+      f3r_model_link_shape(alone.get(), i, j, 0.61, &pb, nullptr);
+      EXPECT_EQ(pa, pb) << i << " " << j;
+    }
+  }
+  EXPECT_EQ(model->nq, 9 + 5 + 2 + 6);
+}
+
 // The option per link, for all three in the mapping form and through --set; initial
 // deflections index the basis functions, the shapes after the modes.
 TEST(StaticCorrection, SceneOptionPerLinkForAllAndThroughSet) {

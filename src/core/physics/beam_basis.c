@@ -113,19 +113,36 @@ static void shape_eval(const shape_def* s, long double xi, long double* v, long 
   if (ddv) *ddv = ddp;
 }
 
-/* f3r_beam_mode_eval's cancellation-free form (beam_modes.c) in long double, same double root. */
-static void mode_ld(f3r_beam_end end, double alpha, long double xi, long double* psi,
-                    long double* dpsi, long double* ddpsi) {
+/* A mode's terms that do not depend on xi, for mode_at: its root, the end's sign, sigma, and the
+ * factors of its two boundary layers. */
+typedef struct {
+  long double a, sigma, k1, den, k2;
+} mode_terms;
+
+static mode_terms mode_terms_of(f3r_beam_end end, double alpha) {
   const long double a = alpha, s = end == F3R_BEAM_FIXED_FREE ? 1.0L : -1.0L;
   const long double ca = cosl(a), sa = sinl(a), em = expl(-a), em2 = em * em;
   const long double den = 2.0L * sa * em + s * (1.0L - em2);
   const long double sigma = (2.0L * ca * em + s * (1.0L + em2)) / den;
-  const long double e1 = (sa - ca - s * em) * expl(a * (xi - 1.0L)) / den;
-  const long double e2 = 0.5L * (1.0L + sigma) * expl(-a * xi);
+  return (mode_terms){a, sigma, sa - ca - s * em, den, 0.5L * (1.0L + sigma)};
+}
+
+/* f3r_beam_mode_eval's cancellation-free form (beam_modes.c) in long double, same double root. */
+static void mode_at(const mode_terms* m, long double xi, long double* psi, long double* dpsi,
+                    long double* ddpsi) {
+  const long double a = m->a, sigma = m->sigma;
+  const long double e1 = m->k1 * expl(a * (xi - 1.0L)) / m->den;
+  const long double e2 = m->k2 * expl(-a * xi);
   const long double c = cosl(a * xi), sn = sinl(a * xi);
   if (psi) *psi = c - sigma * sn - e1 - e2;
   if (dpsi) *dpsi = a * (-sn - sigma * c - e1 + e2);
   if (ddpsi) *ddpsi = a * a * (-c + sigma * sn - e1 - e2);
+}
+
+static void mode_ld(f3r_beam_end end, double alpha, long double xi, long double* psi,
+                    long double* dpsi, long double* ddpsi) {
+  const mode_terms m = mode_terms_of(end, alpha);
+  mode_at(&m, xi, psi, dpsi, ddpsi);
 }
 
 /* f3r_beam_mode_constants' term-by-term closed forms in long double: int psi, int xi psi and
@@ -188,14 +205,16 @@ static void couplings(const f3r_beam_basis* b, build_work* w) {
   long double x[F3R_BASIS_POINTS], wt[F3R_BASIS_POINTS];
   long double B[F3R_MAX_MODES][3] = {{0}}, E[F3R_MAX_MODES][F3R_MAX_MODES] = {{0}};
   const int r = b->modes;
+  mode_terms terms[F3R_MAX_MODES];
   gauss_legendre_ld(F3R_BASIS_POINTS, x, wt);
   for (int j = 0; j < r; ++j) mode_constants_ld(b->end, b->alpha[j], w->mode[j]);
+  for (int j = 0; j < r; ++j) terms[j] = mode_terms_of(b->end, b->alpha[j]);
   for (int panel = 0; panel < F3R_BASIS_PANELS; ++panel)
     for (int q = 0; q < F3R_BASIS_POINTS; ++q) {
       const long double xi = (panel + x[q]) / F3R_BASIS_PANELS, wq = wt[q] / F3R_BASIS_PANELS;
       long double s[3], psi[F3R_MAX_MODES];
       for (int k = 0; k < w->p; ++k) shape_eval(w->shape[k], xi, &s[k], NULL, NULL);
-      for (int j = 0; j < r; ++j) mode_ld(b->end, b->alpha[j], xi, &psi[j], NULL, NULL);
+      for (int j = 0; j < r; ++j) mode_at(&terms[j], xi, &psi[j], NULL, NULL);
       for (int j = 0; j < r; ++j) {
         for (int k = 0; k < w->p; ++k) B[j][k] += wq * psi[j] * s[k];
         for (int i = 0; i < r; ++i) E[j][i] += wq * psi[j] * psi[i];
@@ -212,7 +231,9 @@ static void couplings(const f3r_beam_basis* b, build_work* w) {
 /* M_t and K_t by composite Gauss-Legendre quadrature of the pointwise residual. */
 static void residual_grams(const f3r_beam_basis* b, build_work* w) {
   long double x[F3R_BASIS_POINTS], wt[F3R_BASIS_POINTS];
+  mode_terms terms[F3R_MAX_MODES];
   gauss_legendre_ld(F3R_BASIS_POINTS, x, wt);
+  for (int j = 0; j < b->modes; ++j) terms[j] = mode_terms_of(b->end, b->alpha[j]);
   memset(w->Mt, 0, sizeof w->Mt);
   memset(w->Kt, 0, sizeof w->Kt);
   for (int panel = 0; panel < F3R_BASIS_PANELS; ++panel) {
@@ -221,7 +242,7 @@ static void residual_grams(const f3r_beam_basis* b, build_work* w) {
       const long double xi = (panel + x[q]) / F3R_BASIS_PANELS;
       const long double wq = wt[q] / F3R_BASIS_PANELS;
       long double t[3], tdd[3], psi[F3R_MAX_MODES], dd[F3R_MAX_MODES];
-      for (int j = 0; j < b->modes; ++j) mode_ld(b->end, b->alpha[j], xi, &psi[j], NULL, &dd[j]);
+      for (int j = 0; j < b->modes; ++j) mode_at(&terms[j], xi, &psi[j], NULL, &dd[j]);
       for (int k = 0; k < w->p; ++k) {
         shape_eval(w->shape[k], xi, &t[k], NULL, &tdd[k]);
         for (int j = 0; j < b->modes; ++j) {

@@ -100,13 +100,30 @@ static unsigned correction_shapes(const f3r_link_scene* L) {
   return L->model == F3R_LINK_FIXED_FREE ? loads | F3R_SHAPE_TIP_FORCE : loads;
 }
 
+/* An earlier link whose basis link i's would repeat (the same end, modes and shapes), or -1. A
+ * basis with static shapes costs thousands of long double sin, cos and exp (beam_basis.c), and
+ * the accuracy knob builds tens of models while it chooses. */
+static int same_basis_as(const f3r_model* m, int i) {
+  const f3r_link_scene* L = &m->scene.links[i];
+  for (int j = 0; j < i; ++j) {
+    const f3r_link_scene* K = &m->scene.links[j];
+    if (K->model == L->model && K->modes == L->modes &&
+        correction_shapes(K) == correction_shapes(L))
+      return j;
+  }
+  return -1;
+}
+
 /* Link i's basis (its r modes, then its static shapes) and each function's constants: the modes'
  * exactly as f3r_beam_mode_constants gives them, the shapes' from the Ritz step. */
 static f3r_status fill_link_constants(f3r_model* m, int i, double* room, f3r_error* err) {
   const f3r_link_scene* L = &m->scene.links[i];
   f3r_link_params* lp = &m->link[i];
   f3r_beam_basis* b = &m->basis[i];
-  if (f3r_beam_basis_build((f3r_beam_end)lp->model, L->modes, correction_shapes(L), b))
+  const int same = same_basis_as(m, i);
+  if (same >= 0)
+    *b = m->basis[same]; /* the build is a function of these alone: the same numbers, once */
+  else if (f3r_beam_basis_build((f3r_beam_end)lp->model, L->modes, correction_shapes(L), b))
     return f3r_error_set(err, F3R_ERR_SCENE, "links[%d].modes: %d is out of range 1..%d", i,
                          L->modes, F3R_MAX_MODES - (f3r_link_scene_functions(L) - L->modes));
   lp->modes = b->count;
