@@ -113,10 +113,11 @@ static void shape_eval(const shape_def* s, long double xi, long double* v, long 
   if (ddv) *ddv = ddp;
 }
 
-/* A mode's terms that do not depend on xi, for mode_at: its root, the end's sign, sigma, and the
- * factors of its two boundary layers. */
+/* A mode's terms that do not depend on xi, for mode_at and mode_constants_ld: its end and root,
+ * cos, sin and exp(-) of the root, sigma, and the factors of its two boundary layers. */
 typedef struct {
-  long double a, sigma, k1, den, k2;
+  f3r_beam_end end;
+  long double a, ca, sa, em, sigma, k1, den, k2;
 } mode_terms;
 
 static mode_terms mode_terms_of(f3r_beam_end end, double alpha) {
@@ -124,7 +125,7 @@ static mode_terms mode_terms_of(f3r_beam_end end, double alpha) {
   const long double ca = cosl(a), sa = sinl(a), em = expl(-a), em2 = em * em;
   const long double den = 2.0L * sa * em + s * (1.0L - em2);
   const long double sigma = (2.0L * ca * em + s * (1.0L + em2)) / den;
-  return (mode_terms){a, sigma, sa - ca - s * em, den, 0.5L * (1.0L + sigma)};
+  return (mode_terms){end, a, ca, sa, em, sigma, sa - ca - s * em, den, 0.5L * (1.0L + sigma)};
 }
 
 /* f3r_beam_mode_eval's cancellation-free form (beam_modes.c) in long double, same double root. */
@@ -147,18 +148,15 @@ static void mode_ld(f3r_beam_end end, double alpha, long double xi, long double*
 
 /* f3r_beam_mode_constants' term-by-term closed forms in long double: int psi, int xi psi and
  * psi(1) (exactly 0 at a pin). */
-static void mode_constants_ld(f3r_beam_end end, double alpha, long double* out) {
-  const long double a = alpha, s = end == F3R_BEAM_FIXED_FREE ? 1.0L : -1.0L;
-  const long double ca = cosl(a), sa = sinl(a), em = expl(-a), em2 = em * em;
-  const long double den = 2.0L * sa * em + s * (1.0L - em2);
-  const long double sigma = (2.0L * ca * em + s * (1.0L + em2)) / den;
-  const long double k1 = (sa - ca - s * em) / den, k2 = 0.5L * (1.0L + sigma);
+static void mode_constants_ld(const mode_terms* t, long double* out) {
+  const long double a = t->a, ca = t->ca, sa = t->sa, em = t->em, sigma = t->sigma;
+  const long double k1 = t->k1 / t->den, k2 = t->k2;
   const long double decay = (1.0L - em) / a, decay2 = (1.0L - em) / (a * a);
   out[0] = sa / a - sigma * (1.0L - ca) / a - k1 * decay - k2 * decay;
   out[1] = sa / a + (ca - 1.0L) / (a * a) - sigma * (-ca / a + sa / (a * a)) -
            k1 * (1.0L / a - decay2) - k2 * (decay2 - em / a);
   out[2] = 0.0L;
-  if (end == F3R_BEAM_FIXED_FREE) mode_ld(end, alpha, 1.0L, &out[2], NULL, NULL);
+  if (t->end == F3R_BEAM_FIXED_FREE) mode_at(t, 1.0L, &out[2], NULL, NULL);
 }
 
 /* The n-point Gauss-Legendre rule on [0, 1] in long double (beam_modes.c's in double): with
@@ -207,8 +205,10 @@ static void couplings(const f3r_beam_basis* b, build_work* w) {
   const int r = b->modes;
   mode_terms terms[F3R_MAX_MODES];
   gauss_legendre_ld(F3R_BASIS_POINTS, x, wt);
-  for (int j = 0; j < r; ++j) mode_constants_ld(b->end, b->alpha[j], w->mode[j]);
-  for (int j = 0; j < r; ++j) terms[j] = mode_terms_of(b->end, b->alpha[j]);
+  for (int j = 0; j < r; ++j) {
+    terms[j] = mode_terms_of(b->end, b->alpha[j]);
+    mode_constants_ld(&terms[j], w->mode[j]);
+  }
   for (int panel = 0; panel < F3R_BASIS_PANELS; ++panel)
     for (int q = 0; q < F3R_BASIS_POINTS; ++q) {
       const long double xi = (panel + x[q]) / F3R_BASIS_PANELS, wq = wt[q] / F3R_BASIS_PANELS;
