@@ -10,7 +10,6 @@
  * --summary-json FILE (or - for stdout, the human summary then on stderr) writes the summary's
  * numbers as JSON, units in the key names, with the error when the run fails (run_report.c). */
 #include <math.h>
-#include <stdarg.h>
 #include <stddef.h>
 #include <stdio.h>
 #include <stdlib.h>
