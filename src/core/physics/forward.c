@@ -33,16 +33,18 @@ static void platform_joints(const f3r_model* m, double phi_p, f3r_data* d) {
   for (int i = 0; i < 3; ++i) joint_direction(m, i, cp, sp, &d->link[i].cc, &d->link[i].sc);
 }
 
-/* w, the mean deflection and |eta|^2 of link i. */
+/* w, the mean deflection and |eta|^2 of link i, summed in locals (a store into k could alias
+ * the model's tables, so summing into k would store at every mode). */
 static void modal_sums(const f3r_model* m, int i, const double* q, f3r_link_data* k) {
   const f3r_link_params* lp = &m->link[i];
-  k->w = k->mean_defl = k->eta_sq = 0.0;
+  const double* eta = q + lp->eta_index;
+  double w = 0.0, mean_defl = 0.0, eta_sq = 0.0;
   for (int j = 0; j < lp->modes; ++j) {
-    const double eta = q[lp->eta_index + j];
-    k->w += lp->tip[j] * eta;
-    k->mean_defl += lp->mean[j] * eta;
-    k->eta_sq += eta * eta;
+    w += lp->tip[j] * eta[j];
+    mean_defl += lp->mean[j] * eta[j];
+    eta_sq += eta[j] * eta[j];
   }
+  k->w = w, k->mean_defl = mean_defl, k->eta_sq = eta_sq;
 }
 
 /* Position stage of link i from the full coordinates d->q. */
@@ -94,13 +96,14 @@ static void link_velocity(const f3r_model* m, int i, int closed, f3r_data* d) {
   const f3r_link_params* lp = &m->link[i];
   f3r_link_data* k = &d->link[i];
   const double *q = d->q, *v = d->v;
-  k->w_dot = k->mean_defl_dot = k->eta_eta_dot = 0.0;
+  double w_dot = 0.0, mean_defl_dot = 0.0, eta_eta_dot = 0.0; /* in locals, as modal_sums */
   for (int j = 0; j < lp->modes; ++j) {
     const double rate = v[lp->eta_index + j];
-    k->w_dot += lp->tip[j] * rate;
-    k->mean_defl_dot += lp->mean[j] * rate;
-    k->eta_eta_dot += q[lp->eta_index + j] * rate;
+    w_dot += lp->tip[j] * rate;
+    mean_defl_dot += lp->mean[j] * rate;
+    eta_eta_dot += q[lp->eta_index + j] * rate;
   }
+  k->w_dot = w_dot, k->mean_defl_dot = mean_defl_dot, k->eta_eta_dot = eta_eta_dot;
   if (closed) {
     const double r = m->platform_radius;
     const double cx = v[F3R_Q_X] - r * k->sc * v[F3R_Q_PHI],
