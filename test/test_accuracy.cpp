@@ -728,7 +728,7 @@ TEST(Accuracy, TheKnobTakesTheStaticCorrectionWhereItIsCheaperAndMeetsTheRequest
   }
   EXPECT_NE(std::string(c.summary).find("basis: the static correction"), std::string::npos)
       << c.summary;
-  EXPECT_NE(std::string(c.summary).find("1 modes + 3 static shapes"), std::string::npos)
+  EXPECT_NE(std::string(c.summary).find("1 modes + 2 static shapes"), std::string::npos)
       << c.summary;
   EXPECT_NE(std::string(c.brief).find("+ static shapes"), std::string::npos) << c.brief;
   EXPECT_LE(c.estimated_error, 1e-5) << c.summary;
@@ -736,16 +736,17 @@ TEST(Accuracy, TheKnobTakesTheStaticCorrectionWhereItIsCheaperAndMeetsTheRequest
   EXPECT_LE(MaxDistance(got, ref), 1e-5) << c.summary;
 }
 
-// Where the paper's modes cost less for the request (a loose one), the knob keeps them and says
-// what the correction would have cost.
+// Where the paper's modes cost less for the request (a loose one: 2 modes a link, against the
+// least correction's 1 mode + 2 shapes), the knob keeps them and says what the correction would
+// have cost.
 TEST(Accuracy, TheKnobKeepsThePapersModesWhereTheyAreCheaper) {
   f3r_scene s = OpenScene("paper_sim3_fixed_free.yaml");
   f3r_accuracy_choice c;
   f3r_error err{};
-  ASSERT_EQ(f3r_accuracy_choose(&s, 1e-3, 0, &c, &err), F3R_OK) << err.message;
+  ASSERT_EQ(f3r_accuracy_choose(&s, 1.5e-3, 0, &c, &err), F3R_OK) << err.message;
   for (int i = 0; i < 3; ++i) EXPECT_EQ(c.static_correction[i], 0) << c.summary;
   const std::string summary = c.summary;
-  EXPECT_NE(summary.find("basis: the paper's modes 3/3/3"), std::string::npos) << summary;
+  EXPECT_NE(summary.find("basis: the paper's modes 2/2/2"), std::string::npos) << summary;
   EXPECT_NE(summary.find("cost no more than the least static correction"), std::string::npos)
       << summary;
 }
@@ -785,7 +786,8 @@ TEST(Accuracy, AStaticCorrectionTheSceneSetsIsKept) {
 
 // The solver relations were measured on the paper's modes; on the static correction the knob
 // keeps a tenth of the solver's budget. resonance.yaml, driven at a resonance: minimal IDA at
-// rtol 1e-3 (2.1e-6 m on the benchmark's scenes) left 1 mode + 3 shapes 2.2e-5 m off.
+// rtol 1e-3 (2.1e-6 m on the benchmark's scenes) left 1 mode + 3 shapes (the set shipped then)
+// 2.2e-5 m off.
 TEST(Accuracy, OnTheStaticCorrectionTheSolverKeepsATenthOfItsBudget) {
   f3r_scene open = OpenScene("resonance.yaml");
   open.output_step = 1e-3;

@@ -59,13 +59,13 @@ TEST(StaticCorrection, ModelKeepsTheModesAndAddsTheShapes) {
   auto plain = MakeModel(Sim3(2, false));
   auto corrected = MakeModel(Sim3(2, true));
   EXPECT_EQ(plain->nq, 9 + 3 * 2);
-  EXPECT_EQ(corrected->nq, 9 + 3 * 5);
+  EXPECT_EQ(corrected->nq, 9 + 3 * 4);
   for (int i = 0; i < 3; ++i) {
     const f3r_link_params *a = f3r_model_link(plain.get(), i),
                           *b = f3r_model_link(corrected.get(), i);
     EXPECT_EQ(a->static_shapes, 0);
-    EXPECT_EQ(b->static_shapes, 3);
-    EXPECT_EQ(b->modes, 5);
+    EXPECT_EQ(b->static_shapes, 2);
+    EXPECT_EQ(b->modes, 4);
     for (int j = 0; j < 2; ++j) {
       EXPECT_EQ(a->alpha[j], b->alpha[j]);
       EXPECT_EQ(a->mean[j], b->mean[j]);
@@ -73,7 +73,7 @@ TEST(StaticCorrection, ModelKeepsTheModesAndAddsTheShapes) {
       EXPECT_EQ(a->stiffness[j], b->stiffness[j]);
       EXPECT_EQ(a->omega_clamped[j], b->omega_clamped[j]);
     }
-    for (int j = 2; j < 5; ++j) {  // stiffer than the kept modes, in ascending order
+    for (int j = 2; j < 4; ++j) {  // stiffer than the kept modes, in ascending order
       EXPECT_GT(b->stiffness[j], b->stiffness[j - 1]);
       EXPECT_NEAR(b->omega_clamped[j] * b->omega_clamped[j] * corrected->link_mass, b->stiffness[j],
                   1e-12 * b->stiffness[j]);
@@ -81,7 +81,7 @@ TEST(StaticCorrection, ModelKeepsTheModesAndAddsTheShapes) {
   }
   char text[96];
   EXPECT_STREQ(f3r_model_link_basis_name(corrected.get(), 0, text, sizeof text),
-               "fixed_free, 2 modes + 3 static shapes");
+               "fixed_free, 2 modes + 2 static shapes");
   EXPECT_STREQ(f3r_model_link_basis_name(plain.get(), 0, text, sizeof text), "fixed_free, 2 modes");
   // The beam point at the tip deflects by the tip deflection, through every function.
   std::vector<double> q(F3R_MAX_Q, 0.0), v(F3R_MAX_Q, 0.0);
@@ -92,8 +92,8 @@ TEST(StaticCorrection, ModelKeepsTheModesAndAddsTheShapes) {
     f3r_model_beam_point(corrected.get(), q.data(), i, 1.0, position, &angle, &w);
     EXPECT_NEAR(w, f3r_model_tip_deflection(corrected.get(), q.data(), i), 1e-15) << i;
     double psi, dpsi;
-    f3r_model_link_shape(corrected.get(), i, 4, 1.0, &psi, &dpsi);
-    EXPECT_NEAR(psi, corrected->link[i].tip[4], 1e-12 * std::fabs(psi));
+    f3r_model_link_shape(corrected.get(), i, 3, 1.0, &psi, &dpsi);
+    EXPECT_NEAR(psi, corrected->link[i].tip[3], 1e-12 * std::fabs(psi));
   }
 }
 
@@ -123,7 +123,7 @@ TEST(StaticCorrection, EachLinkGetsItsOwnBasisWhenTheLinksDiffer) {
       EXPECT_EQ(pa, pb) << i << " " << j;
     }
   }
-  EXPECT_EQ(model->nq, 9 + 5 + 2 + 6);
+  EXPECT_EQ(model->nq, 9 + 4 + 2 + 5);
 }
 
 // The option per link, for all three in the mapping form and through --set; initial
@@ -138,16 +138,16 @@ TEST(StaticCorrection, SceneOptionPerLinkForAllAndThroughSet) {
   const std::string list = WriteTemp("sc_list.yaml",
                                      "links:\n  - {model: fixed_free, modes: 2}\n"
                                      "  - {model: fixed_free, modes: 2, static_correction: true,"
-                                     " initial_deflection: [0, 0, 1e-5, 0, 2e-6]}\n"
+                                     " initial_deflection: [0, 0, 1e-5, 2e-6]}\n"
                                      "  - {model: rigid}\n");
   ASSERT_EQ(LoadWith(list, {}, &s, &err), F3R_OK) << err.message;
   EXPECT_EQ(s.links[0].static_correction, 0);
   EXPECT_EQ(s.links[1].static_correction, 1);
   auto m = MakeModel(s);
-  EXPECT_EQ(m->nq, 9 + 2 + 5);
+  EXPECT_EQ(m->nq, 9 + 2 + 4);
   std::vector<double> q(F3R_MAX_Q), v(F3R_MAX_Q);
   ASSERT_EQ(f3r_model_initial_state(m.get(), q.data(), v.data()), F3R_OK);
-  EXPECT_EQ(q[m->link[1].eta_index + 4], 2e-6);
+  EXPECT_EQ(q[m->link[1].eta_index + 3], 2e-6);
   const std::string plain = WriteTemp("sc_plain.yaml", "links: {model: fixed_free, modes: 3}\n");
   ASSERT_EQ(LoadWith(plain, {"links[0].static_correction=true"}, &s, &err), F3R_OK) << err.message;
   EXPECT_EQ(s.links[0].static_correction, 1);
@@ -166,14 +166,14 @@ TEST(StaticCorrection, InvalidUsesAreErrorsNamingTheField) {
   const Bad bad[] = {
       {"links: {model: rigid, static_correction: true}\n", "links[0].static_correction",
        "allowed with model fixed_free"},
-      {"links: {model: fixed_free, modes: 18, static_correction: true}\n", "links[0].modes",
-       "allowed 1..17 modes"},
+      {"links: {model: fixed_free, modes: 19, static_correction: true}\n", "links[0].modes",
+       "allowed 1..18 modes"},
       {"links: {model: fixed_free, modes: 3, static_correction: maybe}\n",
        "links[0].static_correction", ""},
       {"links: {model: fixed_free, modes: 1, static_correction: true,"
-       " initial_deflection: [0, 0, 0, 0, 1e-5]}\n",
+       " initial_deflection: [0, 0, 0, 1e-5]}\n",
        "links[0].initial_deflection",
-       "function 5 given but the link has 4 functions (1 mode + 3 static shapes)"},
+       "function 4 given but the link has 3 functions (1 mode + 2 static shapes)"},
   };
   for (const Bad& b : bad) {
     f3r_scene s;
@@ -187,13 +187,13 @@ TEST(StaticCorrection, InvalidUsesAreErrorsNamingTheField) {
   }
   f3r_scene s;
   f3r_error err{};
-  // At r = 8 a fixed-free link drops the linear-load shape: its initial value has no function.
-  f3r_scene dropped = Sim3(8, true);
-  dropped.links[2].eta0[10] = 1e-6;
+  // At r = 12 a fixed-free link drops a shape: its initial value has no function.
+  f3r_scene dropped = Sim3(12, true);
+  dropped.links[2].eta0[13] = 1e-6;
   f3r_model* m = nullptr;
   EXPECT_NE(f3r_model_create(&dropped, &m, &err), F3R_OK);
   f3r_model_destroy(m);
-  EXPECT_NE(std::string(err.message).find("links[2].initial_deflection[10]: the link keeps 10"),
+  EXPECT_NE(std::string(err.message).find("links[2].initial_deflection[13]: the link keeps 13"),
             std::string::npos)
       << err.message;
   // Open modes with the correction: the knob (or modes: auto) chooses the modes beside the shapes.
@@ -206,7 +206,7 @@ TEST(StaticCorrection, InvalidUsesAreErrorsNamingTheField) {
       << err.message;
 }
 
-// Paper simulation 3, driven, with 1 mode + 3 shapes a link: the dae formulation keeps the
+// Paper simulation 3, driven, with 1 mode + 2 shapes a link: the dae formulation keeps the
 // constraints and T + V - W to the tolerances PaperRun holds the plain basis to, and the
 // minimal formulation follows the same platform path.
 TEST(StaticCorrection, DrivenRunKeepsEnergyBalanceAndFormulationsAgree) {
@@ -280,14 +280,14 @@ TEST(StaticCorrection, CliWritesTheFrequenciesAndNamesTheBasis) {
     EXPECT_EQ(counts[0], 2);
     EXPECT_EQ(counts[1], 0);
     EXPECT_EQ(counts[2], 2);
-    EXPECT_EQ(counts[3], 3);
+    EXPECT_EQ(counts[3], 2);
     ++rows;
   }
   EXPECT_EQ(rows, count);
   std::ifstream text(out);
   const std::string printed((std::istreambuf_iterator<char>(text)),
                             std::istreambuf_iterator<char>());
-  EXPECT_NE(printed.find("# links[1]: fixed_free, 2 modes + 3 static shapes"), std::string::npos)
+  EXPECT_NE(printed.find("# links[1]: fixed_free, 2 modes + 2 static shapes"), std::string::npos)
       << printed;
   const std::string geometry = std::string(F3R_CLI) + " --geometry " +
                                ScenePath("paper_sim3_fixed_free.yaml") +
@@ -295,7 +295,7 @@ TEST(StaticCorrection, CliWritesTheFrequenciesAndNamesTheBasis) {
   ASSERT_EQ(std::system(geometry.c_str()), 0);
   std::ifstream g(out);
   const std::string json((std::istreambuf_iterator<char>(g)), std::istreambuf_iterator<char>());
-  EXPECT_NE(json.find("\"link_basis\": [\"fixed_free, 3 modes + 3 static shapes\", "
+  EXPECT_NE(json.find("\"link_basis\": [\"fixed_free, 3 modes + 2 static shapes\", "
                       "\"fixed_free, 3 modes\", \"fixed_free, 3 modes\"]"),
             std::string::npos)
       << json;

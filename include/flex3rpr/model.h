@@ -97,7 +97,7 @@ void f3r_model_beam_point(const f3r_model* model, const double* q, int link, dou
 void f3r_model_link_shape(const f3r_model* model, int link, int j, double xi, double* psi,
                           double* dpsi);
 
-/* "fixed_free, 1 mode + 3 static shapes", "fixed_pinned, 3 modes" or "rigid" into text (size
+/* "fixed_free, 1 mode + 2 static shapes", "fixed_pinned, 3 modes" or "rigid" into text (size
  * bytes, terminated); returns text. */
 const char* f3r_model_link_basis_name(const f3r_model* model, int link, char* text, size_t size);
 

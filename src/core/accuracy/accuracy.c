@@ -130,8 +130,8 @@ static f3r_status cheaper_than_any_correction(choice_run* run, const f3r_scene* 
 static f3r_status compare_correction(choice_run* run, f3r_accuracy_choice* c, f3r_error* err) {
   /* Not on a run longer than the benchmark's scenes: there neither the pilot's ratio (measured
    * on the paper's modes) nor the solver relations held for it. free_vibration_long over 2 s,
-   * for 1e-5 m: 2 modes + 3 shapes were 8.3e-6 m from the converged path where the estimate
-   * said 2.8e-6, and ERK at rtol 1e-3 added 2.2e-5 m (3.0e-5 in all). */
+   * for 1e-5 m: 2 modes + 3 shapes (the set then) were 8.3e-6 m from the converged path where
+   * the estimate said 2.8e-6, and ERK at rtol 1e-3 added 2.2e-5 m (3.0e-5 in all). */
   run->correctable = run->ms.at_rest || run->impacts ? 0u : correctable_links(run);
   run->correction_too_long = run->correctable && run->long_run;
   if (run->long_run) run->correctable = 0;
@@ -289,9 +289,9 @@ static f3r_status pick_relation(choice_run* run, const f3r_accuracy_choice* c, s
   p->limit = run->impacts ? budget / IMPACT_AMPLIFICATION : budget;
   /* The relations were measured on the paper's modes. On the static correction the solver keeps
    * a tenth of its budget: on resonance.yaml, driven at a resonance for 0.25 s, minimal IDA at
-   * rtol 1e-3 (2.1e-6 m on the benchmark's scenes) left 1 mode + 3 shapes 2.2e-5 m from the
-   * converged path, at rtol 1e-4 2.4e-8 m for the same steps; a pilot over the first tenth of
-   * the run saw nothing of it (the resonance builds up later). */
+   * rtol 1e-3 (2.1e-6 m on the benchmark's scenes) left 1 mode + 3 shapes (the fixed-free
+   * set then) 2.2e-5 m from the converged path, at rtol 1e-4 2.4e-8 m for the same steps; a
+   * pilot over the first tenth of the run saw nothing of it (the resonance builds up later). */
   if (run->unmeasured_basis) p->limit *= SOLVER_CHECK_SHARE;
   int most = 0;
   for (int i = 0; i < 3; ++i) most = c->modes[i] > most ? c->modes[i] : most;

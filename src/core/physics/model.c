@@ -92,12 +92,15 @@ static f3r_status check_modes_resolved(const f3r_scene* scene, f3r_error* err) {
 }
 
 /* The static shapes links[i].static_correction adds (beam_basis.h): fixed-free links carry the
- * platform joint's tip force and their own inertia, uniform and growing along the link; a pin
- * takes no tip force. */
+ * platform joint's tip force and their own inertia as a uniform load; a pin takes no tip force,
+ * so fixed-pinned links take the uniform and the linear load. The fixed-free linear load is
+ * left out: it halves the basis error at one mode but doubles IDA's steps (its own frequency,
+ * 6.7 kHz against 3.1 kHz), so the accuracy knob met every request faster without it
+ * (docs/benchmarks/shape_choice.md). */
 static unsigned correction_shapes(const f3r_link_scene* L) {
   if (!L->static_correction) return 0u;
-  const unsigned loads = F3R_SHAPE_UNIFORM_LOAD | F3R_SHAPE_LINEAR_LOAD;
-  return L->model == F3R_LINK_FIXED_FREE ? loads | F3R_SHAPE_TIP_FORCE : loads;
+  if (L->model == F3R_LINK_FIXED_FREE) return F3R_SHAPE_TIP_FORCE | F3R_SHAPE_UNIFORM_LOAD;
+  return F3R_SHAPE_UNIFORM_LOAD | F3R_SHAPE_LINEAR_LOAD;
 }
 
 /* An earlier link whose basis link i's would repeat (the same end, modes and shapes), or -1. A

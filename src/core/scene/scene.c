@@ -335,8 +335,8 @@ static f3r_status validate_bodies(const f3r_scene* s, f3r_error* err) {
 }
 
 int f3r_link_static_shapes(f3r_link_model model) {
-  /* beam_basis.h: tip force, uniform and linear load; a pin takes no tip force */
-  return model == F3R_LINK_FIXED_FREE ? 3 : model == F3R_LINK_FIXED_PINNED ? 2 : 0;
+  /* model.c, correction_shapes: tip force and uniform load; a pin's uniform and linear load */
+  return model == F3R_LINK_FIXED_FREE ? 2 : model == F3R_LINK_FIXED_PINNED ? 2 : 0;
 }
 
 int f3r_link_scene_functions(const f3r_link_scene* L) {
