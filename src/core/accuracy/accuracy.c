@@ -38,6 +38,31 @@ static const f3r_solver_relation* pick_solver(const f3r_scene* s, const char* ki
   return best;
 }
 
+/* Explicit integrators' cost scale at these mode counts: a step's right-hand side grows with the
+ * modes beyond the benchmark's, and so does an explicit method's step count. */
+static double explicit_scale_of(const int modes[3]) {
+  int most = 0;
+  for (int i = 0; i < 3; ++i) most = modes[i] > most ? modes[i] : most;
+  return most > BENCHMARK_MODES ? (double)(most * most) / (BENCHMARK_MODES * BENCHMARK_MODES) : 1.0;
+}
+
+/* The relative cost of the solver a basis leaves room for: the cheapest measured relation within
+ * the request less the basis's model error and the kinematics' (at least the solver's share), a
+ * tenth of that on the static correction (pick_relation keeps it there); 1, minimal IDA at rtol
+ * 1e-6, where the scene sets its solver or none fits. The bases' costs are compared with it: on
+ * resonance_damped at 1e-5 m they tie (3 modes, 1 mode + shapes), and the correction's tighter
+ * solver made it 1.6 times the CPU time (docs/benchmarks/accuracy_knob.md). */
+static double solver_cost_for(const choice_run* run, const f3r_accuracy_choice* c,
+                              const int modes[3], double model_error, int corrected) {
+  if (!run->solver_open) return 1.0;
+  double budget = run->request - model_error - c->kinematics_error;
+  budget = fmax(budget, F3R_ACCURACY_SOLVER_SHARE * run->request);
+  if (corrected) budget *= SOLVER_CHECK_SHARE;
+  const double scale = explicit_scale_of(modes);
+  const f3r_solver_relation* r = pick_solver(run->scene, run->kind, budget, scale);
+  return r ? relation_cost(r, scale) : 1.0;
+}
+
 /* The measured error of the scene's own fixed solver (the nearest tolerance at or below). */
 static double solver_error_of(const f3r_scene* s, const char* kind) {
   double error = NAN, at = 0.0;
@@ -157,8 +182,12 @@ static f3r_status compare_correction(choice_run* run, f3r_accuracy_choice* c, f3
   run->corrected_found = st == F3R_OK && f3r_mode_search_found(&ms, run->corrected_modes);
   if (st == F3R_OK && run->corrected_found)
     st = f3r_basis_cost(&corrected, run->corrected_modes, &run->corrected_cost, err);
+  run->plain_solver_cost = solver_cost_for(run, c, run->plain_modes, run->plain_error, 0);
+  run->corrected_solver_cost =
+      solver_cost_for(run, c, run->corrected_modes, run->corrected_error, 1);
   const int take = st == F3R_OK && run->corrected_found &&
-                   (!run->plain_found || run->corrected_cost < run->plain_cost);
+                   (!run->plain_found || run->corrected_cost * run->corrected_solver_cost <
+                                             run->plain_cost * run->plain_solver_cost);
   run->ms.evaluations += ms.evaluations;
   if (!take) {
     f3r_mode_search_free(&ms);
@@ -293,10 +322,7 @@ static f3r_status pick_relation(choice_run* run, const f3r_accuracy_choice* c, s
    * set then) 2.2e-5 m from the converged path, at rtol 1e-4 2.4e-8 m for the same steps; a
    * pilot over the first tenth of the run saw nothing of it (the resonance builds up later). */
   if (run->unmeasured_basis) p->limit *= SOLVER_CHECK_SHARE;
-  int most = 0;
-  for (int i = 0; i < 3; ++i) most = c->modes[i] > most ? c->modes[i] : most;
-  const double explicit_scale =
-      most > BENCHMARK_MODES ? (double)(most * most) / (BENCHMARK_MODES * BENCHMARK_MODES) : 1.0;
+  const double explicit_scale = explicit_scale_of(c->modes);
   for (int attempt = 0; attempt < 4; ++attempt) {
     const f3r_solver_relation* next = pick_solver(scene, run->kind, p->limit, explicit_scale);
     if (!next || next == p->relation) break;

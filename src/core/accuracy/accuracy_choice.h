@@ -52,6 +52,7 @@ typedef struct {
   int plain_modes[3], corrected_modes[3];
   int plain_found, corrected_found;
   double plain_error, corrected_error, plain_cost, corrected_cost;
+  double plain_solver_cost, corrected_solver_cost; /* the solver each basis leaves room for */
   double least_corrected_cost; /* > 0: the search was spared, the paper's modes cost no more */
   int correction_too_long;     /* correctable links, but the run is longer than the benchmark's */
   int impacts;                 /* end stops on a path that moves: the most faithful model */
