@@ -29,8 +29,14 @@
 
 #include "dense.h"
 
-/* As beam_modes.c: 64 panels of 12 points integrate mode 20's boundary layer to rounding. */
-#define F3R_BASIS_PANELS 64
+/* As beam_modes.c: panels of 12 points, each spanning at most 1 rad of the highest kept mode's
+ * oscillation and boundary layer (alpha_r xi), where a degree-23 rule is exact to rounding; 64
+ * for mode 20, as beam_modes.c integrates every mode (measured there: converged at 16 panels for
+ * mode 20). The shapes are polynomials of degree 5 at most, exact on any panel, so fewer panels
+ * for fewer modes change nothing but the time: a basis of 1 mode + shapes takes 8 panels, and
+ * the accuracy knob builds several while it chooses. At least 8, at most 64. */
+#define F3R_BASIS_MAX_PANELS 64
+#define F3R_BASIS_MIN_PANELS 8
 #define F3R_BASIS_POINTS 12
 /* Second drop guard: the smallest eigenvalue of the unit-diagonal residual Gram. Measured
  * 2e-5 at worst (fixed-free r = 1 with all three shapes), so it only guards degenerate input. */
@@ -191,7 +197,16 @@ typedef struct {
   long double mode[F3R_MAX_MODES][3]; /* mean, first moment, tip of psi_j */
   long double C[F3R_MAX_MODES][3];    /* int psi_j s_k */
   long double Mt[3][3], Kt[3][3];     /* the residuals' Grams */
+  int panels;                         /* of the composite rule, by the highest mode */
 } build_work;
+
+/* Panels of the composite rule for modes up to root alpha_r: about one per radian of alpha_r. */
+static int panels_for(double alpha_r) {
+  const int panels = (int)ceil(alpha_r);
+  return panels < F3R_BASIS_MIN_PANELS   ? F3R_BASIS_MIN_PANELS
+         : panels > F3R_BASIS_MAX_PANELS ? F3R_BASIS_MAX_PANELS
+                                         : panels;
+}
 
 /* C = G^-1 B with B_jk = int psi_j s_k and the modes' Gram G_ij = int psi_i psi_j, by the
  * composite rule in long double, so that t_k is mass-orthogonal to the modes as evaluated.
@@ -209,9 +224,9 @@ static void couplings(const f3r_beam_basis* b, build_work* w) {
     terms[j] = mode_terms_of(b->end, b->alpha[j]);
     mode_constants_ld(&terms[j], w->mode[j]);
   }
-  for (int panel = 0; panel < F3R_BASIS_PANELS; ++panel)
+  for (int panel = 0; panel < w->panels; ++panel)
     for (int q = 0; q < F3R_BASIS_POINTS; ++q) {
-      const long double xi = (panel + x[q]) / F3R_BASIS_PANELS, wq = wt[q] / F3R_BASIS_PANELS;
+      const long double xi = (panel + x[q]) / w->panels, wq = wt[q] / w->panels;
       long double s[3], psi[F3R_MAX_MODES];
       for (int k = 0; k < w->p; ++k) shape_eval(w->shape[k], xi, &s[k], NULL, NULL);
       for (int j = 0; j < r; ++j) mode_at(&terms[j], xi, &psi[j], NULL, NULL);
@@ -236,11 +251,11 @@ static void residual_grams(const f3r_beam_basis* b, build_work* w) {
   for (int j = 0; j < b->modes; ++j) terms[j] = mode_terms_of(b->end, b->alpha[j]);
   memset(w->Mt, 0, sizeof w->Mt);
   memset(w->Kt, 0, sizeof w->Kt);
-  for (int panel = 0; panel < F3R_BASIS_PANELS; ++panel) {
+  for (int panel = 0; panel < w->panels; ++panel) {
     long double pm[3][3] = {{0}}, pk[3][3] = {{0}}; /* per panel, then added */
     for (int q = 0; q < F3R_BASIS_POINTS; ++q) {
-      const long double xi = (panel + x[q]) / F3R_BASIS_PANELS;
-      const long double wq = wt[q] / F3R_BASIS_PANELS;
+      const long double xi = (panel + x[q]) / w->panels;
+      const long double wq = wt[q] / w->panels;
       long double t[3], tdd[3], psi[F3R_MAX_MODES], dd[F3R_MAX_MODES];
       for (int j = 0; j < b->modes; ++j) mode_at(&terms[j], xi, &psi[j], NULL, &dd[j]);
       for (int k = 0; k < w->p; ++k) {
@@ -437,6 +452,7 @@ int f3r_beam_basis_build(f3r_beam_end end, int modes, unsigned shape_set, f3r_be
   if (!shape_set) return 0;
   build_work w;
   memset(&w, 0, sizeof w);
+  w.panels = panels_for(out->alpha[modes - 1]);
   for (unsigned bit = 1; bit <= 4; bit <<= 1)
     if (shape_set & bit) w.shape[w.p++] = find_shape(end, bit);
   couplings(out, &w);
