@@ -52,11 +52,18 @@ static double explicit_scale_of(const int modes[3]) {
  * 1e-6, where the scene sets its solver or none fits. The bases' costs are compared with it: on
  * resonance_damped at 1e-5 m they tie (3 modes, 1 mode + shapes), and the correction's tighter
  * solver made it 1.6 times the CPU time (docs/benchmarks/accuracy_knob.md). */
+/* The solver's budget: what the request leaves beside the model's and the kinematics' errors,
+ * at least the solver's share of it. */
+static double solver_budget(const choice_run* run, const f3r_accuracy_choice* c,
+                            double model_error) {
+  const double left = run->request - model_error - c->kinematics_error;
+  return fmax(left, F3R_ACCURACY_SOLVER_SHARE * run->request);
+}
+
 static double solver_cost_for(const choice_run* run, const f3r_accuracy_choice* c,
                               const int modes[3], double model_error, int corrected) {
   if (!run->solver_open) return 1.0;
-  double budget = run->request - model_error - c->kinematics_error;
-  budget = fmax(budget, F3R_ACCURACY_SOLVER_SHARE * run->request);
+  double budget = solver_budget(run, c, model_error);
   if (corrected) budget *= SOLVER_CHECK_SHARE;
   const double scale = explicit_scale_of(modes);
   const f3r_solver_relation* r = pick_solver(run->scene, run->kind, budget, scale);
@@ -374,8 +381,7 @@ static f3r_status pick_relation(choice_run* run, const f3r_accuracy_choice* c, s
 static f3r_status choose_solver(choice_run* run, f3r_accuracy_choice* c, f3r_error* err) {
   const f3r_scene* scene = run->scene;
   solver_pick p = {0};
-  p.budget = run->request - c->model_error - c->kinematics_error;
-  p.budget = fmax(p.budget, F3R_ACCURACY_SOLVER_SHARE * run->request);
+  p.budget = solver_budget(run, c, c->model_error);
   c->formulation = scene->formulation;
   c->integrator = scene->integrator;
   c->rtol = scene->rtol;

@@ -198,6 +198,8 @@ typedef struct {
   long double C[F3R_MAX_MODES][3];    /* int psi_j s_k */
   long double Mt[3][3], Kt[3][3];     /* the residuals' Grams */
   int panels;                         /* of the composite rule, by the highest mode */
+  long double x[F3R_BASIS_POINTS], wt[F3R_BASIS_POINTS]; /* one panel's Gauss-Legendre rule */
+  mode_terms terms[F3R_MAX_MODES]; /* of the kept modes, formed once a build */
 } build_work;
 
 /* Panels of the composite rule for modes up to root alpha_r: about one per radian of alpha_r. */
@@ -215,15 +217,11 @@ static int panels_for(double alpha_r) {
  * |CV| ~ |s| / |t| (up to 1e7) left int phi_m psi_j at 2e-12..3e-10 for r = 2..5. G = I + E
  * with |E| ~ 1e-16, so G^-1 = I - E to 1e-32. */
 static void couplings(const f3r_beam_basis* b, build_work* w) {
-  long double x[F3R_BASIS_POINTS], wt[F3R_BASIS_POINTS];
+  const long double *x = w->x, *wt = w->wt;
   long double B[F3R_MAX_MODES][3] = {{0}}, E[F3R_MAX_MODES][F3R_MAX_MODES] = {{0}};
   const int r = b->modes;
-  mode_terms terms[F3R_MAX_MODES];
-  gauss_legendre_ld(F3R_BASIS_POINTS, x, wt);
-  for (int j = 0; j < r; ++j) {
-    terms[j] = mode_terms_of(b->end, b->alpha[j]);
-    mode_constants_ld(&terms[j], w->mode[j]);
-  }
+  const mode_terms* terms = w->terms;
+  for (int j = 0; j < r; ++j) mode_constants_ld(&terms[j], w->mode[j]);
   for (int panel = 0; panel < w->panels; ++panel)
     for (int q = 0; q < F3R_BASIS_POINTS; ++q) {
       const long double xi = (panel + x[q]) / w->panels, wq = wt[q] / w->panels;
@@ -245,10 +243,8 @@ static void couplings(const f3r_beam_basis* b, build_work* w) {
 
 /* M_t and K_t by composite Gauss-Legendre quadrature of the pointwise residual. */
 static void residual_grams(const f3r_beam_basis* b, build_work* w) {
-  long double x[F3R_BASIS_POINTS], wt[F3R_BASIS_POINTS];
-  mode_terms terms[F3R_MAX_MODES];
-  gauss_legendre_ld(F3R_BASIS_POINTS, x, wt);
-  for (int j = 0; j < b->modes; ++j) terms[j] = mode_terms_of(b->end, b->alpha[j]);
+  const long double *x = w->x, *wt = w->wt;
+  const mode_terms* terms = w->terms;
   memset(w->Mt, 0, sizeof w->Mt);
   memset(w->Kt, 0, sizeof w->Kt);
   for (int panel = 0; panel < w->panels; ++panel) {
@@ -453,6 +449,8 @@ int f3r_beam_basis_build(f3r_beam_end end, int modes, unsigned shape_set, f3r_be
   build_work w;
   memset(&w, 0, sizeof w);
   w.panels = panels_for(out->alpha[modes - 1]);
+  gauss_legendre_ld(F3R_BASIS_POINTS, w.x, w.wt);
+  for (int j = 0; j < modes; ++j) w.terms[j] = mode_terms_of(end, out->alpha[j]);
   for (unsigned bit = 1; bit <= 4; bit <<= 1)
     if (shape_set & bit) w.shape[w.p++] = find_shape(end, bit);
   couplings(out, &w);
