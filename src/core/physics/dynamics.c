@@ -23,7 +23,8 @@ static double exact_flag(const f3r_model* m) { return m->exact_kinematics ? 1.0 
 
 /* --- the stages' per-link parts (forward.c) ------------------------------------------------- */
 
-void f3r_link_mass_blocks(const f3r_model* m, int i, f3r_link_data* k, double rho) {
+F3R_STAGE_KERNEL void f3r_link_mass_blocks(const f3r_model* m, int i, f3r_link_data* k,
+                                           double rho) {
   const f3r_link_params* lp = &m->link[i];
   const double l = m->link_length, mass = m->link_mass, e = exact_flag(m);
   k->m_rho_theta = -e * mass * k->mean_defl;
@@ -33,7 +34,7 @@ void f3r_link_mass_blocks(const f3r_model* m, int i, f3r_link_data* k, double rh
     k->m_theta_eta[j] = mass * (l * lp->first_moment[j] + rho * lp->mean[j]);
 }
 
-void f3r_link_velocity_forces(const f3r_model* m, int i, f3r_data* d) {
+F3R_STAGE_KERNEL void f3r_link_velocity_forces(const f3r_model* m, int i, f3r_data* d) {
   const f3r_link_params* lp = &m->link[i];
   const f3r_link_data* k = &d->link[i];
   const double* q = d->q;

@@ -84,15 +84,13 @@ static f3r_status link_position_closed(const f3r_model* m, int i, f3r_data* d) {
   k->len = q[i] + m->link_length;
   k->c = (dx * len + dy * k->w) / d_sq;
   k->s = (dy * len - dx * k->w) / d_sq;
-  f3r_link_mass_blocks(m, i, k, q[i]);
-  f3r_link_constraints(m, i, d, 1);
   return F3R_OK;
 }
 
 /* Velocity stage of link i: the rates of its modal sums; with `closed`, rho_i' and theta_i' in
  * v_closed from G v = 0, with C' the velocity of C_i: theta' = (n . C' - w') / L and
- * rho' = e . C' + w theta'; then h and gamma. */
-static void link_velocity(const f3r_model* m, int i, int closed, f3r_data* d) {
+ * rho' = e . C' + w theta'. h and gamma follow in link_velocity_forces. */
+F3R_STAGE_KERNEL static void link_velocity(const f3r_model* m, int i, int closed, f3r_data* d) {
   const f3r_link_params* lp = &m->link[i];
   f3r_link_data* k = &d->link[i];
   const double *q = d->q, *v = d->v;
@@ -114,13 +112,17 @@ static void link_velocity(const f3r_model* m, int i, int closed, f3r_data* d) {
   }
   k->rho_dot = v[i];
   k->theta_dot = v[F3R_Q_THETA + i];
+}
+
+/* Link i's velocity-dependent forces h and constraint bias gamma, from its rates. */
+static void link_velocity_forces(const f3r_model* m, int i, f3r_data* d) {
   f3r_link_velocity_forces(m, i, d);
   f3r_link_constraint_bias(m, i, d);
 }
 
 /* Link i's share of the force stage: its elastic forces and the caller's held forces on its
  * coordinates, which the effects then add to. */
-static void link_forces(const f3r_model* m, int i, f3r_data* d) {
+F3R_STAGE_KERNEL static void link_forces(const f3r_model* m, int i, f3r_data* d) {
   const f3r_link_params* lp = &m->link[i];
   const double* held = d->held;
   f3r_link_elastic_forces(m, i, d->q, d->k);
@@ -135,7 +137,7 @@ static void link_forces(const f3r_model* m, int i, f3r_data* d) {
 
 /* The force stage after the links': the platform's share, the effects, the actuator lag (the
  * commanded leg forces) and the power Q . v. */
-static void forces(const f3r_model* m, f3r_data* d) {
+F3R_STAGE_KERNEL static void forces(const f3r_model* m, f3r_data* d) {
   const int nq = m->nq;
   const double *held = d->held, *v = d->v;
   for (int n = F3R_Q_X; n < F3R_Q_MODAL; ++n) {
@@ -155,15 +157,16 @@ static void forces(const f3r_model* m, f3r_data* d) {
 }
 
 /* The closed stages start from the independent coordinates and rates, copied whole (one copy
- * measured faster than each link's share in its pass). */
+ * measured faster than each link's share in its pass), element by element: memcpy's wide stores
+ * stalled the next stage's loads of the pose (store forwarding, 4 ns a residual). */
 static void open_closed_stages(const f3r_model* m, unsigned what, f3r_data* d) {
-  const size_t nz = (size_t)m->n_independent;
+  const int nz = m->n_independent;
   if (what & F3R_FWD_POSITION_CLOSED) {
-    memcpy(d->q_closed + F3R_Q_INDEPENDENT, d->z, nz * sizeof(double));
+    for (int j = 0; j < nz; ++j) d->q_closed[F3R_Q_INDEPENDENT + j] = d->z[j];
     d->q = d->q_closed;
   }
   if (what & F3R_FWD_VELOCITY_CLOSED) {
-    memcpy(d->v_closed + F3R_Q_INDEPENDENT, d->u, nz * sizeof(double));
+    for (int j = 0; j < nz; ++j) d->v_closed[F3R_Q_INDEPENDENT + j] = d->u[j];
     d->v = d->v_closed;
   }
 }
@@ -174,9 +177,10 @@ f3r_status f3r_forward(const f3r_model* m, f3r_data* d, unsigned what) {
   const int velocity = closed_v || (what & F3R_FWD_VELOCITY);
   open_closed_stages(m, what, d);
   if (closed_q || (what & F3R_FWD_POSITION)) platform_joints(m, d->q[F3R_Q_PHI], d);
-  /* The links' positions first, then their rates and forces: each leg's closure ends in a square
-   * root and two divisions, and the three legs' run side by side only when nothing of another
-   * stage stands between them (one pass per link measured slower, f3r_microbench). */
+  /* Stage by stage over the three links, and the closed stages split after their divisions:
+   * each leg's closure ends in a square root and two divisions, its rates in one more, and the
+   * three legs' run side by side only when nothing that depends on them stands between (one pass
+   * per link measured slower, f3r_microbench: 8 ns a residual for the two splits). */
   for (int i = 0; i < 3; ++i) {
     if (closed_q) {
       const f3r_status st = link_position_closed(m, i, d);
@@ -185,8 +189,15 @@ f3r_status f3r_forward(const f3r_model* m, f3r_data* d, unsigned what) {
       link_position(m, i, d);
     }
   }
+  if (closed_q)
+    for (int i = 0; i < 3; ++i) {
+      f3r_link_mass_blocks(m, i, &d->link[i], d->q[i]);
+      f3r_link_constraints(m, i, d, 1);
+    }
+  if (velocity)
+    for (int i = 0; i < 3; ++i) link_velocity(m, i, closed_v, d);
   for (int i = 0; i < 3; ++i) {
-    if (velocity) link_velocity(m, i, closed_v, d);
+    if (velocity) link_velocity_forces(m, i, d);
     if (what & F3R_FWD_FORCES) link_forces(m, i, d);
   }
   if (velocity) d->h[F3R_Q_X] = d->h[F3R_Q_Y] = d->h[F3R_Q_PHI] = 0.0;
