@@ -22,6 +22,7 @@
 #include "flex3rpr/beam_modes.h"
 #include "flex3rpr/sim.h"
 #include "cli_options.h"
+#include "csv_number.h"
 #include "model_reports.h"
 #include "run_report.h"
 
@@ -44,17 +45,31 @@ static void write_header(FILE* f, const f3r_model* m) {
   fprintf(f, ",kinetic_energy,potential_energy,external_work,constraint_residual\n");
 }
 
+/* ",x" at end with x as "%.*g" writes it (csv_number.h: the same text, 5 times faster); returns
+ * the new end. */
+static char* put_number(char* end, double x, int precision) {
+  *end++ = ',';
+  return end + f3r_format_g(end, x, precision);
+}
+
+/* One row, formed in a buffer and written at once (a call to stdio a number took a fifth of the
+ * writing). */
 static void write_row(FILE* f, const f3r_model* m, const f3r_outputs* o) {
-  fprintf(f, "%.10g", o->t);
+  char row[(2 * (F3R_MAX_Q + 3) + F3R_NCON + 5) * (F3R_FORMAT_G_SIZE + 1)];
+  char* end = row + f3r_format_g(row, o->t, 10);
   for (int pass = 0; pass < 2; ++pass) {
     const double* x = pass ? o->v : o->q;
-    for (int n = 0; n < f3r_model_nq(m); ++n) fprintf(f, ",%.15g", x[n]);
+    for (int n = 0; n < f3r_model_nq(m); ++n) end = put_number(end, x[n], 15);
     const double* w = pass ? o->tip_deflection_rate : o->tip_deflection;
-    for (int i = 0; i < 3; ++i) fprintf(f, ",%.15g", w[i]);
+    for (int i = 0; i < 3; ++i) end = put_number(end, w[i], 15);
   }
-  for (int c = 0; c < F3R_NCON; ++c) fprintf(f, ",%.10g", o->lambda[c]);
-  fprintf(f, ",%.15g,%.15g,%.15g,%.3g\n", o->kinetic_energy, o->potential_energy, o->external_work,
-          o->constraint_residual);
+  for (int c = 0; c < F3R_NCON; ++c) end = put_number(end, o->lambda[c], 10);
+  end = put_number(end, o->kinetic_energy, 15);
+  end = put_number(end, o->potential_energy, 15);
+  end = put_number(end, o->external_work, 15);
+  end = put_number(end, o->constraint_residual, 3);
+  *end++ = '\n';
+  fwrite(row, 1, (size_t)(end - row), f);
 }
 
 /* Process CPU time in s, at nanosecond resolution (clock() has microsecond steps). A system
