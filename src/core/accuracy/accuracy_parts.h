@@ -18,10 +18,15 @@ static inline int f3r_is_flexible(const f3r_scene* s, int i) {
 /* The scene with fixed mode counts, no accuracy request: a model the caller must destroy. */
 f3r_status f3r_model_with_modes(const f3r_scene* base, const int modes[3], int exact_kinematics,
                                 f3r_model** model, f3r_error* err);
-/* The linearised end-effector path (x, y, phi a sample) at t_k = k dt, k < count; order 1, or 2
- * with the second-order correction. */
-f3r_status f3r_linear_path(const f3r_scene* s, const int modes[3], double dt, int count, int order,
-                           double* pose, f3r_error* err);
+/* The scene's inputs (through the actuator lag) at t_k = k dt, k < count, into u
+ * (F3R_RIGID_FORCES a sample): what f3r_linear_response samples (linear_model.c). */
+void f3r_linear_sample_inputs(const f3r_model* model, double dt, int count, double* u);
+/* f3r_linear_response (other NULL) or f3r_linear_difference_response (order 1) on inputs sampled
+ * by f3r_linear_sample_inputs at the same dt and count (inputs may be NULL: sampled here). */
+f3r_status f3r_linear_response_sampled(const f3r_linear_model* lin, const f3r_model* model,
+                                       const f3r_model* other, const double* inputs, double dt,
+                                       int count, int order, double* pose, int* unreachable,
+                                       f3r_error* err);
 /* Largest end-effector distance between two pose paths (3 values a sample) over count samples. */
 double f3r_max_distance(const double* a, const double* b, int count);
 
@@ -46,6 +51,8 @@ typedef struct {
   int far;         /* the first- or second-order path leaves the initial pose far */
   int at_rest;
   int evaluations; /* linear models built and solved (a path found in the memo is not one) */
+  double* inputs;  /* count F3R_RIGID_FORCES: the scene's inputs at the sampling, or NULL until a
+                    * path needs them (every model of the scene samples the same values) */
   /* The paths computed so far, by mode counts and order, at the current sampling: the search runs
    * again after the pilot, and the pilot's pair needs paths the search has made. */
   struct {
@@ -57,6 +64,10 @@ typedef struct {
   int memo_used, memo_next;
 } f3r_mode_search;
 
+/* The linearised end-effector path (x, y, phi a sample) at the search's sampling; order 1, or 2
+ * with the second-order correction. */
+f3r_status f3r_linear_path(const f3r_scene* s, f3r_mode_search* ms, const int modes[3], int order,
+                           double* pose, f3r_error* err);
 /* Sampling, links and the order of the estimate for a scene; f3r_mode_search_free after. */
 f3r_status f3r_mode_search_init(const f3r_scene* s, unsigned chosen, f3r_mode_search* ms,
                                 f3r_error* err);

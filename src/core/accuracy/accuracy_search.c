@@ -32,15 +32,26 @@ f3r_status f3r_model_with_modes(const f3r_scene* base, const int modes[3], int e
   return f3r_model_create(&s, model, err);
 }
 
-/* The linearised end-effector path (order 1, or 2 with the second-order correction) at
- * t_k = k dt, k < count, of the scene with the given mode counts. */
-f3r_status f3r_linear_path(const f3r_scene* s, const int modes[3], double dt, int count, int order,
+/* The scene's inputs at the search's sampling, sampled with the first model that needs them: the
+ * same for every model of the scene (the mode counts and kinematics do not change the inputs or
+ * the actuator lag), and a tenth of the search's time when sampled per path. */
+static const double* search_inputs(f3r_mode_search* ms, const f3r_model* model) {
+  if (!ms->inputs) {
+    ms->inputs = malloc((size_t)ms->count * F3R_RIGID_FORCES * sizeof(double));
+    if (ms->inputs) f3r_linear_sample_inputs(model, ms->dt, ms->count, ms->inputs);
+  }
+  return ms->inputs; /* NULL without memory: the response samples them itself */
+}
+
+f3r_status f3r_linear_path(const f3r_scene* s, f3r_mode_search* ms, const int modes[3], int order,
                            double* pose, f3r_error* err) {
   f3r_model* model = NULL;
   f3r_linear_model* lin = NULL;
   f3r_status st = f3r_model_with_modes(s, modes, 0, &model, err);
   if (st == F3R_OK) st = f3r_linearise(model, &lin, err);
-  if (st == F3R_OK) st = f3r_linear_response(lin, model, dt, count, order, pose, NULL, err);
+  if (st == F3R_OK)
+    st = f3r_linear_response_sampled(lin, model, NULL, search_inputs(ms, model), ms->dt, ms->count,
+                                     order, pose, NULL, err);
   f3r_linear_destroy(lin);
   f3r_model_destroy(model);
   return st;
@@ -57,7 +68,8 @@ f3r_status f3r_linear_kinematics(const f3r_scene* s, const f3r_mode_search* ms, 
   if (st == F3R_OK) st = f3r_model_with_modes(s, modes, 1, &exact, err);
   if (st == F3R_OK) st = f3r_linearise(model, &lin, err);
   if (st == F3R_OK)
-    st = f3r_linear_difference_response(lin, model, exact, ms->dt, ms->count, pose, NULL, err);
+    st = f3r_linear_response_sampled(lin, model, exact, ms->inputs, ms->dt, ms->count, 1, pose,
+                                     NULL, err);
   for (int k = 0; st == F3R_OK && k < ms->count; ++k)
     *effect = fmax(*effect, hypot(pose[3 * k], pose[3 * k + 1]));
   f3r_linear_destroy(lin);
@@ -114,7 +126,8 @@ static void memo_clear(f3r_mode_search* ms) {
 void f3r_mode_search_free(f3r_mode_search* ms) {
   free(ms->ref);
   free(ms->path);
-  ms->ref = ms->path = NULL;
+  free(ms->inputs);
+  ms->ref = ms->path = ms->inputs = NULL;
   memo_clear(ms);
 }
 
@@ -167,7 +180,7 @@ f3r_status f3r_mode_search_path(const f3r_scene* s, f3r_mode_search* ms, const i
       return F3R_OK;
     }
   ++ms->evaluations;
-  const f3r_status st = f3r_linear_path(s, modes, ms->dt, ms->count, order, pose, err);
+  const f3r_status st = f3r_linear_path(s, ms, modes, order, pose, err);
   if (st != F3R_OK) return st;
   int k = ms->memo_used; /* a free entry, or the oldest one */
   if (ms->memo_used < F3R_PATH_MEMO) {
@@ -264,7 +277,9 @@ static f3r_status use_second_order(const f3r_scene* s, f3r_mode_search* ms, f3r_
     return F3R_OK;
   }
   if ((int)samples != ms->count) {
-    memo_clear(ms); /* paths at the old sampling */
+    memo_clear(ms); /* paths and inputs at the old sampling */
+    free(ms->inputs);
+    ms->inputs = NULL;
     ms->count = (int)samples;
     ms->dt = s->duration / (ms->count - 1);
     free(ms->ref);

@@ -214,7 +214,7 @@ static void mode_transition(double k, double c, double h, double E[4][4]) {
 }
 
 /* The scripted inputs at t_k, through the actuator lag when there is one: u[k * 9 + f]. */
-static void sample_inputs(const f3r_model* model, double dt, int count, double* u) {
+void f3r_linear_sample_inputs(const f3r_model* model, double dt, int count, double* u) {
   const f3r_scene* s = &model->scene;
   for (int f = 0; f < F3R_RIGID_FORCES; ++f) {
     const int lagged = model->n_lag && f < 3;
@@ -356,15 +356,16 @@ static f3r_status second_order_remainder(const f3r_linear_model* lin, const f3r_
 /* The linear path (order 1 or 2) into pose; with `other`, the response to what other adds along
  * the first-order path instead (pose: the deviation from it). */
 static f3r_status response(const f3r_linear_model* lin, const f3r_model* model,
-                           const f3r_model* other, double dt, int count, int order, double* pose,
-                           int* unreachable, f3r_error* err) {
+                           const f3r_model* other, const double* inputs, double dt, int count,
+                           int order, double* pose, int* unreachable, f3r_error* err) {
   const int n = lin->n;
   if (unreachable) *unreachable = 0;
   if (count < 1 || !(dt > 0.0))
     return f3r_error_set(err, F3R_ERR_ARGUMENT, "linear response: needs count >= 1 and dt > 0");
   const size_t series = (size_t)n * count;
   const int second = order >= 2 || other;
-  double* u = malloc((size_t)count * F3R_RIGID_FORCES * sizeof(double));
+  double* sampled = inputs ? NULL : malloc((size_t)count * F3R_RIGID_FORCES * sizeof(double));
+  const double* u = inputs ? inputs : sampled;
   double* P = malloc(series * sizeof(double));
   double* F = second ? malloc(series * sizeof(double)) : NULL;
   double* z = second ? malloc(series * sizeof(double)) : NULL;
@@ -375,7 +376,7 @@ static f3r_status response(const f3r_linear_model* lin, const f3r_model* model,
     st = f3r_error_set(err, F3R_ERR_MEMORY, "linear response: out of memory");
     goto done;
   }
-  sample_inputs(model, dt, count, u);
+  if (sampled) f3r_linear_sample_inputs(model, dt, count, sampled);
   const f3r_scene* s = &model->scene;
   double dz0[F3R_MAX_Q] = {0}, vz0[F3R_MAX_Q] = {0}, zero[F3R_MAX_Q] = {0};
   for (int k = 0; k < 3; ++k) vz0[k] = s->platform_velocity0[k];
@@ -412,14 +413,24 @@ static f3r_status response(const f3r_linear_model* lin, const f3r_model* model,
     if (unreachable) *unreachable = missed;
   }
 done:
-  free(u), free(P), free(F), free(z), free(zd), free(zdd);
+  free(sampled), free(P), free(F), free(z), free(zd), free(zdd);
   return st;
 }
 
 f3r_status f3r_linear_response(const f3r_linear_model* lin, const f3r_model* model, double dt,
                                int count, int order, double* pose, int* unreachable,
                                f3r_error* err) {
-  return response(lin, model, NULL, dt, count, order, pose, unreachable, err);
+  return response(lin, model, NULL, NULL, dt, count, order, pose, unreachable, err);
+}
+
+f3r_status f3r_linear_response_sampled(const f3r_linear_model* lin, const f3r_model* model,
+                                       const f3r_model* other, const double* inputs, double dt,
+                                       int count, int order, double* pose, int* unreachable,
+                                       f3r_error* err) {
+  if (other && other->nq != model->nq)
+    return f3r_error_set(err, F3R_ERR_ARGUMENT,
+                         "linear response: the other model needs the same coordinates");
+  return response(lin, model, other, inputs, dt, count, other ? 1 : order, pose, unreachable, err);
 }
 
 f3r_status f3r_linear_difference_response(const f3r_linear_model* lin, const f3r_model* model,
@@ -428,5 +439,5 @@ f3r_status f3r_linear_difference_response(const f3r_linear_model* lin, const f3r
   if (!other || other->nq != model->nq)
     return f3r_error_set(err, F3R_ERR_ARGUMENT,
                          "linear response: the other model needs the same coordinates");
-  return response(lin, model, other, dt, count, 1, pose, unreachable, err);
+  return response(lin, model, other, NULL, dt, count, 1, pose, unreachable, err);
 }
