@@ -14,7 +14,7 @@
 
 /* --- the stages' per-link parts (forward.c) ------------------------------------------------- */
 
-F3R_STAGE_KERNEL void f3r_link_constraints(const f3r_model* m, int i, f3r_data* d, int closed) {
+void f3r_link_constraints(const f3r_model* m, int i, f3r_data* d, int closed) {
   f3r_link_data* k = &d->link[i];
   const double r = m->platform_radius;
   k->g_theta[0] = -k->len * k->s - k->w * k->c;
@@ -31,7 +31,7 @@ F3R_STAGE_KERNEL void f3r_link_constraints(const f3r_model* m, int i, f3r_data* 
 }
 
 /* gamma_i = along e + across n + r_PC phi'^2 e_c (the header's comment). */
-F3R_STAGE_KERNEL void f3r_link_constraint_bias(const f3r_model* m, int i, f3r_data* d) {
+void f3r_link_constraint_bias(const f3r_model* m, int i, f3r_data* d) {
   const f3r_link_data* k = &d->link[i];
   const double td = k->theta_dot, phi_dot = d->v[F3R_Q_PHI];
   const double along = -k->len * td * td - 2.0 * k->w_dot * td; /* e component */

@@ -102,14 +102,6 @@ f3r_status f3r_fwd_leg_strokes(const f3r_model* m, const double* q, double rho[3
 void f3r_fwd_leg_angles(const f3r_model* m, const f3r_data* d, double* q);
 
 /* --- per-link kernels of the stages, beside their derivatives (dynamics.c, constraints.c) ------ */
-/* Each is called once per link and evaluation from forward.c; as calls they cost a tenth of a
- * residual (f3r_microbench), so they are forced inline: across files when the core links with
- * -flto (F3R_LTO), as plain calls otherwise. */
-#if defined(__GNUC__)
-#define F3R_STAGE_KERNEL inline __attribute__((always_inline))
-#else
-#define F3R_STAGE_KERNEL
-#endif
 /* The mass blocks of link i at stroke rho; its part of h (the velocity stage of link i in d). */
 void f3r_link_mass_blocks(const f3r_model* m, int i, f3r_link_data* k, double rho);
 void f3r_link_velocity_forces(const f3r_model* m, int i, f3r_data* d);

@@ -23,8 +23,7 @@ static double exact_flag(const f3r_model* m) { return m->exact_kinematics ? 1.0 
 
 /* --- the stages' per-link parts (forward.c) ------------------------------------------------- */
 
-F3R_STAGE_KERNEL void f3r_link_mass_blocks(const f3r_model* m, int i, f3r_link_data* k,
-                                           double rho) {
+void f3r_link_mass_blocks(const f3r_model* m, int i, f3r_link_data* k, double rho) {
   const f3r_link_params* lp = &m->link[i];
   const double l = m->link_length, mass = m->link_mass, e = exact_flag(m);
   k->m_rho_theta = -e * mass * k->mean_defl;
@@ -34,7 +33,7 @@ F3R_STAGE_KERNEL void f3r_link_mass_blocks(const f3r_model* m, int i, f3r_link_d
     k->m_theta_eta[j] = mass * (l * lp->first_moment[j] + rho * lp->mean[j]);
 }
 
-F3R_STAGE_KERNEL void f3r_link_velocity_forces(const f3r_model* m, int i, f3r_data* d) {
+void f3r_link_velocity_forces(const f3r_model* m, int i, f3r_data* d) {
   const f3r_link_params* lp = &m->link[i];
   const f3r_link_data* k = &d->link[i];
   const double* q = d->q;

@@ -18,6 +18,16 @@
 
 #include "data.h"
 
+/* The stages' per-link parts below run once per link and evaluation; as calls they cost about 5 %
+ * of a minimal residual at r = 3 (f3r_microbench), so they are forced inline. (Forcing the
+ * kernels of dynamics.c and constraints.c inline too, across files under -flto, gained 3 % more
+ * at r = 3 and lost 2 % at r = 20.) */
+#if defined(__GNUC__)
+#define STAGE static inline __attribute__((always_inline))
+#else
+#define STAGE static inline
+#endif
+
 /* (cc, sc) of platform joint i from (cos, sin) phi_p: its direction at phi_p = 0, rotated. */
 static void joint_direction(const f3r_model* m, int i, double cp, double sp, double* cc,
                             double* sc) {
@@ -33,11 +43,10 @@ static void platform_joints(const f3r_model* m, double phi_p, f3r_data* d) {
   for (int i = 0; i < 3; ++i) joint_direction(m, i, cp, sp, &d->link[i].cc, &d->link[i].sc);
 }
 
-/* w, the mean deflection and |eta|^2 of link i, summed in locals (a store into k could alias
- * the model's tables, so summing into k would store at every mode). */
-static void modal_sums(const f3r_model* m, int i, const double* q, f3r_link_data* k) {
+/* w, the mean deflection and |eta|^2 of link i from its modal coordinates eta, summed in locals
+ * (a store into k could alias the model's tables, so summing into k would store at every mode). */
+static void modal_sums(const f3r_model* m, int i, const double* eta, f3r_link_data* k) {
   const f3r_link_params* lp = &m->link[i];
-  const double* eta = q + lp->eta_index;
   double w = 0.0, mean_defl = 0.0, eta_sq = 0.0;
   for (int j = 0; j < lp->modes; ++j) {
     w += lp->tip[j] * eta[j];
@@ -55,26 +64,28 @@ static void link_position(const f3r_model* m, int i, f3r_data* d) {
   k->s = sin(q[F3R_Q_THETA + i]);
   d->sincos_pairs++;
   k->len = q[i] + m->link_length;
-  modal_sums(m, i, q, k);
+  modal_sums(m, i, q + m->link[i].eta_index, k);
   f3r_link_mass_blocks(m, i, k, q[i]);
   f3r_link_constraints(m, i, d, 0);
 }
 
-/* D = C_i - A_i of leg i, from the platform pose in q and the joint direction (cc, sc). */
-static void leg_span(const f3r_model* m, int i, const double* q, double cc, double sc, double* dx,
-                     double* dy) {
-  *dx = q[F3R_Q_X] + m->platform_radius * cc - m->base_joint[i][0];
-  *dy = q[F3R_Q_Y] + m->platform_radius * sc - m->base_joint[i][1];
+/* D = C_i - A_i of leg i, from the platform position (x, y) and the joint direction (cc, sc). */
+static void leg_span(const f3r_model* m, int i, double x, double y, double cc, double sc,
+                     double* dx, double* dy) {
+  *dx = x + m->platform_radius * cc - m->base_joint[i][0];
+  *dy = y + m->platform_radius * sc - m->base_joint[i][1];
 }
 
 /* Closed position stage of link i (z already in q_closed): the loop closes in closed form: with D = C_i - A_i, |D|^2 = L^2 + w^2, and D points along theta_i +
  * beta with tan beta = w / L, so e = (D_x L + D_y w, D_y L - D_x w) / |D|^2. */
 static f3r_status link_position_closed(const f3r_model* m, int i, f3r_data* d) {
   double* q = d->q_closed;
+  const double* z = d->z; /* read from z, not from its copy in q (open_closed_stages) */
   f3r_link_data* k = &d->link[i];
-  modal_sums(m, i, q, k);
+  modal_sums(m, i, z + m->link[i].eta_index - F3R_Q_INDEPENDENT, k);
   double dx, dy;
-  leg_span(m, i, q, k->cc, k->sc, &dx, &dy);
+  leg_span(m, i, z[F3R_Q_X - F3R_Q_INDEPENDENT], z[F3R_Q_Y - F3R_Q_INDEPENDENT], k->cc, k->sc, &dx,
+           &dy);
   const double d_sq = dx * dx + dy * dy;
   const double len_sq = d_sq - k->w * k->w;
   const double min_len = F3R_CLOSURE_MIN_LEG_FRACTION * m->link_length;
@@ -90,22 +101,24 @@ static f3r_status link_position_closed(const f3r_model* m, int i, f3r_data* d) {
 /* Velocity stage of link i: the rates of its modal sums; with `closed`, rho_i' and theta_i' in
  * v_closed from G v = 0, with C' the velocity of C_i: theta' = (n . C' - w') / L and
  * rho' = e . C' + w theta'. h and gamma follow in link_velocity_forces. */
-F3R_STAGE_KERNEL static void link_velocity(const f3r_model* m, int i, int closed, f3r_data* d) {
+STAGE void link_velocity(const f3r_model* m, int i, int closed, f3r_data* d) {
   const f3r_link_params* lp = &m->link[i];
   f3r_link_data* k = &d->link[i];
   const double *q = d->q, *v = d->v;
+  /* the closed stage reads the independent rates from u, not from their copy in v */
+  const double* eta_rate = closed ? d->u + lp->eta_index - F3R_Q_INDEPENDENT : v + lp->eta_index;
   double w_dot = 0.0, mean_defl_dot = 0.0, eta_eta_dot = 0.0; /* in locals, as modal_sums */
   for (int j = 0; j < lp->modes; ++j) {
-    const double rate = v[lp->eta_index + j];
+    const double rate = eta_rate[j];
     w_dot += lp->tip[j] * rate;
     mean_defl_dot += lp->mean[j] * rate;
     eta_eta_dot += q[lp->eta_index + j] * rate;
   }
   k->w_dot = w_dot, k->mean_defl_dot = mean_defl_dot, k->eta_eta_dot = eta_eta_dot;
   if (closed) {
-    const double r = m->platform_radius;
-    const double cx = v[F3R_Q_X] - r * k->sc * v[F3R_Q_PHI],
-                 cy = v[F3R_Q_Y] + r * k->cc * v[F3R_Q_PHI];
+    const double r = m->platform_radius, *pose_rate = d->u;
+    const double cx = pose_rate[0] - r * k->sc * pose_rate[2],
+                 cy = pose_rate[1] + r * k->cc * pose_rate[2];
     const double theta_dot = (-k->s * cx + k->c * cy - k->w_dot) / k->len;
     d->v_closed[i] = k->c * cx + k->s * cy + k->w * theta_dot;
     d->v_closed[F3R_Q_THETA + i] = theta_dot;
@@ -122,7 +135,7 @@ static void link_velocity_forces(const f3r_model* m, int i, f3r_data* d) {
 
 /* Link i's share of the force stage: its elastic forces and the caller's held forces on its
  * coordinates, which the effects then add to. */
-F3R_STAGE_KERNEL static void link_forces(const f3r_model* m, int i, f3r_data* d) {
+STAGE void link_forces(const f3r_model* m, int i, f3r_data* d) {
   const f3r_link_params* lp = &m->link[i];
   const double* held = d->held;
   f3r_link_elastic_forces(m, i, d->q, d->k);
@@ -137,7 +150,7 @@ F3R_STAGE_KERNEL static void link_forces(const f3r_model* m, int i, f3r_data* d)
 
 /* The force stage after the links': the platform's share, the effects, the actuator lag (the
  * commanded leg forces) and the power Q . v. */
-F3R_STAGE_KERNEL static void forces(const f3r_model* m, f3r_data* d) {
+STAGE void forces(const f3r_model* m, f3r_data* d) {
   const int nq = m->nq;
   const double *held = d->held, *v = d->v;
   for (int n = F3R_Q_X; n < F3R_Q_MODAL; ++n) {
@@ -157,16 +170,16 @@ F3R_STAGE_KERNEL static void forces(const f3r_model* m, f3r_data* d) {
 }
 
 /* The closed stages start from the independent coordinates and rates, copied whole (one copy
- * measured faster than each link's share in its pass), element by element: memcpy's wide stores
- * stalled the next stage's loads of the pose (store forwarding, 4 ns a residual). */
+ * measured faster than each link's share in its pass). The stages right after read z and u
+ * themselves: a load from the copy waited for memcpy's wide stores (4 ns a residual). */
 static void open_closed_stages(const f3r_model* m, unsigned what, f3r_data* d) {
-  const int nz = m->n_independent;
+  const size_t nz = (size_t)m->n_independent;
   if (what & F3R_FWD_POSITION_CLOSED) {
-    for (int j = 0; j < nz; ++j) d->q_closed[F3R_Q_INDEPENDENT + j] = d->z[j];
+    memcpy(d->q_closed + F3R_Q_INDEPENDENT, d->z, nz * sizeof(double));
     d->q = d->q_closed;
   }
   if (what & F3R_FWD_VELOCITY_CLOSED) {
-    for (int j = 0; j < nz; ++j) d->v_closed[F3R_Q_INDEPENDENT + j] = d->u[j];
+    memcpy(d->v_closed + F3R_Q_INDEPENDENT, d->u, nz * sizeof(double));
     d->v = d->v_closed;
   }
 }
@@ -176,7 +189,10 @@ f3r_status f3r_forward(const f3r_model* m, f3r_data* d, unsigned what) {
   const int closed_v = (what & F3R_FWD_VELOCITY_CLOSED) != 0;
   const int velocity = closed_v || (what & F3R_FWD_VELOCITY);
   open_closed_stages(m, what, d);
-  if (closed_q || (what & F3R_FWD_POSITION)) platform_joints(m, d->q[F3R_Q_PHI], d);
+  if (closed_q)
+    platform_joints(m, d->z[F3R_Q_PHI - F3R_Q_INDEPENDENT], d);
+  else if (what & F3R_FWD_POSITION)
+    platform_joints(m, d->q[F3R_Q_PHI], d);
   /* Stage by stage over the three links, and the closed stages split after their divisions:
    * each leg's closure ends in a square root and two divisions, its rates in one more, and the
    * three legs' run side by side only when nothing that depends on them stands between (one pass
@@ -221,7 +237,7 @@ f3r_status f3r_fwd_leg_strokes(const f3r_model* m, const double* q, double rho[3
     const double w = f3r_model_tip_deflection(m, q, i); /* summed as modal_sums sums it */
     double cc, sc, dx, dy;
     joint_direction(m, i, cp, sp, &cc, &sc);
-    leg_span(m, i, q, cc, sc, &dx, &dy);
+    leg_span(m, i, q[F3R_Q_X], q[F3R_Q_Y], cc, sc, &dx, &dy);
     const double len_sq = dx * dx + dy * dy - w * w;
     if (!(len_sq > min_len * min_len)) return F3R_ERR_SINGULAR;
     rho[i] = sqrt(len_sq) - m->link_length;
