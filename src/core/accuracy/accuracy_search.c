@@ -114,20 +114,22 @@ static int any_flexible(const f3r_scene* s) {
  * that a slowly converging fixed-free link is compared with modes well beyond it; 20 from r = 6. */
 static int reference_modes(int r) { return 3 * r + 3 < F3R_MAX_MODES ? 3 * r + 3 : F3R_MAX_MODES; }
 
+/* Forgets what was computed at the current sampling: the paths and the sampled inputs. */
 static void memo_clear(f3r_mode_search* ms) {
   for (int k = 0; k < ms->memo_used; ++k) {
     free(ms->memo[k].pose);
     ms->memo[k].pose = NULL;
   }
   ms->memo_used = ms->memo_next = 0;
+  free(ms->inputs);
+  ms->inputs = NULL;
 }
 
 /* Safe to call twice (init frees on its own failure, and its caller frees again). */
 void f3r_mode_search_free(f3r_mode_search* ms) {
   free(ms->ref);
   free(ms->path);
-  free(ms->inputs);
-  ms->ref = ms->path = ms->inputs = NULL;
+  ms->ref = ms->path = NULL;
   memo_clear(ms);
 }
 
@@ -278,8 +280,6 @@ static f3r_status use_second_order(const f3r_scene* s, f3r_mode_search* ms, f3r_
   }
   if ((int)samples != ms->count) {
     memo_clear(ms); /* paths and inputs at the old sampling */
-    free(ms->inputs);
-    ms->inputs = NULL;
     ms->count = (int)samples;
     ms->dt = s->duration / (ms->count - 1);
     free(ms->ref);

@@ -420,7 +420,8 @@ done:
 f3r_status f3r_linear_response(const f3r_linear_model* lin, const f3r_model* model, double dt,
                                int count, int order, double* pose, int* unreachable,
                                f3r_error* err) {
-  return response(lin, model, NULL, NULL, dt, count, order, pose, unreachable, err);
+  return f3r_linear_response_sampled(lin, model, NULL, NULL, dt, count, order, pose, unreachable,
+                                     err);
 }
 
 f3r_status f3r_linear_response_sampled(const f3r_linear_model* lin, const f3r_model* model,
@@ -436,8 +437,6 @@ f3r_status f3r_linear_response_sampled(const f3r_linear_model* lin, const f3r_mo
 f3r_status f3r_linear_difference_response(const f3r_linear_model* lin, const f3r_model* model,
                                           const f3r_model* other, double dt, int count,
                                           double* pose, int* unreachable, f3r_error* err) {
-  if (!other || other->nq != model->nq)
-    return f3r_error_set(err, F3R_ERR_ARGUMENT,
-                         "linear response: the other model needs the same coordinates");
-  return response(lin, model, other, NULL, dt, count, 1, pose, unreachable, err);
+  if (!other) return f3r_error_set(err, F3R_ERR_ARGUMENT, "linear response: needs the other model");
+  return f3r_linear_response_sampled(lin, model, other, NULL, dt, count, 1, pose, unreachable, err);
 }
