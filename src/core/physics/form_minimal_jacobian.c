@@ -12,44 +12,19 @@ static void links_of_column(int owner, int* first, int* end) {
   *end = owner < 0 ? 3 : owner + 1;
 }
 
-/* out (6 x nz) = X B for X (6 x nq) of the constraints' derivatives: B is the identity on z
- * below its dependent rows Bd (6 x nz), so (X B)(:, j) = X(:, z_j) + X(:, legs) Bd(:, j), and
- * the rows of link i reach only its own legs' columns rho_i, theta_i. A modal column z_j of
- * link l (owner[j] = l) is zero on the other links' rows: X(:, z_j) and Bd(:, j) both are. */
-static void times_B_constraints(const double* X, const double* Bd, const int* owner, int nz,
-                                double* out) {
-  for (int j = 0; j < nz; ++j) {
-    int first, end;
-    links_of_column(owner[j], &first, &end);
-    for (int r = 0; r < 6; ++r) out[r + 6 * j] = 0.0;
-    for (int i = first; i < end; ++i)
-      for (int r = 2 * i; r < 2 * i + 2; ++r) {
-        double sum = X[r + 6 * (F3R_Q_INDEPENDENT + j)];
-        sum += X[r + 6 * i] * Bd[i + 6 * j];
-        sum += X[r + 6 * (F3R_Q_THETA + i)] * Bd[F3R_Q_THETA + i + 6 * j];
-        out[r + 6 * j] = sum;
-      }
-  }
-}
-
-/* T(:, j) += M x_j for the nz columns x_j of X (nq x nz) that are nonzero on the legs only (as
- * f3r_data_mass_times gives it: the skipped terms are exact zeros). */
-static void add_mass_times_legs(const f3r_model* m, const int* owner, const f3r_data* d,
-                                const double* X, double* T) {
-  const int nq = m->nq;
+/* t += M x for a column x (nq) that is nonzero on the legs only (as f3r_data_mass_times gives
+ * it: the skipped terms are exact zeros); owner: the column's link, or -1 for the pose. */
+static void add_mass_times_legs(const f3r_model* m, int owner, const f3r_data* d, const double* x,
+                                double* t) {
   const double mass = m->link_mass;
-  for (int j = 0; j < m->n_independent; ++j) {
-    const double* x = X + (size_t)nq * j;
-    double* t = T + (size_t)nq * j;
-    for (int i = 0; i < 3; ++i) {
-      if (owner[j] >= 0 && i != owner[j]) continue; /* x is zero on the other links' legs */
-      const f3r_link_data* k = &d->link[i];
-      const double xr = x[i], xt = x[F3R_Q_THETA + i];
-      t[i] += mass * xr + k->m_rho_theta * xt;
-      t[F3R_Q_THETA + i] += k->m_rho_theta * xr + k->m_theta_theta * xt;
-      for (int e = 0; e < m->link[i].modes; ++e)
-        t[m->link[i].eta_index + e] += k->m_theta_eta[e] * xt;
-    }
+  for (int i = 0; i < 3; ++i) {
+    if (owner >= 0 && i != owner) continue; /* x is zero on the other links' legs */
+    const f3r_link_data* k = &d->link[i];
+    const double xr = x[i], xt = x[F3R_Q_THETA + i];
+    t[i] += mass * xr + k->m_rho_theta * xt;
+    t[F3R_Q_THETA + i] += k->m_rho_theta * xr + k->m_theta_theta * xt;
+    for (int e = 0; e < m->link[i].modes; ++e)
+      t[m->link[i].eta_index + e] += k->m_theta_eta[e] * xt;
   }
 }
 
@@ -93,55 +68,49 @@ static void column_owners(const f3r_model* m, int* owner) {
       owner[m->link[l].eta_index - F3R_Q_INDEPENDENT + e] = l;
 }
 
-/* out (nq x nz) = X B for X (nq x nq) of that structure; a modal column on its link's rows. */
-static void times_B_links(const f3r_model* m, const int* owner, const double* X, const double* Bd,
-                          double* out) {
+/* o (nq) = X B(:, j) for X (nq x nq) of that structure; a modal column (owner l >= 0) only on
+ * its link's rows (the others are left as they were, and nothing reads them). */
+static void times_B_column(const f3r_model* m, int l, const double* X, int j, const double* bd,
+                           double* o) {
   const int nq = m->nq;
-  for (int j = 0; j < m->n_independent; ++j) {
-    double* o = out + (size_t)nq * j;
-    const double* x = X + (size_t)nq * (F3R_Q_INDEPENDENT + j);
-    const int l = owner[j];
-    if (l < 0) {
-      memcpy(o, x, (size_t)nq * sizeof(double));
-    } else {
-      o[l] = x[l];
-      o[F3R_Q_THETA + l] = x[F3R_Q_THETA + l];
-      for (int e = 0; e < m->link[l].modes; ++e)
-        o[m->link[l].eta_index + e] = x[m->link[l].eta_index + e];
-    }
-    add_leg_columns(m, X, Bd + 6 * j, o);
+  const double* x = X + (size_t)nq * (F3R_Q_INDEPENDENT + j);
+  if (l < 0) {
+    memcpy(o, x, (size_t)nq * sizeof(double));
+  } else {
+    o[l] = x[l];
+    o[F3R_Q_THETA + l] = x[F3R_Q_THETA + l];
+    for (int e = 0; e < m->link[l].modes; ++e)
+      o[m->link[l].eta_index + e] = x[m->link[l].eta_index + e];
   }
+  add_leg_columns(m, X, bd, o);
 }
 
-/* J(rows0.., cols0..) += scale B^T Y for Y (nq x nz) as times_B_links forms it. Column z_i of Bd
- * is nonzero on every leg for the pose and on its own link's legs only for a modal coordinate;
- * the rows of two different links' modal coordinates stay zero. */
-static void add_B_transpose_times(const f3r_model* m, const int* owner, const double* Bd,
-                                  const double* Y, double scale, double* J, int ld) {
-  const int nq = m->nq, nz = m->n_independent;
-  for (int j = 0; j < nz; ++j) {
-    const double* y = Y + (size_t)nq * j;
-    const int lj = owner[j];
-    for (int i = 0; i < 3; ++i) {
-      double sum;
-      if (lj < 0) {
-        sum = y[F3R_Q_INDEPENDENT + i];
-        for (int c = 0; c < F3R_Q_LEG_JOINTS; ++c) sum += Bd[c + 6 * i] * y[c];
-      } else { /* y is zero on the pose and the other links' legs */
-        sum = 0.0 + Bd[lj + 6 * i] * y[lj];
-        sum += Bd[F3R_Q_THETA + lj + 6 * i] * y[F3R_Q_THETA + lj];
-      }
-      F3R_AT(J, ld, i, j) += scale * sum;
+/* J(rows0.., j) += B^T y for a column y (nq) as times_B_column forms it (jcol points at J's
+ * entry (rows0, j)). Column z_i of Bd is nonzero on every leg for the pose and on its own link's
+ * legs only for a modal coordinate; the rows of two different links' modal coordinates stay
+ * zero. */
+static void add_B_transpose_column(const f3r_model* m, const int* owner, const double* Bd, int j,
+                                   const double* y, double* jcol) {
+  const int lj = owner[j];
+  for (int i = 0; i < 3; ++i) {
+    double sum;
+    if (lj < 0) {
+      sum = y[F3R_Q_INDEPENDENT + i];
+      for (int c = 0; c < F3R_Q_LEG_JOINTS; ++c) sum += Bd[c + 6 * i] * y[c];
+    } else { /* y is zero on the pose and the other links' legs */
+      sum = 0.0 + Bd[lj + 6 * i] * y[lj];
+      sum += Bd[F3R_Q_THETA + lj + 6 * i] * y[F3R_Q_THETA + lj];
     }
-    for (int l = 0; l < 3; ++l) {
-      if (lj >= 0 && l != lj) continue;
-      for (int e = 0; e < m->link[l].modes; ++e) {
-        const int i = m->link[l].eta_index - F3R_Q_INDEPENDENT + e;
-        double sum = y[F3R_Q_INDEPENDENT + i];
-        sum += Bd[l + 6 * i] * y[l];
-        sum += Bd[F3R_Q_THETA + l + 6 * i] * y[F3R_Q_THETA + l];
-        F3R_AT(J, ld, i, j) += scale * sum;
-      }
+    jcol[i] += sum;
+  }
+  for (int l = 0; l < 3; ++l) {
+    if (lj >= 0 && l != lj) continue;
+    for (int e = 0; e < m->link[l].modes; ++e) {
+      const int i = m->link[l].eta_index - F3R_Q_INDEPENDENT + e;
+      double sum = y[F3R_Q_INDEPENDENT + i];
+      sum += Bd[l + 6 * i] * y[l];
+      sum += Bd[F3R_Q_THETA + l + 6 * i] * y[F3R_Q_THETA + l];
+      jcol[i] += sum;
     }
   }
 }
@@ -175,8 +144,6 @@ typedef struct {
   double* Vz;  /* nq x nz */
   double* Az;  /* nq x nz */
   double* Au;  /* nq x nz */
-  double* T;   /* nq x nz */
-  double* S6;  /* 6 x nz */
   double* Qq;  /* nq x nq: dQ/dq */
   double* Qv;  /* nq x nq: dQ/dv */
 } jacobian_products;
@@ -192,8 +159,6 @@ static jacobian_products jacobian_products_in(f3r_workspace* ws, int nq, int nz)
   p.Vz = p.Bd + 6 * nz;
   p.Az = p.Vz + (size_t)nq * nz;
   p.Au = p.Az + (size_t)nq * nz;
-  p.T = p.Au + (size_t)nq * nz;
-  p.S6 = p.T + (size_t)nq * nz;
   p.Qq = ws->dQ;
   p.Qv = ws->dQ + (size_t)nq * nq;
   return p;
@@ -205,13 +170,14 @@ static jacobian_products jacobian_products_in(f3r_workspace* ws, int nq, int nz)
 static void clear_link_blocks(const f3r_model* m, double* X) {
   const int nq = m->nq;
   for (int i = 0; i < 3; ++i) {
-    const f3r_link_params* lp = &m->link[i];
-    int rows[2 + F3R_MAX_MODES], n = 0;
-    rows[n++] = i;
-    rows[n++] = F3R_Q_THETA + i;
-    for (int e = 0; e < lp->modes; ++e) rows[n++] = lp->eta_index + e;
-    for (int c = 0; c < n; ++c)
-      for (int r = 0; r < n; ++r) X[rows[r] + (size_t)nq * rows[c]] = 0.0;
+    const int base = m->link[i].eta_index, modes = m->link[i].modes;
+    const int cols[2] = {i, F3R_Q_THETA + i};
+    for (int n = 0; n < 2 + modes; ++n) { /* the link's columns: rho_i, theta_i, then its modes */
+      double* x = X + (size_t)nq * (n < 2 ? cols[n] : base + n - 2);
+      x[i] = 0.0;
+      x[F3R_Q_THETA + i] = 0.0;
+      memset(x + base, 0, (size_t)modes * sizeof(double));
+    }
   }
   X[F3R_Q_PHI + (size_t)nq * F3R_Q_PHI] = 0.0;
 }
@@ -254,51 +220,69 @@ static void dependent_rows_of_B(const f3r_model* m, const f3r_data* d, const int
   for (size_t k = 0; k < 6 * (size_t)nz; ++k) Bd[k] = -Bd[k];
 }
 
-/* The legs' rows of out (nq x nz) from S6 (6 x nz). */
-static void set_leg_rows(const double* S6, int nq, int nz, double* out) {
-  for (int j = 0; j < nz; ++j)
-    for (int c = 0; c < F3R_Q_LEG_JOINTS; ++c) out[c + nq * j] = S6[c + 6 * j];
+/* Link i's two rows of X B, column j, for X (6 x nq) of the constraints' derivatives: B is the
+ * identity on z below its dependent rows Bd (6 x nz), and the rows of link i reach only its own
+ * legs' columns rho_i, theta_i, so (X B)(r, j) = X(r, z_j) + X(r, legs_i) Bd(legs_i, j). */
+static void link_rows_times_B(const double* X, const double* Bd, int i, int j, double out[2]) {
+  const int t = F3R_Q_THETA + i;
+  for (int e = 0; e < 2; ++e) {
+    const int r = 2 * i + e;
+    double sum = X[r + 6 * (F3R_Q_INDEPENDENT + j)];
+    sum += X[r + 6 * i] * Bd[i + 6 * j];
+    sum += X[r + 6 * t] * Bd[t + 6 * j];
+    out[e] = sum;
+  }
 }
 
-/* V_z, A_u, A_z: only their legs' rows are nonzero. */
+/* V_z, A_u, A_z: only their legs' rows are nonzero, and a modal column's only on its own link's
+ * (the others are -0.0, as -G_d^{-1} 0 gives them). Column by column, link by link:
+ *   V_z = -G_d^{-1} d(G v)/dq B,  A_u = -G_d^{-1} dgamma/dv B,
+ *   A_z = -G_d^{-1} [(d(G a)/dq + dgamma/dq) B + dgamma/dv V_z]. */
 static void dependent_rates(const f3r_data* d, const int* owner, int nq, int nz,
                             const jacobian_products* p) {
-  const double *Bd = p->Bd, *gv = p->gv, *Vz = p->Vz;
-  double* S6 = p->S6;
-  times_B_constraints(p->Gvq, Bd, owner, nz, S6);
-  minus_dependent_solve(d, owner, S6, nz, S6);
-  set_leg_rows(S6, nq, nz, p->Vz);
-  times_B_constraints(gv, Bd, owner, nz, S6);
-  minus_dependent_solve(d, owner, S6, nz, S6);
-  set_leg_rows(S6, nq, nz, p->Au);
-  times_B_constraints(p->Caq, Bd, owner, nz, S6);
-  for (int j = 0; j < nz; ++j) { /* + dgamma/dv V_z: link i's rows reach its own legs only */
+  const double *Bd = p->Bd, *gv = p->gv;
+  for (int j = 0; j < nz; ++j) {
+    double *vz = p->Vz + (size_t)nq * j, *au = p->Au + (size_t)nq * j, *az = p->Az + (size_t)nq * j;
+    for (int c = 0; c < F3R_Q_LEG_JOINTS; ++c) vz[c] = au[c] = az[c] = -0.0;
     int first, end;
     links_of_column(owner[j], &first, &end);
-    for (int r = 2 * first; r < 2 * end; ++r) {
-      const int i = r / 2;
-      S6[r + 6 * j] += gv[r + 6 * i] * Vz[i + nq * j];
-      S6[r + 6 * j] += gv[r + 6 * (F3R_Q_THETA + i)] * Vz[F3R_Q_THETA + i + nq * j];
+    for (int i = first; i < end; ++i) {
+      const f3r_link_data* k = &d->link[i];
+      const int t = F3R_Q_THETA + i;
+      double x[2], rho, theta;
+      link_rows_times_B(p->Gvq, Bd, i, j, x);
+      f3r_link_solve_dependent(k, x[0], x[1], &rho, &theta);
+      vz[i] = -rho, vz[t] = -theta;
+      link_rows_times_B(gv, Bd, i, j, x);
+      f3r_link_solve_dependent(k, x[0], x[1], &rho, &theta);
+      au[i] = -rho, au[t] = -theta;
+      link_rows_times_B(p->Caq, Bd, i, j, x);
+      for (int e = 0; e < 2; ++e) { /* + dgamma/dv V_z: link i's rows reach its own legs only */
+        x[e] += gv[2 * i + e + 6 * i] * vz[i];
+        x[e] += gv[2 * i + e + 6 * t] * vz[t];
+      }
+      f3r_link_solve_dependent(k, x[0], x[1], &rho, &theta);
+      az[i] = -rho, az[t] = -theta;
     }
   }
-  minus_dependent_solve(d, owner, S6, nz, S6);
-  set_leg_rows(S6, nq, nz, p->Az);
 }
 
 /* The reduced equations' rows in z and u: dF_u/dz = B^T (Z B + H V_z + M A_z) and
- * dF_u/du = B^T (H B + M A_u), added into J. */
+ * dF_u/du = B^T (H B + M A_u), added into J a column j of both at a time. */
 static void add_force_blocks(const f3r_model* m, const f3r_data* d, const int* owner,
                              const jacobian_products* p, double* J, int ld) {
   const int nq = m->nq, nz = m->n_independent;
-  const double *H = p->H, *Bd = p->Bd, *Vz = p->Vz;
-  double* T = p->T;
-  times_B_links(m, owner, p->Z, Bd, T);
-  for (int j = 0; j < nz; ++j) add_leg_columns(m, H, Vz + (size_t)nq * j, T + (size_t)nq * j);
-  add_mass_times_legs(m, owner, d, p->Az, T);
-  add_B_transpose_times(m, owner, Bd, T, 1.0, &F3R_AT(J, ld, nz, 0), ld);
-  times_B_links(m, owner, H, Bd, T);
-  add_mass_times_legs(m, owner, d, p->Au, T);
-  add_B_transpose_times(m, owner, Bd, T, 1.0, &F3R_AT(J, ld, nz, nz), ld);
+  double t[F3R_MAX_Q];
+  for (int j = 0; j < nz; ++j) {
+    const double* bd = p->Bd + 6 * j;
+    times_B_column(m, owner[j], p->Z, j, bd, t);
+    add_leg_columns(m, p->H, p->Vz + (size_t)nq * j, t);
+    add_mass_times_legs(m, owner[j], d, p->Az + (size_t)nq * j, t);
+    add_B_transpose_column(m, owner, p->Bd, j, t, &F3R_AT(J, ld, nz, j));
+    times_B_column(m, owner[j], p->H, j, bd, t);
+    add_mass_times_legs(m, owner[j], d, p->Au + (size_t)nq * j, t);
+    add_B_transpose_column(m, owner, p->Bd, j, t, &F3R_AT(J, ld, nz, nz + j));
+  }
 }
 
 /* cj dF/dy' for z (identity), u (B^T M B) and the lag states (tau, with their own 1), and

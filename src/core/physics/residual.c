@@ -17,7 +17,7 @@ f3r_workspace* f3r_workspace_create(const f3r_model* m) {
   ws->res_base = calloc((size_t)ny_dae, sizeof(double));
   ws->dQ = calloc(2 * (size_t)m->nq * (size_t)m->nq, sizeof(double));
   const size_t nq = (size_t)m->nq, nz = (size_t)ws->nz;
-  ws->jac_work = calloc(2 * nq * nq + 18 * nq + 4 * nq * nz + 12 * nz, sizeof(double));
+  ws->jac_work = calloc(2 * nq * nq + 18 * nq + 3 * nq * nz + 6 * nz, sizeof(double));
   if (!ws->solve_work || !ws->y_perturbed || !ws->res_base || !ws->dQ || !ws->jac_work) {
     f3r_workspace_destroy(ws);
     return NULL;

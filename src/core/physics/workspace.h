@@ -16,7 +16,7 @@ struct f3r_workspace {
   double mass_pp[9];                                /* platform, 3 x 3 */
   double mass_pe[3][3 * F3R_MAX_MODES];             /* link i's modes with the platform, 3 x r_i */
   double mass_ee[3][F3R_MAX_MODES * F3R_MAX_MODES]; /* link i's modes, r_i x r_i */
-  double* jac_work; /* the minimal Jacobian's products: 2 nq^2 + 18 nq + 4 nq nz + 12 nz */
+  double* jac_work; /* the minimal Jacobian's products: 2 nq^2 + 18 nq + 3 nq nz + 6 nz */
   double* dQ;       /* 2 nq x nq: dQ/dq and dQ/dv of the effects */
 };
 
