@@ -5,6 +5,9 @@
 #include <set>
 
 #include "stages.h"
+extern "C" {
+#include "data.h"  // f3r_data, f3r_effects_add_forces: the inputs' forces alone
+}
 #include "independent_lagrangian.h"
 #include "test_support.h"
 
@@ -243,6 +246,42 @@ TEST(Effects, ScriptedInputShapesAndTheirBreakpoints) {
 
 // A full table, uneven knots, both interpolations: every value at, between, before and after the
 // knots equals the definition, evaluated here by scanning the knots from the start.
+// Harmonic inputs with the same frequency and phase share one cosine per evaluation; each still
+// gets its own offset and amplitude, and a different phase or frequency gets its own cosine.
+TEST(Effects, HarmonicInputsSharingAWaveKeepTheirOwnValues) {
+  f3r_scene s = Flexible();
+  auto harmonic = [&](int n, double offset, double amplitude, double frequency, double phase) {
+    s.inputs[n].kind = F3R_INPUT_HARMONIC;
+    s.inputs[n].offset = offset;
+    s.inputs[n].amplitude = amplitude;
+    s.inputs[n].omega = 2 * M_PI * frequency;
+    s.inputs[n].phase = phase;
+  };
+  harmonic(F3R_FORCE_RHO + 0, -50.0, 50.0, 20.0, 0.0);
+  harmonic(F3R_FORCE_RHO + 1, 1.0, 7.0, 20.0, 0.0);         // rho_1's wave
+  harmonic(F3R_FORCE_THETA + 0, 0.0, 5.0, 20.0, 0.3);       // another phase
+  harmonic(F3R_FORCE_THETA + 1, 0.0, 5.0, 200.0, 0.0);      // another frequency
+  harmonic(F3R_FORCE_PLATFORM + 0, 0.0, 100.0, 20.0, 0.0);  // rho_1's wave again
+  harmonic(F3R_FORCE_PLATFORM + 2, 0.0, 2.0, 200.0, 0.0);   // theta_2's
+  s.inputs[F3R_FORCE_THETA + 2].kind = F3R_INPUT_STEP;
+  s.inputs[F3R_FORCE_THETA + 2].before = 1.0;
+  s.inputs[F3R_FORCE_THETA + 2].after = 2.0;
+  auto m = MakeModel(s);
+  const int expected_source[F3R_RIGID_FORCES] = {0, 0, -1, 3, 4, -1, 0, -1, 4};
+  for (int n = 0; n < F3R_RIGID_FORCES; ++n) EXPECT_EQ(m->wave_source[n], expected_source[n]) << n;
+  double q[F3R_MAX_Q] = {0}, v[F3R_MAX_Q] = {0};
+  for (double t : {0.0, 1.3e-3, 0.0123, 0.25}) {
+    f3r_data d{};
+    d.t = t;
+    d.q = q;
+    d.v = v;
+    double Q[F3R_MAX_Q] = {0};
+    f3r_effects_add_forces(m.get(), &d, Q);
+    for (int n = 0; n < F3R_RIGID_FORCES; ++n)
+      EXPECT_EQ(Q[n], 0.0 + f3r_input_value(&s.inputs[n], t)) << "input " << n << " at t " << t;
+  }
+}
+
 TEST(Effects, LongTablesGiveTheValueOfTheirInterval) {
   f3r_input table{};
   table.kind = F3R_INPUT_TABLE;

@@ -96,8 +96,17 @@ const f3r_force_effect f3r_damping_effect = {"damping", damping_add, 0, damping_
 static void inputs_add(const f3r_model* m, double t, const double* q, const double* v,
                        const f3r_data* d, double* Q) {
   (void)q, (void)v, (void)d;
-  for (int n = 0; n < F3R_RIGID_FORCES; ++n) /* an input that is off adds nothing */
-    if (m->scene.inputs[n].kind != F3R_INPUT_NONE) Q[n] += f3r_input_value(&m->scene.inputs[n], t);
+  double wave[F3R_RIGID_FORCES]; /* cos(omega t + phase), once per distinct harmonic */
+  for (int n = 0; n < F3R_RIGID_FORCES; ++n) { /* an input that is off adds nothing */
+    const f3r_input* in = &m->scene.inputs[n];
+    const int source = m->wave_source[n];
+    if (source < 0) {
+      if (in->kind != F3R_INPUT_NONE) Q[n] += f3r_input_value(in, t);
+      continue;
+    }
+    wave[n] = source == n ? cos(in->omega * t + in->phase) : wave[source];
+    Q[n] += in->offset + in->amplitude * wave[n]; /* as f3r_input_value sums it */
+  }
 }
 
 const f3r_force_effect f3r_inputs_effect = {"inputs", inputs_add, 0, 0};
@@ -143,6 +152,14 @@ void f3r_model_compile_effects(f3r_model* m) {
     for (int j = 0; j < m->link[i].modes; ++j)
       m->modal_damping[m->link[i].eta_index + j] =
           2.0 * s->links[i].damping_ratio * m->link[i].omega_clamped[j] * m->link_mass;
+  }
+  for (int n = 0; n < F3R_RIGID_FORCES; ++n) {
+    const f3r_input* in = &s->inputs[n];
+    m->wave_source[n] = in->kind == F3R_INPUT_HARMONIC ? n : -1;
+    for (int k = 0; k < n && m->wave_source[n] == n; ++k)
+      if (m->wave_source[k] == k && s->inputs[k].omega == in->omega &&
+          s->inputs[k].phase == in->phase)
+        m->wave_source[n] = k;
   }
   m->n_effects = 0;
   int any_input = 0;

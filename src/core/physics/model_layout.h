@@ -72,6 +72,9 @@ struct f3r_model {
   /* coefficients of the effects (effects.c), copied from the scene so that the loop never reads it */
   double joint_friction[6]; /* viscous, per coordinate: rho_i (N s/m), theta_i (N m s) */
   double* modal_damping;    /* nq values; for modal coordinate n >= 9: 2 zeta omega_j m (N s/m) */
+  /* per input: the first harmonic input with the same omega and phase (itself if none), whose
+   * cosine it shares in an evaluation; -1 for an input that is not harmonic */
+  int wave_source[F3R_RIGID_FORCES];
 
   /* end stops of the pistons (events.c): active only when end_stops is 1 */
   int end_stops;
