@@ -736,6 +736,29 @@ TEST(Accuracy, TheKnobTakesTheStaticCorrectionWhereItIsCheaperAndMeetsTheRequest
   EXPECT_LE(MaxDistance(got, ref), 1e-5) << c.summary;
 }
 
+// Where the pilot asks the paper's modes to be searched again and no count up to 3 a link fits,
+// the rest of that search (against 20 modes, the costly part) waits for the corrected search, and
+// is not run where the correction already costs less than any count it could give: paper
+// simulation 3 with fixed-free links at 1e-4 m (the whole search again made 11 linear models).
+TEST(Accuracy, ThePapersModesAreNotSearchedFurtherWhereTheCorrectionCostsLess) {
+  f3r_scene s = OpenScene("paper_sim3_fixed_free.yaml");
+  s.output_step = 1e-3;
+  f3r_accuracy_choice c;
+  f3r_error err{};
+  ASSERT_EQ(f3r_accuracy_choose(&s, 1e-4, 0, &c, &err), F3R_OK) << err.message;
+  for (int i = 0; i < 3; ++i) {
+    EXPECT_EQ(c.static_correction[i], 1) << c.summary;
+    EXPECT_EQ(c.modes[i], 1) << c.summary;
+  }
+  const std::string summary = c.summary;
+  EXPECT_NE(summary.find("basis: the static correction: the paper's modes with 4 or more on a "
+                         "link (cost at least"),
+            std::string::npos)
+      << summary;
+  EXPECT_LE(c.linear_evaluations, 8) << summary;
+  EXPECT_LE(c.estimated_error, 1e-4) << summary;
+}
+
 // Where the paper's modes cost less for the request (a loose one: 2 modes a link, against the
 // least correction's 1 mode + 2 shapes), the knob keeps them and says what the correction would
 // have cost.

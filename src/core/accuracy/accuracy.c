@@ -135,6 +135,22 @@ static unsigned correctable_links(const choice_run* run) {
   return links;
 }
 
+/* The paper's modes searched again within the pilot's target, if that was deferred. */
+static f3r_status resume_plain_search(choice_run* run, f3r_accuracy_choice* c, f3r_error* err) {
+  if (!(run->deferred_target > 0.0)) return F3R_OK;
+  const f3r_status st = f3r_mode_search_run(run->s, &run->ms, run->deferred_target, c->modes,
+                                            &run->linear_error, err);
+  c->model_error = c->pilot_ratio * run->linear_error;
+  run->deferred_target = 0.0;
+  return st;
+}
+
+/* Whether the search again can wait for the corrected one (compare_correction's conditions for
+ * searching that basis at all). */
+static int plain_search_may_wait(const choice_run* run) {
+  return !run->ms.at_rest && !run->impacts && !run->long_run && correctable_links(run);
+}
+
 /* Clears run->correctable when the paper's modes the search found cost no more than the least
  * corrected basis (its cost only grows with the modes): then no corrected search is needed. On
  * the shipped scenes where the paper's modes win, that spares 10 to 45 ms of choosing. */
@@ -155,6 +171,86 @@ static f3r_status cheaper_than_any_correction(choice_run* run, const f3r_scene* 
   return st;
 }
 
+/* Where the paper's modes wait for their search again (run->deferred_target): the search's
+ * first part, r = 1, 2, 3 on every chosen link each against its own reference, runs now; where
+ * one fits, the whole search runs now (the order of choosing is today's, and that part comes
+ * from the memo). Where none fits, the rest (against 20 modes, the costly part) waits for the
+ * corrected search, and *least_cost gets the least static correction's cost. */
+static f3r_status plain_search_first_part(choice_run* run, const f3r_scene* corrected,
+                                          f3r_accuracy_choice* c, double* least_cost,
+                                          f3r_error* err) {
+  *least_cost = 0.0;
+  if (!(run->deferred_target > 0.0)) return F3R_OK;
+  int fits = 0;
+  f3r_status st = F3R_OK;
+  for (int r = 1; r <= 3 && !fits && st == F3R_OK; ++r)
+    st = f3r_mode_search_fits(run->s, &run->ms, r, run->deferred_target, &fits, err);
+  if (st != F3R_OK) return st;
+  if (fits || !f3r_mode_search_found(&run->ms, c->modes)) return resume_plain_search(run, c, err);
+  int least[3];
+  f3r_mode_search_least(&run->ms, least);
+  for (int i = 0; i < 3; ++i)
+    if (run->correctable >> i & 1) least[i] = 1;
+  return f3r_basis_cost(corrected, least, least_cost, err);
+}
+
+/* The least cost the paper's modes can have once searched again: the counts found so far with the
+ * cheapest solver any model error leaves (the most budget; 1 where none fits), or the least
+ * counts with one chosen link at r_lo, whichever is more. The search again needs at least r_lo
+ * modes on some link: 4, as r <= 3 missed, and at least the uniform count found so far, since
+ * every count below it missed a looser target. That it keeps every link at least at the count
+ * found so far is the search's own assumption that the difference falls with the modes. */
+static f3r_status plain_least_cost(choice_run* run, const f3r_accuracy_choice* c, double* cost,
+                                   int* r_least, f3r_error* err) {
+  int r_lo = 4, least[3];
+  for (int i = 0; i < 3; ++i)
+    if ((run->chosen >> i & 1) && c->modes[i] > r_lo) r_lo = c->modes[i];
+  f3r_mode_search_least(&run->ms, least);
+  *r_least = r_lo;
+  double so_far = 0.0;
+  f3r_status st = f3r_basis_cost(run->s, c->modes, &so_far, err);
+  *cost = so_far * fmin(1.0, solver_cost_for(run, c, c->modes, 0.0, 0));
+  for (int i = 0; i < 3 && st == F3R_OK; ++i) {
+    if (!(run->chosen >> i & 1) || !f3r_is_flexible(run->s, i)) continue;
+    int modes[3];
+    memcpy(modes, least, sizeof modes);
+    modes[i] = r_lo > least[i] ? r_lo : least[i];
+    double basis = 0.0;
+    st = f3r_basis_cost(run->s, modes, &basis, err);
+    *cost = fmax(*cost, basis * fmin(1.0, solver_cost_for(run, c, modes, 0.0, 0)));
+  }
+  return st;
+}
+
+/* After the corrected search, where the rest of the paper's modes' search waited: it runs only
+ * where they could still cost less (plain_least_cost). Where it runs and they cost no more than
+ * the least correction, they are kept as cheaper_than_any_correction keeps them. */
+static f3r_status settle_plain_search(choice_run* run, f3r_accuracy_choice* c, double least_cost,
+                                      f3r_error* err) {
+  if (!(run->deferred_target > 0.0)) return F3R_OK;
+  run->corrected_first = 1;
+  f3r_status st = F3R_OK;
+  if (run->corrected_found) {
+    double at_least = 0.0;
+    int r_least = 0;
+    if ((st = plain_least_cost(run, c, &at_least, &r_least, err)) != F3R_OK) return st;
+    if (run->corrected_cost * run->corrected_solver_cost < at_least) {
+      run->plain_beyond = r_least;
+      run->plain_cost = at_least;
+      run->deferred_target = 0.0;
+      return F3R_OK;
+    }
+  }
+  st = resume_plain_search(run, c, err);
+  memcpy(run->plain_modes, c->modes, sizeof run->plain_modes);
+  run->plain_error = c->model_error;
+  run->plain_found = f3r_mode_search_found(&run->ms, c->modes);
+  if (st == F3R_OK) st = f3r_basis_cost(run->s, c->modes, &run->plain_cost, err);
+  if (st == F3R_OK && run->plain_found && run->plain_cost <= least_cost)
+    run->least_corrected_cost = least_cost;
+  return st;
+}
+
 /* The same search with the static shapes on the correctable links, after the pilot: its ratio
  * of the nonlinear to the linear difference scales both bases' estimates alike (it measures how
  * the motion amplifies a truncation, not the basis). The cheaper basis that fits the model's
@@ -167,18 +263,20 @@ static f3r_status compare_correction(choice_run* run, f3r_accuracy_choice* c, f3
   run->correctable = run->ms.at_rest || run->impacts ? 0u : correctable_links(run);
   run->correction_too_long = run->correctable && run->long_run;
   if (run->long_run) run->correctable = 0;
-  if (!run->correctable) return F3R_OK;
+  if (!run->correctable) return resume_plain_search(run, c, err);
   f3r_scene corrected = *run->s; /* a view of the same tables */
   for (int i = 0; i < 3; ++i)
     if (run->correctable >> i & 1) corrected.links[i].static_correction = 1;
   f3r_mode_search ms;
-  double estimate = 0.0;
+  double estimate = 0.0, least_cost = 0.0;
   const double ratio = c->pilot_ratio > 1.0 ? c->pilot_ratio : 1.0;
+  f3r_status st = plain_search_first_part(run, &corrected, c, &least_cost, err);
+  if (st != F3R_OK) return st;
   memcpy(run->plain_modes, c->modes, sizeof run->plain_modes);
   run->plain_error = c->model_error;
   run->plain_found = f3r_mode_search_found(&run->ms, c->modes);
-  f3r_status st = F3R_OK;
-  if (run->plain_found && (st = cheaper_than_any_correction(run, &corrected, c, err)) != F3R_OK)
+  if (!(run->deferred_target > 0.0) && run->plain_found &&
+      (st = cheaper_than_any_correction(run, &corrected, c, err)) != F3R_OK)
     return st;
   if (run->least_corrected_cost > 0.0 || !run->correctable) return F3R_OK;
   st = f3r_mode_search_init(&corrected, run->chosen, &ms, err);
@@ -189,12 +287,15 @@ static f3r_status compare_correction(choice_run* run, f3r_accuracy_choice* c, f3
   run->corrected_found = st == F3R_OK && f3r_mode_search_found(&ms, run->corrected_modes);
   if (st == F3R_OK && run->corrected_found)
     st = f3r_basis_cost(&corrected, run->corrected_modes, &run->corrected_cost, err);
-  run->plain_solver_cost = solver_cost_for(run, c, run->plain_modes, run->plain_error, 0);
   run->corrected_solver_cost =
       solver_cost_for(run, c, run->corrected_modes, run->corrected_error, 1);
-  const int take = st == F3R_OK && run->corrected_found &&
-                   (!run->plain_found || run->corrected_cost * run->corrected_solver_cost <
-                                             run->plain_cost * run->plain_solver_cost);
+  if (st == F3R_OK) st = settle_plain_search(run, c, least_cost, err);
+  run->plain_solver_cost =
+      run->plain_beyond ? 1.0 : solver_cost_for(run, c, run->plain_modes, run->plain_error, 0);
+  const int take =
+      st == F3R_OK && run->corrected_found && !(run->least_corrected_cost > 0.0) &&
+      (!run->plain_found || run->plain_beyond ||
+       run->corrected_cost * run->corrected_solver_cost < run->plain_cost * run->plain_solver_cost);
   run->ms.evaluations += ms.evaluations;
   if (!take) {
     f3r_mode_search_free(&ms);
@@ -261,9 +362,8 @@ static f3r_status run_mode_pilot(choice_run* run, f3r_accuracy_choice* c, f3r_er
     c->pilot_ratio = ratio;
     c->model_error = ratio * run->linear_error;
     if (c->model_error > run->model_target) {
-      st = f3r_mode_search_run(run->s, &run->ms, run->model_target / ratio, c->modes,
-                               &run->linear_error, err);
-      c->model_error = ratio * run->linear_error;
+      run->deferred_target = run->model_target / ratio;
+      if (!plain_search_may_wait(run)) st = resume_plain_search(run, c, err);
     }
   }
   if (st == F3R_OK && run->kinematics) {

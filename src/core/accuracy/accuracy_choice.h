@@ -54,14 +54,21 @@ typedef struct {
   double plain_error, corrected_error, plain_cost, corrected_cost;
   double plain_solver_cost, corrected_solver_cost; /* the solver each basis leaves room for */
   double least_corrected_cost; /* > 0: the search was spared, the paper's modes cost no more */
-  int correction_too_long;     /* correctable links, but the run is longer than the benchmark's */
-  int impacts;                 /* end stops on a path that moves: the most faithful model */
-  int long_run;                /* longer than the benchmark's scenes */
-  int unmeasured_basis;        /* the static correction: the relations were measured on the paper's
+  /* > 0: the pilot asked the paper's modes to be searched again within this target; beyond
+   * r = 3 that waits for the corrected search (settle_plain_search). plain_beyond > 0: it was not
+   * needed, as the paper's modes would need that many on some link and cost at least plain_cost
+   * (with their solver) */
+  double deferred_target;
+  int plain_beyond;
+  int corrected_first;     /* the corrected search ran while the paper's modes waited */
+  int correction_too_long; /* correctable links, but the run is longer than the benchmark's */
+  int impacts;             /* end stops on a path that moves: the most faithful model */
+  int long_run;            /* longer than the benchmark's scenes */
+  int unmeasured_basis;    /* the static correction: the relations were measured on the paper's
                            * modes, so the solver keeps SOLVER_CHECK_SHARE of its budget */
-  double linear_error;         /* m: the search's last linear estimate */
-  int pair, pair_skipped;      /* the pilot's pair ran, or was skipped as needless */
-  int kinematics;              /* a pilot measures exact kinematics' effect */
+  double linear_error;     /* m: the search's last linear estimate */
+  int pair, pair_skipped;  /* the pilot's pair ran, or was skipped as needless */
+  int kinematics;          /* a pilot measures exact kinematics' effect */
   int kinematics_linear_only;
   f3r_pilot pilot;
   int pilot_started;

@@ -80,6 +80,10 @@ f3r_status f3r_mode_search_path(const f3r_scene* s, f3r_mode_search* ms, const i
 f3r_status f3r_mode_search_run(const f3r_scene* s, f3r_mode_search* ms, double target, int modes[3],
                                double* estimate, f3r_error* err);
 void f3r_mode_search_free(f3r_mode_search* ms);
+/* Whether r modes on every chosen link (r <= 3) stay within target of their own reference, as
+ * f3r_mode_search_run tests r = 1, 2, 3: *fits 1 or 0. */
+f3r_status f3r_mode_search_fits(const f3r_scene* s, f3r_mode_search* ms, int r, double target,
+                                int* fits, f3r_error* err);
 /* The least mode counts the search may give: one mode, or the initial state's highest, on each
  * chosen link; the other links keep theirs. */
 void f3r_mode_search_least(const f3r_mode_search* ms, int modes[3]);

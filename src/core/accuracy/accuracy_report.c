@@ -75,18 +75,23 @@ static void summarise_basis(const choice_run* run, f3r_accuracy_choice* c) {
   if (run->least_corrected_cost > 0.0) {
     char plain[32];
     counts(run->plain_modes, plain, sizeof plain);
-    f3r_accuracy_append(c->summary, sizeof c->summary,
-                        "basis: the paper's modes %s (cost %.3g) cost no more than the least "
-                        "static correction, 1 mode + static shapes (cost %.3g): not searched; cost "
-                        "is sqrt(highest linearised frequency) x coordinates\n",
-                        plain, run->plain_cost, run->least_corrected_cost);
+    f3r_accuracy_append(
+        c->summary, sizeof c->summary,
+        "basis: the paper's modes %s (cost %.3g) cost no more than the least "
+        "static correction, 1 mode + static shapes (cost %.3g): %s; cost "
+        "is sqrt(highest linearised frequency) x coordinates\n",
+        plain, run->plain_cost, run->least_corrected_cost,
+        run->corrected_first ? "its search, run first, is dropped" : "not searched");
     return;
   }
   char plain[32], corrected[32], p_est[64] = "no count within the share",
                                  c_est[64] = "no count within the share";
   counts(run->plain_modes, plain, sizeof plain);
   counts(run->corrected_modes, corrected, sizeof corrected);
-  if (run->plain_found)
+  if (run->plain_beyond) { /* their search again was not needed */
+    snprintf(plain, sizeof plain, "with %d or more on a link", run->plain_beyond);
+    snprintf(p_est, sizeof p_est, "cost at least %.3g with their solver", run->plain_cost);
+  } else if (run->plain_found)
     snprintf(p_est, sizeof p_est, "%.3g m, cost %.3g x %.2g", run->plain_error, run->plain_cost,
              run->plain_solver_cost);
   if (run->corrected_found)

@@ -411,6 +411,17 @@ f3r_status f3r_mode_search_run(const f3r_scene* s, f3r_mode_search* ms, double t
   return F3R_OK;
 }
 
+f3r_status f3r_mode_search_fits(const f3r_scene* s, f3r_mode_search* ms, int r, double target,
+                                int* fits, f3r_error* err) {
+  *fits = 0;
+  int trial[3];
+  uniform(ms, r, trial);
+  f3r_status st = reference_for(s, ms, r, err);
+  if (st == F3R_OK) st = f3r_mode_search_path(s, ms, trial, ms->order, ms->path, err);
+  if (st == F3R_OK) *fits = f3r_max_distance(ms->path, ms->ref, ms->count) <= target;
+  return st;
+}
+
 f3r_status f3r_accuracy_modes(const f3r_scene* scene, unsigned chosen, double target, int modes[3],
                               double* estimate, double* extent, int* evaluations, f3r_error* err) {
   f3r_mode_search ms;
