@@ -35,7 +35,7 @@ int f3r_lu_factor(double* A, int n, int* piv) {
   return 0;
 }
 
-void f3r_lu_solve_lower(const double* A, int n, const int* piv, double* b) {
+void f3r_lu_solve(const double* A, int n, const int* piv, double* b) {
   /* The factorisation swapped whole rows, so all swaps apply to b before substitution. */
   for (int k = 0; k < n; ++k) {
     const int p = piv[k];
@@ -47,10 +47,6 @@ void f3r_lu_solve_lower(const double* A, int n, const int* piv, double* b) {
   }
   for (int k = 0; k < n; ++k)
     for (int i = k + 1; i < n; ++i) b[i] -= F3R_AT(A, n, i, k) * b[k];
-}
-
-void f3r_lu_solve(const double* A, int n, const int* piv, double* b) {
-  f3r_lu_solve_lower(A, n, piv, b);
   for (int k = n - 1; k >= 0; --k) {
     b[k] /= F3R_AT(A, n, k, k);
     for (int i = 0; i < k; ++i) b[i] -= F3R_AT(A, n, i, k) * b[k];

@@ -11,8 +11,6 @@
 int f3r_lu_factor(double* A, int n, int* piv);
 /* Solves with the factors of f3r_lu_factor; b is overwritten with the solution. */
 void f3r_lu_solve(const double* A, int n, const int* piv, double* b);
-/* Its first half: b = L^{-1} P b (a caller with its own back substitution). */
-void f3r_lu_solve_lower(const double* A, int n, const int* piv, double* b);
 /* Cholesky factorisation A = L L^T of the symmetric positive definite n x n matrix A (lower
  * triangle used, L written over it). Returns 0, or 1 if A is not numerically positive definite. */
 int f3r_cholesky_factor(double* A, int n);

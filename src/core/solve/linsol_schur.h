@@ -6,10 +6,10 @@
  * The solve eliminates x_k = (b_k - J_kr x_r) / cj and factors only the Schur complement
  *   S = J_rr - J_rk J_kr / cj
  * (minimal r = 3: 13 x 13 instead of 25; dae: 31 instead of 49) with partial pivoting. J_kr is
- * sparse (-I on the rates, G^T on mu): only its nonzero entries are used, and only J_rk's and
- * U's (their patterns recorded at setup). For dae the solver drops d(G^T mu)/dq from J_kk: mu
- * vanishes along exact solutions (it is roundoff-sized), so Newton converges to the same
- * residual-zero state with an iteration matrix that differs from the exact one by O(|mu|).
+ * sparse (-I on the rates, G^T on mu): only its nonzero entries are used (their pattern recorded
+ * at setup). For dae the solver drops d(G^T mu)/dq from J_kk: mu vanishes along exact solutions
+ * (it is roundoff-sized), so Newton converges to the same residual-zero state with an iteration
+ * matrix that differs from the exact one by O(|mu|).
  * For minimal the elimination is exact. The kinematic rows must come from the analytic
  * Jacobian: with difference quotients use the dense solver.
  *
