@@ -759,6 +759,23 @@ TEST(Accuracy, ThePapersModesAreNotSearchedFurtherWhereTheCorrectionCostsLess) {
   EXPECT_LE(c.estimated_error, 1e-4) << summary;
 }
 
+// Near the pose (no pilot) the first search itself waits beyond r = 3 for the corrected one:
+// resonance.yaml at 1e-4 m, where the whole search took 19 linear models for 7/8/8 modes the
+// correction then beat.
+TEST(Accuracy, TheFirstSearchWaitsForTheCorrectionNearThePose) {
+  f3r_scene s = OpenScene("resonance.yaml");
+  s.output_step = 1e-3;
+  f3r_accuracy_choice c;
+  f3r_error err{};
+  ASSERT_EQ(f3r_accuracy_choose(&s, 1e-4, 0, &c, &err), F3R_OK) << err.message;
+  for (int i = 0; i < 3; ++i) EXPECT_EQ(c.static_correction[i], 1) << c.summary;
+  const std::string summary = c.summary;
+  EXPECT_NE(summary.find("the paper's modes with 4 or more on a link"), std::string::npos)
+      << summary;
+  EXPECT_LE(c.linear_evaluations, 10) << summary;
+  EXPECT_LE(c.estimated_error, 1e-4) << summary;
+}
+
 // Where the paper's modes cost less for the request (a loose one: 2 modes a link, against the
 // least correction's 1 mode + 2 shapes), the knob keeps them and says what the correction would
 // have cost.

@@ -209,7 +209,7 @@ static f3r_status plain_least_cost(choice_run* run, const f3r_accuracy_choice* c
   *r_least = r_lo;
   double so_far = 0.0;
   f3r_status st = f3r_basis_cost(run->s, c->modes, &so_far, err);
-  *cost = so_far * fmin(1.0, solver_cost_for(run, c, c->modes, 0.0, 0));
+  double one_link = 0.0; /* the cheapest way to have r_lo on some chosen link */
   for (int i = 0; i < 3 && st == F3R_OK; ++i) {
     if (!(run->chosen >> i & 1) || !f3r_is_flexible(run->s, i)) continue;
     int modes[3];
@@ -217,8 +217,10 @@ static f3r_status plain_least_cost(choice_run* run, const f3r_accuracy_choice* c
     modes[i] = r_lo > least[i] ? r_lo : least[i];
     double basis = 0.0;
     st = f3r_basis_cost(run->s, modes, &basis, err);
-    *cost = fmax(*cost, basis * fmin(1.0, solver_cost_for(run, c, modes, 0.0, 0)));
+    const double total = basis * fmin(1.0, solver_cost_for(run, c, modes, 0.0, 0));
+    if (one_link == 0.0 || total < one_link) one_link = total;
   }
+  *cost = fmax(so_far * fmin(1.0, solver_cost_for(run, c, c->modes, 0.0, 0)), one_link);
   return st;
 }
 
@@ -331,6 +333,11 @@ static f3r_status search_modes(choice_run* run, f3r_accuracy_choice* c, f3r_erro
      * need not converge in the mode count at all (end_stop_impact: 12 and 20 modes part by 5 cm
      * within 0.3 s): the knob takes the most faithful model, with no estimate of its error. */
     for (int i = 0; i < 3; ++i) c->modes[i] = (ms->chosen >> i & 1) ? ms->most[i] : ms->fixed[i];
+  } else if (st == F3R_OK && !ms->far && plain_search_may_wait(run)) {
+    /* Near the pose no pilot needs the counts first: beyond its first part the search waits for
+     * the corrected one (compare_correction), the least counts standing in until then. */
+    run->deferred_target = run->model_target;
+    f3r_mode_search_least(ms, c->modes);
   } else if (st == F3R_OK) {
     st =
         f3r_mode_search_run(run->s, &run->ms, run->model_target, c->modes, &run->linear_error, err);
