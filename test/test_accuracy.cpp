@@ -736,44 +736,34 @@ TEST(Accuracy, TheKnobTakesTheStaticCorrectionWhereItIsCheaperAndMeetsTheRequest
   EXPECT_LE(MaxDistance(got, ref), 1e-5) << c.summary;
 }
 
-// Where the pilot asks the paper's modes to be searched again and no count up to 3 a link fits,
-// the rest of that search (against 20 modes, the costly part) waits for the corrected search, and
-// is not run where the correction already costs less than any count it could give: paper
-// simulation 3 with fixed-free links at 1e-4 m (the whole search again made 11 linear models).
+// Beyond r = 3 (a bisection against 20 modes, the costly part) the paper's modes' search waits
+// for the corrected one, and is not run where the correction already costs less than any count it
+// could give: after the pilot (paper simulation 3 with fixed-free links at 1e-4 m, where the whole
+// search again made 11 linear models) and, near the pose where no pilot runs, the first search
+// itself (resonance.yaml at 1e-4 m: 19 linear models for 7/8/8 modes the correction then beat).
 TEST(Accuracy, ThePapersModesAreNotSearchedFurtherWhereTheCorrectionCostsLess) {
-  f3r_scene s = OpenScene("paper_sim3_fixed_free.yaml");
-  s.output_step = 1e-3;
-  f3r_accuracy_choice c;
-  f3r_error err{};
-  ASSERT_EQ(f3r_accuracy_choose(&s, 1e-4, 0, &c, &err), F3R_OK) << err.message;
-  for (int i = 0; i < 3; ++i) {
-    EXPECT_EQ(c.static_correction[i], 1) << c.summary;
-    EXPECT_EQ(c.modes[i], 1) << c.summary;
+  struct Case {
+    const char* scene;
+    int most_models;
+  };
+  for (const Case& k : {Case{"paper_sim3_fixed_free.yaml", 8}, Case{"resonance.yaml", 10}}) {
+    f3r_scene s = OpenScene(k.scene);
+    s.output_step = 1e-3;
+    f3r_accuracy_choice c;
+    f3r_error err{};
+    ASSERT_EQ(f3r_accuracy_choose(&s, 1e-4, 0, &c, &err), F3R_OK) << k.scene << err.message;
+    for (int i = 0; i < 3; ++i) {
+      EXPECT_EQ(c.static_correction[i], 1) << k.scene << c.summary;
+      EXPECT_EQ(c.modes[i], 1) << k.scene << c.summary;
+    }
+    const std::string summary = c.summary;
+    EXPECT_NE(summary.find("basis: the static correction: the paper's modes with 4 or more on a "
+                           "link (cost at least"),
+              std::string::npos)
+        << k.scene << summary;
+    EXPECT_LE(c.linear_evaluations, k.most_models) << k.scene << summary;
+    EXPECT_LE(c.estimated_error, 1e-4) << k.scene << summary;
   }
-  const std::string summary = c.summary;
-  EXPECT_NE(summary.find("basis: the static correction: the paper's modes with 4 or more on a "
-                         "link (cost at least"),
-            std::string::npos)
-      << summary;
-  EXPECT_LE(c.linear_evaluations, 8) << summary;
-  EXPECT_LE(c.estimated_error, 1e-4) << summary;
-}
-
-// Near the pose (no pilot) the first search itself waits beyond r = 3 for the corrected one:
-// resonance.yaml at 1e-4 m, where the whole search took 19 linear models for 7/8/8 modes the
-// correction then beat.
-TEST(Accuracy, TheFirstSearchWaitsForTheCorrectionNearThePose) {
-  f3r_scene s = OpenScene("resonance.yaml");
-  s.output_step = 1e-3;
-  f3r_accuracy_choice c;
-  f3r_error err{};
-  ASSERT_EQ(f3r_accuracy_choose(&s, 1e-4, 0, &c, &err), F3R_OK) << err.message;
-  for (int i = 0; i < 3; ++i) EXPECT_EQ(c.static_correction[i], 1) << c.summary;
-  const std::string summary = c.summary;
-  EXPECT_NE(summary.find("the paper's modes with 4 or more on a link"), std::string::npos)
-      << summary;
-  EXPECT_LE(c.linear_evaluations, 10) << summary;
-  EXPECT_LE(c.estimated_error, 1e-4) << summary;
 }
 
 // Where the paper's modes cost less for the request (a loose one: 2 modes a link, against the

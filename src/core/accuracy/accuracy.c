@@ -1,5 +1,6 @@
 /* The accuracy knob (include/flex3rpr/accuracy.h): chooses mode counts (accuracy_search.c),
- * checks them and the solver with a pilot (accuracy_pilot.c), and picks the measured solver
+ * compares the paper's modes with the static correction (accuracy_basis.c), checks them and the
+ * solver with a pilot (accuracy_pilot.c), and picks the measured solver
  * relation; exact kinematics is on unless the scene turns it off, and then its effect is counted.
  * Runs once before a simulation, so it allocates freely; nothing here touches the step loop. */
 #include <math.h>
@@ -60,7 +61,7 @@ static double solver_budget(const choice_run* run, const f3r_accuracy_choice* c,
   return fmax(left, F3R_ACCURACY_SOLVER_SHARE * run->request);
 }
 
-static double solver_cost_for(const choice_run* run, const f3r_accuracy_choice* c,
+double f3r_choice_solver_cost(const choice_run* run, const f3r_accuracy_choice* c,
                               const int modes[3], double model_error, int corrected) {
   if (!run->solver_open) return 1.0;
   double budget = solver_budget(run, c, model_error);
@@ -122,201 +123,6 @@ static void open_choice(const f3r_scene* scene, double request, int commanded, f
   run->solver_open = (scene->explicit_settings & solver_fixed) != solver_fixed;
 }
 
-/* The links whose basis the knob may correct: chosen, fixed-free and left open by the scene. A
- * fixed-pinned link's own shapes pay only below about 4e-8 m, where the knob's requests do not
- * reach (docs/benchmarks/basis_convergence.md). */
-static unsigned correctable_links(const choice_run* run) {
-  unsigned links = 0;
-  for (int i = 0; i < 3; ++i)
-    if ((run->chosen >> i & 1) && run->scene->links[i].model == F3R_LINK_FIXED_FREE &&
-        !run->scene->links[i].static_correction &&
-        !(run->scene->explicit_settings & (F3R_EXPLICIT_STATIC_CORRECTION << i)))
-      links |= 1u << i;
-  return links;
-}
-
-/* The paper's modes searched again within the pilot's target, if that was deferred. */
-static f3r_status resume_plain_search(choice_run* run, f3r_accuracy_choice* c, f3r_error* err) {
-  if (!(run->deferred_target > 0.0)) return F3R_OK;
-  const f3r_status st = f3r_mode_search_run(run->s, &run->ms, run->deferred_target, c->modes,
-                                            &run->linear_error, err);
-  c->model_error = c->pilot_ratio * run->linear_error;
-  run->deferred_target = 0.0;
-  return st;
-}
-
-/* Whether the search again can wait for the corrected one (compare_correction's conditions for
- * searching that basis at all). */
-static int plain_search_may_wait(const choice_run* run) {
-  return !run->ms.at_rest && !run->impacts && !run->long_run && correctable_links(run);
-}
-
-/* Clears run->correctable when the paper's modes the search found cost no more than the least
- * corrected basis (its cost only grows with the modes): then no corrected search is needed. On
- * the shipped scenes where the paper's modes win, that spares 10 to 45 ms of choosing. */
-static f3r_status cheaper_than_any_correction(choice_run* run, const f3r_scene* corrected,
-                                              const f3r_accuracy_choice* c, f3r_error* err) {
-  int least[3];
-  f3r_mode_search_least(&run->ms, least);
-  if (!memcmp(least, c->modes, sizeof least)) { /* the paper's least modes: nothing is fewer */
-    run->correctable = 0;
-    return F3R_OK;
-  }
-  for (int i = 0; i < 3; ++i)
-    if (run->correctable >> i & 1) least[i] = 1;
-  double least_cost = 0.0;
-  f3r_status st = f3r_basis_cost(run->s, c->modes, &run->plain_cost, err);
-  if (st == F3R_OK) st = f3r_basis_cost(corrected, least, &least_cost, err);
-  if (st == F3R_OK && run->plain_cost <= least_cost) run->least_corrected_cost = least_cost;
-  return st;
-}
-
-/* Where the paper's modes wait for their search again (run->deferred_target): the search's
- * first part, r = 1, 2, 3 on every chosen link each against its own reference, runs now; where
- * one fits, the whole search runs now (the order of choosing is today's, and that part comes
- * from the memo). Where none fits, the rest (against 20 modes, the costly part) waits for the
- * corrected search, and *least_cost gets the least static correction's cost. */
-static f3r_status plain_search_first_part(choice_run* run, const f3r_scene* corrected,
-                                          f3r_accuracy_choice* c, double* least_cost,
-                                          f3r_error* err) {
-  *least_cost = 0.0;
-  if (!(run->deferred_target > 0.0)) return F3R_OK;
-  int fits = 0;
-  f3r_status st = F3R_OK;
-  for (int r = 1; r <= 3 && !fits && st == F3R_OK; ++r)
-    st = f3r_mode_search_fits(run->s, &run->ms, r, run->deferred_target, &fits, err);
-  if (st != F3R_OK) return st;
-  if (fits || !f3r_mode_search_found(&run->ms, c->modes)) return resume_plain_search(run, c, err);
-  int least[3];
-  f3r_mode_search_least(&run->ms, least);
-  for (int i = 0; i < 3; ++i)
-    if (run->correctable >> i & 1) least[i] = 1;
-  return f3r_basis_cost(corrected, least, least_cost, err);
-}
-
-/* The least cost the paper's modes can have once searched again: the counts found so far with the
- * cheapest solver any model error leaves (the most budget; 1 where none fits), or the least
- * counts with one chosen link at r_lo, whichever is more. The search again needs at least r_lo
- * modes on some link: 4, as r <= 3 missed, and at least the uniform count found so far, since
- * every count below it missed a looser target. That it keeps every link at least at the count
- * found so far is the search's own assumption that the difference falls with the modes. */
-static f3r_status plain_least_cost(choice_run* run, const f3r_accuracy_choice* c, double* cost,
-                                   int* r_least, f3r_error* err) {
-  int r_lo = 4, least[3];
-  for (int i = 0; i < 3; ++i)
-    if ((run->chosen >> i & 1) && c->modes[i] > r_lo) r_lo = c->modes[i];
-  f3r_mode_search_least(&run->ms, least);
-  *r_least = r_lo;
-  double so_far = 0.0;
-  f3r_status st = f3r_basis_cost(run->s, c->modes, &so_far, err);
-  double one_link = 0.0; /* the cheapest way to have r_lo on some chosen link */
-  for (int i = 0; i < 3 && st == F3R_OK; ++i) {
-    if (!(run->chosen >> i & 1) || !f3r_is_flexible(run->s, i)) continue;
-    int modes[3];
-    memcpy(modes, least, sizeof modes);
-    modes[i] = r_lo > least[i] ? r_lo : least[i];
-    double basis = 0.0;
-    st = f3r_basis_cost(run->s, modes, &basis, err);
-    const double total = basis * fmin(1.0, solver_cost_for(run, c, modes, 0.0, 0));
-    if (one_link == 0.0 || total < one_link) one_link = total;
-  }
-  *cost = fmax(so_far * fmin(1.0, solver_cost_for(run, c, c->modes, 0.0, 0)), one_link);
-  return st;
-}
-
-/* After the corrected search, where the rest of the paper's modes' search waited: it runs only
- * where they could still cost less (plain_least_cost). Where it runs and they cost no more than
- * the least correction, they are kept as cheaper_than_any_correction keeps them. */
-static f3r_status settle_plain_search(choice_run* run, f3r_accuracy_choice* c, double least_cost,
-                                      f3r_error* err) {
-  if (!(run->deferred_target > 0.0)) return F3R_OK;
-  run->corrected_first = 1;
-  f3r_status st = F3R_OK;
-  if (run->corrected_found) {
-    double at_least = 0.0;
-    int r_least = 0;
-    if ((st = plain_least_cost(run, c, &at_least, &r_least, err)) != F3R_OK) return st;
-    if (run->corrected_cost * run->corrected_solver_cost < at_least) {
-      run->plain_beyond = r_least;
-      run->plain_cost = at_least;
-      run->deferred_target = 0.0;
-      return F3R_OK;
-    }
-  }
-  st = resume_plain_search(run, c, err);
-  memcpy(run->plain_modes, c->modes, sizeof run->plain_modes);
-  run->plain_error = c->model_error;
-  run->plain_found = f3r_mode_search_found(&run->ms, c->modes);
-  if (st == F3R_OK) st = f3r_basis_cost(run->s, c->modes, &run->plain_cost, err);
-  if (st == F3R_OK && run->plain_found && run->plain_cost <= least_cost)
-    run->least_corrected_cost = least_cost;
-  return st;
-}
-
-/* The same search with the static shapes on the correctable links, after the pilot: its ratio
- * of the nonlinear to the linear difference scales both bases' estimates alike (it measures how
- * the motion amplifies a truncation, not the basis). The cheaper basis that fits the model's
- * share stays in run->ms and run->s (the paper's modes where neither is cheaper). */
-static f3r_status compare_correction(choice_run* run, f3r_accuracy_choice* c, f3r_error* err) {
-  /* Not on a run longer than the benchmark's scenes: there neither the pilot's ratio (measured
-   * on the paper's modes) nor the solver relations held for it. free_vibration_long over 2 s,
-   * for 1e-5 m: 2 modes + 3 shapes (the set then) were 8.3e-6 m from the converged path where
-   * the estimate said 2.8e-6, and ERK at rtol 1e-3 added 2.2e-5 m (3.0e-5 in all). */
-  run->correctable = run->ms.at_rest || run->impacts ? 0u : correctable_links(run);
-  run->correction_too_long = run->correctable && run->long_run;
-  if (run->long_run) run->correctable = 0;
-  if (!run->correctable) return resume_plain_search(run, c, err);
-  f3r_scene corrected = *run->s; /* a view of the same tables */
-  for (int i = 0; i < 3; ++i)
-    if (run->correctable >> i & 1) corrected.links[i].static_correction = 1;
-  f3r_mode_search ms;
-  double estimate = 0.0, least_cost = 0.0;
-  const double ratio = c->pilot_ratio > 1.0 ? c->pilot_ratio : 1.0;
-  f3r_status st = plain_search_first_part(run, &corrected, c, &least_cost, err);
-  if (st != F3R_OK) return st;
-  memcpy(run->plain_modes, c->modes, sizeof run->plain_modes);
-  run->plain_error = c->model_error;
-  run->plain_found = f3r_mode_search_found(&run->ms, c->modes);
-  if (!(run->deferred_target > 0.0) && run->plain_found &&
-      (st = cheaper_than_any_correction(run, &corrected, c, err)) != F3R_OK)
-    return st;
-  if (run->least_corrected_cost > 0.0 || !run->correctable) return F3R_OK;
-  st = f3r_mode_search_init(&corrected, run->chosen, &ms, err);
-  if (st == F3R_OK)
-    st = f3r_mode_search_run(&corrected, &ms, run->model_target / ratio, run->corrected_modes,
-                             &estimate, err);
-  run->corrected_error = ratio * estimate;
-  run->corrected_found = st == F3R_OK && f3r_mode_search_found(&ms, run->corrected_modes);
-  if (st == F3R_OK && run->corrected_found)
-    st = f3r_basis_cost(&corrected, run->corrected_modes, &run->corrected_cost, err);
-  run->corrected_solver_cost =
-      solver_cost_for(run, c, run->corrected_modes, run->corrected_error, 1);
-  if (st == F3R_OK) st = settle_plain_search(run, c, least_cost, err);
-  run->plain_solver_cost =
-      run->plain_beyond ? 1.0 : solver_cost_for(run, c, run->plain_modes, run->plain_error, 0);
-  const int take =
-      st == F3R_OK && run->corrected_found && !(run->least_corrected_cost > 0.0) &&
-      (!run->plain_found || run->plain_beyond ||
-       run->corrected_cost * run->corrected_solver_cost < run->plain_cost * run->plain_solver_cost);
-  run->ms.evaluations += ms.evaluations;
-  if (!take) {
-    f3r_mode_search_free(&ms);
-    return st;
-  }
-  ms.evaluations = run->ms.evaluations;
-  f3r_mode_search_free(&run->ms);
-  run->ms = ms; /* the search's paths move with it */
-  *run->s = corrected;
-  memcpy(c->modes, run->corrected_modes, sizeof c->modes);
-  run->linear_error = estimate;
-  c->model_error = run->corrected_error;
-  /* the pilot's runs and reference are of the paper's basis: a solver check starts its own */
-  f3r_pilot_free(&run->pilot);
-  run->pilot_started = 0;
-  run->unmeasured_basis = 1;
-  return F3R_OK;
-}
-
 /* The mode counts: the fewest whose linearised path stays within the model's share, or the most
  * faithful model where there are impacts. */
 static f3r_status search_modes(choice_run* run, f3r_accuracy_choice* c, f3r_error* err) {
@@ -333,7 +139,7 @@ static f3r_status search_modes(choice_run* run, f3r_accuracy_choice* c, f3r_erro
      * need not converge in the mode count at all (end_stop_impact: 12 and 20 modes part by 5 cm
      * within 0.3 s): the knob takes the most faithful model, with no estimate of its error. */
     for (int i = 0; i < 3; ++i) c->modes[i] = (ms->chosen >> i & 1) ? ms->most[i] : ms->fixed[i];
-  } else if (st == F3R_OK && !ms->far && plain_search_may_wait(run)) {
+  } else if (st == F3R_OK && !ms->far && f3r_choice_plain_search_may_wait(run)) {
     /* Near the pose no pilot needs the counts first: beyond its first part the search waits for
      * the corrected one (compare_correction), the least counts standing in until then. */
     run->deferred_target = run->model_target;
@@ -370,7 +176,7 @@ static f3r_status run_mode_pilot(choice_run* run, f3r_accuracy_choice* c, f3r_er
     c->model_error = ratio * run->linear_error;
     if (c->model_error > run->model_target) {
       run->deferred_target = run->model_target / ratio;
-      if (!plain_search_may_wait(run)) st = resume_plain_search(run, c, err);
+      if (!f3r_choice_plain_search_may_wait(run)) st = f3r_choice_resume_plain_search(run, c, err);
     }
   }
   if (st == F3R_OK && run->kinematics) {
@@ -536,7 +342,7 @@ f3r_status f3r_accuracy_choose(const f3r_scene* scene, double request, int comma
   open_choice(scene, request, commanded, &s, &run);
   f3r_status st = search_modes(&run, c, err);
   if (st == F3R_OK) st = check_modes(&run, c, err);
-  if (st == F3R_OK) st = compare_correction(&run, c, err);
+  if (st == F3R_OK) st = f3r_choice_compare_bases(&run, c, err);
   for (int i = 0; i < 3; ++i)
     c->static_correction[i] = f3r_is_flexible(&s, i) && s.links[i].static_correction;
   c->linear_evaluations = run.ms.evaluations;

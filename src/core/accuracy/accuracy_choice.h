@@ -84,6 +84,18 @@ typedef struct {
       skipped_check; /* the cheapest one, whose check cost more than it saves */
 } solver_pick;
 
+/* The relative cost of the solver a basis leaves room for (accuracy.c): the cheapest measured
+ * relation within the request less the model error and the kinematics', a tenth of that on the
+ * static correction; 1 where the scene sets its solver or none fits. */
+double f3r_choice_solver_cost(const choice_run* run, const f3r_accuracy_choice* c,
+                              const int modes[3], double model_error, int corrected);
+/* The basis (accuracy_basis.c): the same search with the static shapes on the correctable links,
+ * the cheaper basis kept in run->ms and run->s; the paper's modes' search within
+ * run->deferred_target, if it waited; whether it may wait for the corrected one. */
+f3r_status f3r_choice_compare_bases(choice_run* run, f3r_accuracy_choice* c, f3r_error* err);
+f3r_status f3r_choice_resume_plain_search(choice_run* run, f3r_accuracy_choice* c, f3r_error* err);
+int f3r_choice_plain_search_may_wait(const choice_run* run);
+
 /* Appends printf-style text to text (size bytes in all), never past its end. */
 void f3r_accuracy_append(char* text, size_t size, const char* fmt, ...)
     __attribute__((format(printf, 3, 4)));
