@@ -15,6 +15,14 @@
 #include "model_layout.h"
 #include "stages.h"
 
+/* A small kernel called once per link or column in a hot loop, inlined whatever the compiler's
+ * estimate: as calls, their arguments and results went through memory. */
+#if defined(__GNUC__)
+#define F3R_INLINE static inline __attribute__((always_inline))
+#else
+#define F3R_INLINE static inline
+#endif
+
 /* Legs whose beam root comes closer than this fraction of l to A_i are degenerate: there the
  * constraint Jacobian loses rank (det of the leg's 2x2 block is rho + l), and the loop closure
  * refuses them. A run stops long before, at the collapse guard (events.h,

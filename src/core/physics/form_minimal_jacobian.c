@@ -12,125 +12,89 @@ static void links_of_column(int owner, int* first, int* end) {
   *end = owner < 0 ? 3 : owner + 1;
 }
 
-/* t += M x for a column x (nq) that is nonzero on the legs only (as f3r_data_mass_times gives
- * it: the skipped terms are exact zeros); owner: the column's link, or -1 for the pose. */
-static void add_mass_times_legs(const f3r_model* m, int owner, const f3r_data* d, const double* x,
-                                double* t) {
-  const double mass = m->link_mass;
-  for (int i = 0; i < 3; ++i) {
-    if (owner >= 0 && i != owner) continue; /* x is zero on the other links' legs */
-    const f3r_link_data* k = &d->link[i];
-    const double xr = x[i], xt = x[F3R_Q_THETA + i];
-    t[i] += mass * xr + k->m_rho_theta * xt;
-    t[F3R_Q_THETA + i] += k->m_rho_theta * xr + k->m_theta_theta * xt;
-    for (int e = 0; e < m->link[i].modes; ++e)
-      t[m->link[i].eta_index + e] += k->m_theta_eta[e] * xt;
+/* Link l's rows (rho_l, theta_l, eta_l). The nq x nq products Z and H (and the effects' dQ/dq,
+ * dQ/dv) couple each link's coordinates only among themselves, and the platform's among
+ * themselves (the terms of dynamics.c, constraints.c and effects.c; test_residual_jacobian checks
+ * the result against finite differences). So column rho_l or theta_l of X reaches these rows
+ * only, and a modal column of link l (whose B column moves link l's legs alone) too. */
+typedef struct {
+  int n;                      /* 2 + r */
+  int rho, theta;             /* q indices of the legs */
+  int row[2 + F3R_MAX_MODES]; /* q index of each row: rho, theta, then the modes */
+} link_rows;
+
+static void links_rows(const f3r_model* m, link_rows rows[3]) {
+  for (int l = 0; l < 3; ++l) {
+    link_rows* s = &rows[l];
+    s->n = 2 + m->link[l].modes, s->rho = l, s->theta = F3R_Q_THETA + l;
+    s->row[0] = s->rho, s->row[1] = s->theta;
+    for (int e = 0; e < m->link[l].modes; ++e) s->row[2 + e] = m->link[l].eta_index + e;
   }
 }
 
-/* The nq x nq products Z and H (and the effects' dQ/dq, dQ/dv) couple each link's coordinates
- * (rho_i, theta_i, eta_i) only among themselves, and the platform's among themselves (the terms
- * of dynamics.c, constraints.c and effects.c; test_residual_jacobian checks the result against
- * finite differences). So column rho_i or theta_i of X reaches link i's rows only, and
- * o += X(:, legs) b adds, row by row in the dense sum's order, only the terms that can be
- * nonzero (a skipped term is an exact zero). */
-static void add_leg_columns(const f3r_model* m, const double* X, const double* b, double* o) {
-  const int nq = m->nq;
-  /* link by link: its rows take the rho_i column's term, then the theta_i column's, the order of
-   * the dense sum (the other legs' columns do not reach them); both in one pass where both are
-   * nonzero, so that each row is loaded and stored once */
-  for (int i = 0; i < 3; ++i) {
-    const int base = m->link[i].eta_index, modes = m->link[i].modes, t = F3R_Q_THETA + i;
-    const double br = b[i], bt = b[t]; /* held: o may alias nothing it reads */
-    const double *xr = X + (size_t)nq * i, *xt = X + (size_t)nq * t;
-    if (br != 0.0 && bt != 0.0) {
-      o[i] = (o[i] + xr[i] * br) + xt[i] * bt;
-      o[t] = (o[t] + xr[t] * br) + xt[t] * bt;
-      for (int j = base; j < base + modes; ++j) o[j] = (o[j] + xr[j] * br) + xt[j] * bt;
-      continue;
+/* Row k of a link's share of a column: o[k] on the link's rows alone (compact), or o[row[k]] in a
+ * whole column (nq). */
+#define AT(o, s, k, whole) (o)[(whole) ? (s)->row[k] : (k)]
+
+/* o += X(:, legs_l) (br, bt) on link l's rows, row by row in the dense sum's order (the rho_l
+ * column's term, then the theta_l column's), only the terms that can be nonzero (a skipped term
+ * is an exact zero); both in one pass where both are nonzero, so that each row is loaded and
+ * stored once. */
+F3R_INLINE void add_link_leg_columns(const double* X, int nq, const link_rows* s, double br,
+                                     double bt, double* o, int whole) {
+  const double *xr = X + (size_t)nq * s->rho, *xt = X + (size_t)nq * s->theta;
+  if (br != 0.0 && bt != 0.0) {
+    for (int k = 0; k < s->n; ++k)
+      AT(o, s, k, whole) = (AT(o, s, k, whole) + xr[s->row[k]] * br) + xt[s->row[k]] * bt;
+    return;
+  }
+  const double bc = br != 0.0 ? br : bt;
+  if (bc == 0.0) return;
+  const double* x = br != 0.0 ? xr : xt;
+  for (int k = 0; k < s->n; ++k) AT(o, s, k, whole) += x[s->row[k]] * bc;
+}
+
+/* o += M x on link l's rows, for x (nq) nonzero on the legs only (as f3r_data_mass_times gives
+ * it: the skipped terms are exact zeros). */
+F3R_INLINE void add_link_mass_times_legs(const f3r_model* m, const f3r_link_data* k,
+                                         const link_rows* s, const double* x, double* o,
+                                         int whole) {
+  const double xr = x[s->rho], xt = x[s->theta];
+  AT(o, s, 0, whole) += m->link_mass * xr + k->m_rho_theta * xt;
+  AT(o, s, 1, whole) += k->m_rho_theta * xr + k->m_theta_theta * xt;
+  for (int e = 0; e < s->n - 2; ++e) AT(o, s, 2 + e, whole) += k->m_theta_eta[e] * xt;
+}
+
+/* A pose column, whole: o += X(:, legs) b, link by link (the other legs' columns do not reach a
+ * link's rows). */
+static void add_leg_columns(const link_rows rows[3], int nq, const double* X, const double* b,
+                            double* o) {
+  for (int i = 0; i < 3; ++i) add_link_leg_columns(X, nq, &rows[i], b[i], b[F3R_Q_THETA + i], o, 1);
+}
+
+/* A pose column, whole: J(rows0.., j) += B^T y (jcol points at J's entry (rows0, j)), B the
+ * identity on z below its dependent rows Bd (6 x nz). */
+static void add_B_transpose_pose_column(const int* owner, int nz, const double* Bd, const double* y,
+                                        double* jcol) {
+  for (int i = 0; i < nz; ++i) {
+    const int l = owner[i];
+    double sum = y[F3R_Q_INDEPENDENT + i];
+    if (l < 0) {
+      for (int c = 0; c < F3R_Q_LEG_JOINTS; ++c) sum += Bd[c + 6 * i] * y[c];
+    } else { /* column z_i of Bd reaches its own link's legs only */
+      sum += Bd[l + 6 * i] * y[l];
+      sum += Bd[F3R_Q_THETA + l + 6 * i] * y[F3R_Q_THETA + l];
     }
-    const double bc = br != 0.0 ? br : bt;
-    if (bc == 0.0) continue;
-    const double* x = br != 0.0 ? xr : xt;
-    o[i] += x[i] * bc;
-    o[t] += x[t] * bc;
-    for (int j = base; j < base + modes; ++j) o[j] += x[j] * bc;
+    jcol[i] += sum;
   }
 }
 
-/* owner[j]: the link whose modal coordinate z_j is, or -1 for the pose. A product's column of a
- * modal coordinate of link l is nonzero on link l's rows only (its B column moves only link l's
- * legs), so only those rows of it are formed and read. */
+/* owner[j]: the link whose modal coordinate z_j is, or -1 for the pose. */
 static void column_owners(const f3r_model* m, int* owner) {
   for (int j = 0; j < 3; ++j) owner[j] = -1;
   for (int l = 0; l < 3; ++l)
     for (int e = 0; e < m->link[l].modes; ++e)
       owner[m->link[l].eta_index - F3R_Q_INDEPENDENT + e] = l;
-}
-
-/* o (nq) = X B(:, j) for X (nq x nq) of that structure; a modal column (owner l >= 0) only on
- * its link's rows (the others are left as they were, and nothing reads them). */
-static void times_B_column(const f3r_model* m, int l, const double* X, int j, const double* bd,
-                           double* o) {
-  const int nq = m->nq;
-  const double* x = X + (size_t)nq * (F3R_Q_INDEPENDENT + j);
-  if (l < 0) {
-    memcpy(o, x, (size_t)nq * sizeof(double));
-  } else {
-    o[l] = x[l];
-    o[F3R_Q_THETA + l] = x[F3R_Q_THETA + l];
-    for (int e = 0; e < m->link[l].modes; ++e)
-      o[m->link[l].eta_index + e] = x[m->link[l].eta_index + e];
-  }
-  add_leg_columns(m, X, bd, o);
-}
-
-/* J(rows0.., j) += B^T y for a column y (nq) as times_B_column forms it (jcol points at J's
- * entry (rows0, j)). Column z_i of Bd is nonzero on every leg for the pose and on its own link's
- * legs only for a modal coordinate; the rows of two different links' modal coordinates stay
- * zero. */
-static void add_B_transpose_column(const f3r_model* m, const int* owner, const double* Bd, int j,
-                                   const double* y, double* jcol) {
-  const int lj = owner[j];
-  for (int i = 0; i < 3; ++i) {
-    double sum;
-    if (lj < 0) {
-      sum = y[F3R_Q_INDEPENDENT + i];
-      for (int c = 0; c < F3R_Q_LEG_JOINTS; ++c) sum += Bd[c + 6 * i] * y[c];
-    } else { /* y is zero on the pose and the other links' legs */
-      sum = 0.0 + Bd[lj + 6 * i] * y[lj];
-      sum += Bd[F3R_Q_THETA + lj + 6 * i] * y[F3R_Q_THETA + lj];
-    }
-    jcol[i] += sum;
-  }
-  for (int l = 0; l < 3; ++l) {
-    if (lj >= 0 && l != lj) continue;
-    for (int e = 0; e < m->link[l].modes; ++e) {
-      const int i = m->link[l].eta_index - F3R_Q_INDEPENDENT + e;
-      double sum = y[F3R_Q_INDEPENDENT + i];
-      sum += Bd[l + 6 * i] * y[l];
-      sum += Bd[F3R_Q_THETA + l + 6 * i] * y[F3R_Q_THETA + l];
-      jcol[i] += sum;
-    }
-  }
-}
-
-/* The legs' rows of -G_d^{-1} X for each of the nz columns of X (6 x nz), into out (6 x nz),
- * which may be X; a modal column's only on its own link (the other links' rows stay zero). */
-static void minus_dependent_solve(const f3r_data* d, const int* owner, const double* X, int nz,
-                                  double* out) {
-  for (int j = 0; j < nz; ++j) {
-    int first, end;
-    links_of_column(owner[j], &first, &end);
-    const double* x = X + 6 * j;
-    double rho[3] = {0.0, 0.0, 0.0}, theta[3] = {0.0, 0.0, 0.0}; /* read before out is written */
-    for (int i = first; i < end; ++i)
-      f3r_link_solve_dependent(&d->link[i], x[2 * i], x[2 * i + 1], &rho[i], &theta[i]);
-    for (int i = 0; i < 3; ++i) {
-      out[i + 6 * j] = -rho[i];
-      out[F3R_Q_THETA + i + 6 * j] = -theta[i];
-    }
-  }
 }
 
 /* The Jacobian's products, column-major, in ws->jac_work (cleared per evaluation) and ws->dQ. */
@@ -210,20 +174,48 @@ static void force_derivatives(const f3r_model* m, f3r_workspace* ws, const jacob
   f3r_data_add_constraint_bias_dv(m, d, v, 1.0, p->gv, 6);
 }
 
-/* B's dependent rows (6 x nz): G_d^{-1} applied to -G_z's columns. */
+/* Link i's rows of -G's column z_j, as f3r_data_add_constraint_jacobian(-1) adds them into a
+ * cleared G (0.0 + -1.0 * entry; an entry G does not have stays 0.0): -G_P = I on (X, Y), -g_phi
+ * on phi_p, -psi_j(1) n on a fixed-free link's own modes. */
+static void minus_constraint_column(const f3r_model* m, const f3r_link_data* k, int i, int j,
+                                    double* vx, double* vy) {
+  const f3r_link_params* lp = &m->link[i];
+  const int e = j - (lp->eta_index - F3R_Q_INDEPENDENT);
+  *vx = *vy = 0.0;
+  if (j == F3R_Q_X - F3R_Q_INDEPENDENT) {
+    *vx += -1.0 * -1.0;
+  } else if (j == F3R_Q_Y - F3R_Q_INDEPENDENT) {
+    *vy += -1.0 * -1.0;
+  } else if (j == F3R_Q_PHI - F3R_Q_INDEPENDENT) {
+    *vx += -1.0 * k->g_phi[0];
+    *vy += -1.0 * k->g_phi[1];
+  } else if (lp->model == F3R_LINK_FIXED_FREE && e >= 0 && e < lp->modes) {
+    *vx += -1.0 * (-lp->tip[e] * k->s);
+    *vy += -1.0 * (lp->tip[e] * k->c);
+  }
+}
+
+/* B's dependent rows (6 x nz): G_d^{-1} applied to -G_z's columns, on the links a column
+ * reaches (zero on the others). */
 static void dependent_rows_of_B(const f3r_model* m, const f3r_data* d, const int* owner, int nz,
                                 double* Bd) {
-  double G[F3R_NCON * F3R_MAX_Q];
-  memset(G, 0, F3R_NCON * (size_t)m->nq * sizeof(double)); /* the model's columns, not the most */
-  f3r_data_add_constraint_jacobian(m, d, -1.0, G, F3R_NCON);
-  minus_dependent_solve(d, owner, G + F3R_NCON * F3R_Q_INDEPENDENT, nz, Bd);
-  for (size_t k = 0; k < 6 * (size_t)nz; ++k) Bd[k] = -Bd[k];
+  for (int j = 0; j < nz; ++j) {
+    double* b = Bd + 6 * j;
+    for (int c = 0; c < F3R_Q_LEG_JOINTS; ++c) b[c] = 0.0;
+    int first, end;
+    links_of_column(owner[j], &first, &end);
+    for (int i = first; i < end; ++i) {
+      double vx, vy;
+      minus_constraint_column(m, &d->link[i], i, j, &vx, &vy);
+      f3r_link_solve_dependent(&d->link[i], vx, vy, &b[i], &b[F3R_Q_THETA + i]);
+    }
+  }
 }
 
 /* Link i's two rows of X B, column j, for X (6 x nq) of the constraints' derivatives: B is the
  * identity on z below its dependent rows Bd (6 x nz), and the rows of link i reach only its own
  * legs' columns rho_i, theta_i, so (X B)(r, j) = X(r, z_j) + X(r, legs_i) Bd(legs_i, j). */
-static void link_rows_times_B(const double* X, const double* Bd, int i, int j, double out[2]) {
+F3R_INLINE void link_rows_times_B(const double* X, const double* Bd, int i, int j, double out[2]) {
   const int t = F3R_Q_THETA + i;
   for (int e = 0; e < 2; ++e) {
     const int r = 2 * i + e;
@@ -252,14 +244,15 @@ static void dependent_rates(const f3r_data* d, const int* owner, int nq, int nz,
       double x[2], rho, theta;
       link_rows_times_B(p->Gvq, Bd, i, j, x);
       f3r_link_solve_dependent(k, x[0], x[1], &rho, &theta);
-      vz[i] = -rho, vz[t] = -theta;
+      const double vr = -rho, vt = -theta; /* V_z's, kept for A_z (not reloaded from vz) */
+      vz[i] = vr, vz[t] = vt;
       link_rows_times_B(gv, Bd, i, j, x);
       f3r_link_solve_dependent(k, x[0], x[1], &rho, &theta);
       au[i] = -rho, au[t] = -theta;
       link_rows_times_B(p->Caq, Bd, i, j, x);
       for (int e = 0; e < 2; ++e) { /* + dgamma/dv V_z: link i's rows reach its own legs only */
-        x[e] += gv[2 * i + e + 6 * i] * vz[i];
-        x[e] += gv[2 * i + e + 6 * t] * vz[t];
+        x[e] += gv[2 * i + e + 6 * i] * vr;
+        x[e] += gv[2 * i + e + 6 * t] * vt;
       }
       f3r_link_solve_dependent(k, x[0], x[1], &rho, &theta);
       az[i] = -rho, az[t] = -theta;
@@ -267,21 +260,77 @@ static void dependent_rates(const f3r_data* d, const int* owner, int nq, int nz,
   }
 }
 
+/* A modal column of link l, y on link l's rows alone (compact; zero elsewhere): y += M x, then
+ * J's column += B^T y: on the pose's rows through Bd's pose columns, on link l's modes through
+ * theirs (the other links' modal rows stay zero). */
+F3R_INLINE void add_modal_column(const f3r_model* m, const f3r_link_data* k, const link_rows* s,
+                                 const double* Bd, const double* x, double* y, double* jcol) {
+  add_link_mass_times_legs(m, k, s, x, y, 0);
+  for (int i = 0; i < 3; ++i) {
+    double sum = 0.0 + Bd[s->rho + 6 * i] * y[0];
+    jcol[i] += sum + Bd[s->theta + 6 * i] * y[1];
+  }
+  const int z0 = s->row[2] - F3R_Q_INDEPENDENT;
+  for (int e = 0; e < s->n - 2; ++e) {
+    const int i = z0 + e;
+    double sum = y[2 + e] + Bd[s->rho + 6 * i] * y[0];
+    jcol[i] += sum + Bd[s->theta + 6 * i] * y[1];
+  }
+}
+
+/* Both of J's columns of modal coordinate z_j of link l, on link l's rows alone. */
+static void add_modal_force_columns(const f3r_model* m, const f3r_data* d, const link_rows* s,
+                                    const jacobian_products* p, int j, double* jz, double* ju) {
+  const int nq = m->nq;
+  const size_t col = (size_t)nq * (F3R_Q_INDEPENDENT + j);
+  const double *bd = p->Bd + 6 * j, *vz = p->Vz + (size_t)nq * j;
+  double y[2 + F3R_MAX_MODES];
+  for (int k = 0; k < s->n; ++k) y[k] = p->Z[col + s->row[k]];
+  add_link_leg_columns(p->Z, nq, s, bd[s->rho], bd[s->theta], y, 0);
+  add_link_leg_columns(p->H, nq, s, vz[s->rho], vz[s->theta], y, 0);
+  add_modal_column(m, &d->link[s->rho], s, p->Bd, p->Az + (size_t)nq * j, y, jz);
+  for (int k = 0; k < s->n; ++k) y[k] = p->H[col + s->row[k]];
+  add_link_leg_columns(p->H, nq, s, bd[s->rho], bd[s->theta], y, 0);
+  add_modal_column(m, &d->link[s->rho], s, p->Bd, p->Au + (size_t)nq * j, y, ju);
+}
+
+/* Both of J's columns of pose coordinate z_j (j < 3), whole. */
+static void add_pose_force_columns(const f3r_model* m, const f3r_data* d, const link_rows rows[3],
+                                   const int* owner, const jacobian_products* p, int j, double* jz,
+                                   double* ju) {
+  const int nq = m->nq, nz = m->n_independent;
+  const size_t col = (size_t)nq * (F3R_Q_INDEPENDENT + j);
+  const double* bd = p->Bd + 6 * j;
+  double t[F3R_MAX_Q];
+  memcpy(t, p->Z + col, (size_t)nq * sizeof(double));
+  add_leg_columns(rows, nq, p->Z, bd, t);
+  add_leg_columns(rows, nq, p->H, p->Vz + (size_t)nq * j, t);
+  for (int i = 0; i < 3; ++i)
+    add_link_mass_times_legs(m, &d->link[i], &rows[i], p->Az + (size_t)nq * j, t, 1);
+  add_B_transpose_pose_column(owner, nz, p->Bd, t, jz);
+  memcpy(t, p->H + col, (size_t)nq * sizeof(double));
+  add_leg_columns(rows, nq, p->H, bd, t);
+  for (int i = 0; i < 3; ++i)
+    add_link_mass_times_legs(m, &d->link[i], &rows[i], p->Au + (size_t)nq * j, t, 1);
+  add_B_transpose_pose_column(owner, nz, p->Bd, t, ju);
+}
+
 /* The reduced equations' rows in z and u: dF_u/dz = B^T (Z B + H V_z + M A_z) and
- * dF_u/du = B^T (H B + M A_u), added into J a column j of both at a time. */
+ * dF_u/du = B^T (H B + M A_u), added into J a column j of both at a time; a modal column on its
+ * link's rows alone. */
 static void add_force_blocks(const f3r_model* m, const f3r_data* d, const int* owner,
                              const jacobian_products* p, double* J, int ld) {
-  const int nq = m->nq, nz = m->n_independent;
-  double t[F3R_MAX_Q];
-  for (int j = 0; j < nz; ++j) {
-    const double* bd = p->Bd + 6 * j;
-    times_B_column(m, owner[j], p->Z, j, bd, t);
-    add_leg_columns(m, p->H, p->Vz + (size_t)nq * j, t);
-    add_mass_times_legs(m, owner[j], d, p->Az + (size_t)nq * j, t);
-    add_B_transpose_column(m, owner, p->Bd, j, t, &F3R_AT(J, ld, nz, j));
-    times_B_column(m, owner[j], p->H, j, bd, t);
-    add_mass_times_legs(m, owner[j], d, p->Au + (size_t)nq * j, t);
-    add_B_transpose_column(m, owner, p->Bd, j, t, &F3R_AT(J, ld, nz, nz + j));
+  const int nz = m->n_independent;
+  link_rows rows[3];
+  links_rows(m, rows);
+  for (int j = 0; j < 3; ++j)
+    add_pose_force_columns(m, d, rows, owner, p, j, &F3R_AT(J, ld, nz, j),
+                           &F3R_AT(J, ld, nz, nz + j));
+  for (int l = 0; l < 3; ++l) {
+    const int first = m->link[l].eta_index - F3R_Q_INDEPENDENT;
+    for (int j = first; j < first + m->link[l].modes; ++j)
+      add_modal_force_columns(m, d, &rows[l], p, j, &F3R_AT(J, ld, nz, j),
+                              &F3R_AT(J, ld, nz, nz + j));
   }
 }
 

@@ -19,14 +19,10 @@
 #include "data.h"
 
 /* The stages' per-link parts below run once per link and evaluation; as calls they cost about 5 %
- * of a minimal residual at r = 3 (f3r_microbench), so they are forced inline. (Forcing the
- * kernels of dynamics.c and constraints.c inline too, across files under -flto, gained 3 % more
- * at r = 3 and lost 2 % at r = 20.) */
-#if defined(__GNUC__)
-#define STAGE static inline __attribute__((always_inline))
-#else
-#define STAGE static inline
-#endif
+ * of a minimal residual at r = 3 (f3r_microbench), so they are forced inline (F3R_INLINE). (Forcing
+ * the kernels of dynamics.c and constraints.c inline too, across files under -flto, gained 3 %
+ * more at r = 3 and lost 2 % at r = 20.) */
+#define STAGE F3R_INLINE
 
 /* (cc, sc) of platform joint i from (cos, sin) phi_p: its direction at phi_p = 0, rotated. */
 static void joint_direction(const f3r_model* m, int i, double cp, double sp, double* cc,
