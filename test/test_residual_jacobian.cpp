@@ -274,4 +274,35 @@ TEST(Residual, OneEvaluationComputesEachAngleOnce) {
   }
 }
 
+// A residual with an infinite or NaN entry, in any row (the check sums x * 0.0 in four lanes and a
+// tail), is reported as not finite; a large finite one is not.
+TEST(Residual, AnEntryThatIsNotFiniteIsReportedInEveryRow) {
+  f3r_scene scene =
+      SceneWithLinks(F3R_LINK_FIXED_FREE, 3, F3R_LINK_FIXED_FREE, 3, F3R_LINK_FIXED_FREE, 3);
+  auto m = MakeModel(scene);
+  for (f3r_formulation form : {F3R_FORMULATION_DAE, F3R_FORMULATION_MINIMAL}) {
+    const int ny = f3r_state_size(m.get(), form), nz = m->n_independent;
+    std::vector<double> q(F3R_MAX_Q), v(F3R_MAX_Q), y(ny), yp(ny), res(ny);
+    ASSERT_EQ(f3r_model_initial_state(m.get(), q.data(), v.data()), F3R_OK);
+    WorkspacePtr ws(f3r_workspace_create(m.get()));
+    ASSERT_EQ(f3r_consistent_state(m.get(), form, 0.0, q.data(), v.data(), nullptr, nullptr, 0.0,
+                                   y.data(), yp.data(), nullptr, ws.get()),
+              F3R_OK);
+    // rows whose residual is yp minus something: z' - u (minimal) or q' - v (dae), and W' - Q.v
+    std::vector<int> rows;
+    const int rate_rows = form == F3R_FORMULATION_MINIMAL ? nz : m->nq;
+    for (int r = 0; r < rate_rows; ++r) rows.push_back(r);
+    rows.push_back(ny - 1);
+    for (int row : rows)
+      for (double bad : {HUGE_VAL, -HUGE_VAL, std::nan(""), 1e300}) {
+        std::vector<double> ypb = yp;
+        ypb[row] = bad;
+        const f3r_status st =
+            f3r_residual(m.get(), form, 0.0, y.data(), ypb.data(), nullptr, res.data(), ws.get());
+        EXPECT_EQ(st, std::isfinite(bad) ? F3R_OK : F3R_ERR_NONFINITE)
+            << "form " << form << ", row " << row << " of " << ny << ", value " << bad;
+      }
+  }
+}
+
 }  // namespace

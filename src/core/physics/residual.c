@@ -67,10 +67,16 @@ void f3r_index3_variable_indices(const f3r_model* m, int* index_of, int counts[3
   }
 }
 
+/* x * 0.0 is a zero for a finite x and NaN for inf and NaN, so four sums of them are zeros unless
+ * some x is not finite: no branch per entry, and the compiler pairs the sums into vectors (an
+ * isfinite test per entry was 5 % of a minimal residual at r = 3). */
 static f3r_status check_finite(const double* x, int n) {
-  for (int i = 0; i < n; ++i)
-    if (!isfinite(x[i])) return F3R_ERR_NONFINITE;
-  return F3R_OK;
+  double acc[4] = {0.0, 0.0, 0.0, 0.0};
+  int i = 0;
+  for (; i + 4 <= n; i += 4)
+    for (int k = 0; k < 4; ++k) acc[k] += x[i + k] * 0.0;
+  for (; i < n; ++i) acc[0] += x[i] * 0.0;
+  return (acc[0] + acc[1]) + (acc[2] + acc[3]) == 0.0 ? F3R_OK : F3R_ERR_NONFINITE;
 }
 
 f3r_status f3r_residual(const f3r_model* m, f3r_formulation form, double t, const double* y,
