@@ -68,8 +68,8 @@ void f3r_index3_variable_indices(const f3r_model* m, int* index_of, int counts[3
 }
 
 /* x * 0.0 is a zero for a finite x and NaN for inf and NaN, so four sums of them are zeros unless
- * some x is not finite: no branch per entry, and the compiler pairs the sums into vectors (an
- * isfinite test per entry was 5 % of a minimal residual at r = 3). */
+ * some x is not finite: four independent chains and no branch per entry (an isfinite test and
+ * branch per entry was 5 % of a minimal residual at r = 3). */
 static f3r_status check_finite(const double* x, int n) {
   double acc[4] = {0.0, 0.0, 0.0, 0.0};
   int i = 0;
