@@ -92,7 +92,10 @@ f3r_status f3r_residual_jacobian(const f3r_model* m, f3r_formulation form, doubl
                                  const double* y, const double* yp, const double* held, double* J,
                                  int ld, f3r_workspace* ws) {
   const int ny = f3r_state_size(m, form);
-  for (int j = 0; j < ny; ++j) memset(J + (size_t)j * (size_t)ld, 0, (size_t)ny * sizeof(double));
+  if (ld == ny) /* one call, not one a column */
+    memset(J, 0, (size_t)ny * (size_t)ny * sizeof(double));
+  else
+    for (int j = 0; j < ny; ++j) memset(J + (size_t)j * (size_t)ld, 0, (size_t)ny * sizeof(double));
   return form == F3R_FORMULATION_MINIMAL ? f3r_minimal_jacobian(m, t, cj, y, yp, held, J, ld, ws)
                                          : f3r_dae_jacobian(m, form, t, cj, y, yp, held, J, ld, ws);
 }
