@@ -44,24 +44,26 @@ void f3r_link_constraint_bias(const f3r_model* m, int i, f3r_data* d) {
 /* --- kernels on the position stage ---------------------------------------------------------- */
 
 /* Calls put(row, col, value) for every nonzero of G, so G and G^T share one definition. */
-#define F3R_FOR_EACH_G_ENTRY(m, d, PUT)                 \
-  for (int i = 0; i < 3; ++i) {                         \
-    const f3r_link_data* k = &(d)->link[i];             \
-    const int gx = 2 * i, gy = 2 * i + 1;               \
-    PUT(gx, i, k->c);                                   \
-    PUT(gy, i, k->s);                                   \
-    PUT(gx, F3R_Q_THETA + i, k->g_theta[0]);            \
-    PUT(gy, F3R_Q_THETA + i, k->g_theta[1]);            \
-    PUT(gx, F3R_Q_X, -1.0);                             \
-    PUT(gy, F3R_Q_Y, -1.0);                             \
-    PUT(gx, F3R_Q_PHI, k->g_phi[0]);                    \
-    PUT(gy, F3R_Q_PHI, k->g_phi[1]);                    \
-    const f3r_link_params* lp = &(m)->link[i];          \
-    if (lp->model == F3R_LINK_FIXED_FREE)               \
-      for (int j = 0; j < lp->modes; ++j) {             \
-        PUT(gx, lp->eta_index + j, -lp->tip[j] * k->s); \
-        PUT(gy, lp->eta_index + j, lp->tip[j] * k->c);  \
-      }                                                 \
+#define F3R_FOR_EACH_G_ENTRY(m, d, PUT)                  \
+  for (int i = 0; i < 3; ++i) {                          \
+    const f3r_link_data* k = &(d)->link[i];              \
+    const int gx = 2 * i, gy = 2 * i + 1;                \
+    PUT(gx, i, k->c);                                    \
+    PUT(gy, i, k->s);                                    \
+    PUT(gx, F3R_Q_THETA + i, k->g_theta[0]);             \
+    PUT(gy, F3R_Q_THETA + i, k->g_theta[1]);             \
+    PUT(gx, F3R_Q_X, -1.0);                              \
+    PUT(gy, F3R_Q_Y, -1.0);                              \
+    PUT(gx, F3R_Q_PHI, k->g_phi[0]);                     \
+    PUT(gy, F3R_Q_PHI, k->g_phi[1]);                     \
+    const f3r_link_params* lp = &(m)->link[i];           \
+    if (lp->model == F3R_LINK_FIXED_FREE)                \
+      for (int j = 0; j < lp->modes; ++j) {              \
+        double g_x, g_y;                                 \
+        f3r_link_modal_constraint(lp, k, j, &g_x, &g_y); \
+        PUT(gx, lp->eta_index + j, g_x);                 \
+        PUT(gy, lp->eta_index + j, g_y);                 \
+      }                                                  \
   }
 
 void f3r_data_add_constraint_jacobian(const f3r_model* m, const f3r_data* d, double scale,

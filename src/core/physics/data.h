@@ -166,6 +166,14 @@ static inline void f3r_link_solve_dependent_transpose(const f3r_link_data* k, do
   *lx = along * c - across * s;
   *ly = along * s + across * c;
 }
+/* G's column of mode j of a fixed-free link k: psi_j(1) n = (-tip_j s, tip_j c) (a fixed-pinned
+ * link's modes vanish at the tip: no entry). The one spelling of it for G, G^T and the minimal
+ * formulation's solves. */
+static inline void f3r_link_modal_constraint(const f3r_link_params* lp, const f3r_link_data* k,
+                                             int j, double* gx, double* gy) {
+  *gx = -lp->tip[j] * k->s;
+  *gy = lp->tip[j] * k->c;
+}
 /* x = scale G_d^{-1} V per link for the ncols columns of V (6 x ncols, (x, y) per link): x's rho
  * and theta rows (6 x ncols; x may be V). */
 void f3r_data_solve_dependent(const f3r_data* d, const double* V, int ncols, double scale,

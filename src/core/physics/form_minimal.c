@@ -35,8 +35,10 @@ static void link_accelerations(const f3r_model* m, int i, f3r_data* d) {
   gy += k->g_phi[1] * a[F3R_Q_PHI];
   if (lp->model == F3R_LINK_FIXED_FREE)
     for (int j = 0; j < lp->modes; ++j) {
-      gx += (-lp->tip[j] * k->s) * a[lp->eta_index + j];
-      gy += (lp->tip[j] * k->c) * a[lp->eta_index + j];
+      double g_x, g_y;
+      f3r_link_modal_constraint(lp, k, j, &g_x, &g_y);
+      gx += g_x * a[lp->eta_index + j];
+      gy += g_y * a[lp->eta_index + j];
     }
   f3r_link_solve_dependent(k, -gx - d->gamma[2 * i], -gy - d->gamma[2 * i + 1], &a[i],
                            &a[F3R_Q_THETA + i]);
@@ -65,7 +67,11 @@ static void link_loop_forces(const f3r_model* m, int i, f3r_data* d, double* res
   const int tip = lp->model == F3R_LINK_FIXED_FREE;
   for (int j = 0; j < lp->modes; ++j) {
     double gt_lambda = 0.0;
-    if (tip) gt_lambda += (-lp->tip[j] * k->s) * lx, gt_lambda += (lp->tip[j] * k->c) * ly;
+    if (tip) {
+      double g_x, g_y;
+      f3r_link_modal_constraint(lp, k, j, &g_x, &g_y);
+      gt_lambda += g_x * lx, gt_lambda += g_y * ly;
+    }
     res_eta[j] = R[base + j] - gt_lambda;
   }
 }

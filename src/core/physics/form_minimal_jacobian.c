@@ -176,7 +176,7 @@ static void force_derivatives(const f3r_model* m, f3r_workspace* ws, const jacob
 
 /* Link i's rows of -G's column z_j, as f3r_data_add_constraint_jacobian(-1) adds them into a
  * cleared G (0.0 + -1.0 * entry; an entry G does not have stays 0.0): -G_P = I on (X, Y), -g_phi
- * on phi_p, -psi_j(1) n on a fixed-free link's own modes. */
+ * on phi_p, -psi_j(1) n (f3r_link_modal_constraint) on a fixed-free link's own modes. */
 static void minus_constraint_column(const f3r_model* m, const f3r_link_data* k, int i, int j,
                                     double* vx, double* vy) {
   const f3r_link_params* lp = &m->link[i];
@@ -190,8 +190,10 @@ static void minus_constraint_column(const f3r_model* m, const f3r_link_data* k, 
     *vx += -1.0 * k->g_phi[0];
     *vy += -1.0 * k->g_phi[1];
   } else if (lp->model == F3R_LINK_FIXED_FREE && e >= 0 && e < lp->modes) {
-    *vx += -1.0 * (-lp->tip[e] * k->s);
-    *vy += -1.0 * (lp->tip[e] * k->c);
+    double g_x, g_y;
+    f3r_link_modal_constraint(lp, k, e, &g_x, &g_y);
+    *vx += -1.0 * g_x;
+    *vy += -1.0 * g_y;
   }
 }
 
