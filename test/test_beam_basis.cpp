@@ -122,7 +122,7 @@ void ExactGrams(const f3r_beam_basis& b, Eigen::MatrixXd* mass, Eigen::MatrixXd*
       const Mp xi = (Mp(p) + Mp(x[q])) / Mp(panels), wq = Mp(w[q]) / Mp(panels);
       std::vector<Mp> phi(n), dd(n);
       for (int j = 0; j < r; ++j) PrintedMode(b.end, b.alpha[j], xi, &phi[j], &dd[j]);
-      for (int m = 0; m < b.shapes; ++m) {
+      for (int m = 0; m < b.corrections; ++m) {
         phi[r + m] = Mp(0.0);
         dd[r + m] = Mp(0.0);
         for (int k = 0; k < b.shapes; ++k) {
@@ -689,6 +689,90 @@ TEST(BeamBasis, RejectsBadArguments) {
       f3r_beam_basis_build(F3R_BEAM_FIXED_FREE, F3R_MAX_MODES - 2, kTip | kUniform | kLinear, &b),
       -1);
   EXPECT_EQ(f3r_beam_basis_build(static_cast<f3r_beam_end>(0), 3, 0, &b), -1);
+  EXPECT_EQ(f3r_beam_basis_build_mixed(3, NAN, &b), -1);
+  EXPECT_EQ(f3r_beam_basis_build_mixed(3, INFINITY, &b), -1);
+  EXPECT_EQ(f3r_beam_basis_build_mixed(F3R_MAX_MODES, -2.0, &b), -1);
+  EXPECT_EQ(f3r_beam_basis_build_mixed(F3R_MAX_MODES - 1, -2.0, &b), 0);
+  EXPECT_EQ(f3r_beam_basis_build_mixed(0, -2.0, &b), -1);
+}
+
+// The mixed correction (f3r_beam_basis_build_mixed): one function where the pair has two, built
+// here independently in 192 bits from the shapes' exact polynomials: s = s_tip + mix s_uniform,
+// its mass projections on the exact modes removed, normalised in mass, signed by its tip. The
+// stored function must be that one, orthonormal to the modes with its stiffness on the diagonal,
+// with its constants those of quadrature.
+TEST(BeamBasis, MixedCorrectionIsOneFunctionOfBothLoads) {
+  const int panels = 80, points = 10;
+  double x[points], w[points];
+  ASSERT_EQ(f3r_gauss_legendre(points, x, w), 0);
+  double worst = 0.0;
+  for (int r = 1; r <= 5; ++r)
+    for (double mix : {-1.94, 0.5, -10.0}) {
+      f3r_beam_basis b;
+      ASSERT_EQ(f3r_beam_basis_build_mixed(r, mix, &b), 0);
+      ASSERT_EQ(b.count, r + 1);
+      ASSERT_EQ(b.corrections, 1);
+      ASSERT_EQ(b.shapes, 2);
+      EXPECT_EQ(b.mixed, 1);
+      EXPECT_EQ(b.mix, mix);
+      // the residual t = s - sum c_j psi_j, c_j = int s psi_j, on the exact modes
+      std::vector<Mp> c(r, Mp(0.0));
+      auto at = [&](const Mp& xi, Mp* psi_out) {
+        Mp st, su, dd;
+        Shape(F3R_BEAM_FIXED_FREE, kTip, xi, &st, &dd);
+        Shape(F3R_BEAM_FIXED_FREE, kUniform, xi, &su, &dd);
+        for (int j = 0; j < r; ++j)
+          PrintedMode(F3R_BEAM_FIXED_FREE, b.alpha[j], xi, &psi_out[j], &dd);
+        return st + Mp(mix) * su;
+      };
+      std::vector<Mp> psi(r, Mp(0.0));
+      for (int p = 0; p < panels; ++p)
+        for (int q = 0; q < points; ++q) {
+          const Mp xi = (Mp(p) + Mp(x[q])) / Mp(panels), wq = Mp(w[q]) / Mp(panels);
+          const Mp s = at(xi, psi.data());
+          for (int j = 0; j < r; ++j) c[j] = c[j] + wq * s * psi[j];
+        }
+      auto residual = [&](const Mp& xi) {
+        Mp t = at(xi, psi.data());
+        for (int j = 0; j < r; ++j) t = t - c[j] * psi[j];
+        return t;
+      };
+      Mp norm(0.0);
+      for (int p = 0; p < panels; ++p)
+        for (int q = 0; q < points; ++q) {
+          const Mp xi = (Mp(p) + Mp(x[q])) / Mp(panels), wq = Mp(w[q]) / Mp(panels);
+          const Mp t = residual(xi);
+          norm = norm + wq * t * t;
+        }
+      const double scale = static_cast<double>((Mp(1.0) / Fn(mpfr_sqrt, norm)).ld());
+      const double sign = residual(Mp(1.0)).ld() < 0 ? -1.0 : 1.0;
+      for (double xi : {0.1, 0.37, 0.5, 0.81, 1.0}) {
+        double phi;
+        f3r_beam_basis_eval(&b, r, xi, &phi, nullptr, nullptr);
+        const double expected = sign * scale * static_cast<double>(residual(Mp(xi)).ld());
+        worst = std::max(worst, std::fabs(phi - expected));
+        // the cancellation in s - sum c psi: as the pair's functions (OrthonormalWith...)
+        EXPECT_NEAR(phi, expected, r <= 3 ? 3e-12 : 2e-11)
+            << "r " << r << " mix " << mix << " xi " << xi;
+      }
+      EXPECT_GT(b.tip[r], 0.0);
+      const Orthogonality o = Check(b), e = CheckExact(b);
+      EXPECT_LT(o.mass, 1e-12) << "r " << r << " mix " << mix;
+      EXPECT_LT(o.bending, 1e-12) << "r " << r << " mix " << mix;
+      EXPECT_LT(e.mass, 1e-12) << "r " << r << " mix " << mix;
+      EXPECT_LT(e.bending, 1e-12) << "r " << r << " mix " << mix;
+      const Quadrature q = Integrate(b);
+      double tip;
+      f3r_beam_basis_eval(&b, r, 1.0, &tip, nullptr, nullptr);
+      EXPECT_NEAR(q.mean[r], b.mean[r], 1e-13);
+      EXPECT_NEAR(q.first_moment[r], b.first_moment[r], 1e-13);
+      EXPECT_NEAR(tip, b.tip[r], 1e-13);
+      // the first r functions are the paper's modes, as in the pair's basis
+      f3r_beam_basis pair;
+      ASSERT_EQ(f3r_beam_basis_build(F3R_BEAM_FIXED_FREE, r, kTip | kUniform, &pair), 0);
+      for (int j = 0; j < r; ++j) EXPECT_EQ(b.alpha[j], pair.alpha[j]);
+    }
+  std::printf("mixed correction against its 192-bit construction: worst %.1e\n", worst);
 }
 
 }  // namespace

@@ -70,8 +70,17 @@ f3r_status f3r_accuracy_choose(const f3r_scene* scene, double request, int comma
 /* Writes a choice into the scene (modes, exact kinematics, solver), where the scene left it open. */
 void f3r_accuracy_apply(const f3r_accuracy_choice* choice, f3r_scene* scene);
 
+/* The load ratio (links[i].shape_mix, scene.h) of each fixed-free link in the mask `links`
+ * (bit i), with static_correction, that the mechanism's slowest modes put on it: the linearised
+ * model with the link's two static shapes, its lowest group of modes in which the link takes
+ * part, the principal direction of the link's two shape coordinates over it. Its mode counts are
+ * the scene's. mix[i] is 0 for links outside the mask and where the basis keeps one shape. */
+f3r_status f3r_shape_mix_fit(const f3r_scene* scene, unsigned links, double mix[3], f3r_error* err);
+
 /* Resolves a scene for a run: with scene->accuracy > 0, chooses and applies; otherwise resolves
- * links with modes: auto by the linear estimate alone. choice may be NULL. */
+ * links with modes: auto by the linear estimate alone. Then fits links with shape_mix: fit
+ * (f3r_shape_mix_fit, at the mode counts chosen) and notes the values in the summary. choice may
+ * be NULL. */
 f3r_status f3r_accuracy_resolve(f3r_scene* scene, int commanded, f3r_accuracy_choice* choice,
                                 f3r_error* err);
 

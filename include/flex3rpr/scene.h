@@ -104,6 +104,12 @@ enum {
   F3R_EXPLICIT_STATIC_CORRECTION = 1 << 9 /* << i: links[i].static_correction was given */
 };
 
+/* A fixed-free link's static correction: its tip-force and uniform-load shapes, or one shape of
+ * both loads in a ratio, given or fitted to the mechanism's slowest modes (f3r_accuracy_resolve
+ * fits it before the model is built). */
+typedef enum { F3R_SHAPE_PAIR = 0, F3R_SHAPE_MIXED = 1, F3R_SHAPE_MIX_FIT = 2 } f3r_shape_mix;
+#define F3R_SHAPE_MIX_LIMIT 100.0 /* |shape_mix| allowed; the fitted values are about -2 */
+
 typedef struct {
   f3r_link_model model;
   int modes;                       /* 1..F3R_MAX_MODES for a flexible link, 0 for rigid,
@@ -117,6 +123,9 @@ typedef struct {
                           * it carries to its modes (f3r_link_static_shapes of them), so
                           * modes + shapes <= F3R_MAX_MODES. Default 0; where the scene leaves it
                           * open, the accuracy knob may turn it on */
+  f3r_shape_mix shape_mix_kind; /* fixed-free with static_correction: the two shapes (default),
+                                 * or one, the tip force with shape_mix times a uniform load */
+  double shape_mix;             /* q l / F of that one shape's loads (F3R_SHAPE_MIXED) */
 } f3r_link_scene;
 
 typedef struct {

@@ -371,11 +371,29 @@ void f3r_accuracy_apply(const f3r_accuracy_choice* c, f3r_scene* s) {
   snprintf(s->table, sizeof s->table, "%s", c->table);
 }
 
-f3r_status f3r_accuracy_resolve(f3r_scene* scene, int commanded, f3r_accuracy_choice* choice,
+/* The links with shape_mix: fit, fitted at their resolved mode counts (f3r_shape_mix_fit). */
+static f3r_status resolve_shape_mix(f3r_scene* scene, f3r_accuracy_choice* c, f3r_error* err) {
+  unsigned fit = 0;
+  for (int i = 0; i < 3; ++i)
+    if (scene->links[i].static_correction && scene->links[i].shape_mix_kind == F3R_SHAPE_MIX_FIT)
+      fit |= 1u << i;
+  if (!fit) return F3R_OK;
+  double mix[3];
+  const f3r_status st = f3r_shape_mix_fit(scene, fit, mix, err);
+  if (st != F3R_OK) return st;
+  for (int i = 0; i < 3; ++i)
+    if (fit >> i & 1) {
+      scene->links[i].shape_mix_kind = F3R_SHAPE_MIXED;
+      scene->links[i].shape_mix = mix[i];
+      f3r_accuracy_append(
+          c->summary, sizeof c->summary,
+          "links[%d]: shape_mix fit -> %.6g (the load ratio of its slowest modes)\n", i, mix[i]);
+    }
+  return F3R_OK;
+}
+
+static f3r_status resolve_modes(f3r_scene* scene, int commanded, f3r_accuracy_choice* c,
                                 f3r_error* err) {
-  f3r_accuracy_choice local;
-  f3r_accuracy_choice* c = choice ? choice : &local;
-  memset(c, 0, sizeof *c);
   if (scene->accuracy > 0.0) {
     const f3r_status st = f3r_accuracy_choose(scene, scene->accuracy, commanded, c, err);
     if (st == F3R_OK) f3r_accuracy_apply(c, scene);
@@ -411,4 +429,13 @@ f3r_status f3r_accuracy_resolve(f3r_scene* scene, int commanded, f3r_accuracy_ch
           i, c->modes[i], c->model_error, tolerance, c->extent);
   }
   return F3R_OK;
+}
+
+f3r_status f3r_accuracy_resolve(f3r_scene* scene, int commanded, f3r_accuracy_choice* choice,
+                                f3r_error* err) {
+  f3r_accuracy_choice local;
+  f3r_accuracy_choice* c = choice ? choice : &local;
+  memset(c, 0, sizeof *c);
+  const f3r_status st = resolve_modes(scene, commanded, c, err);
+  return st == F3R_OK ? resolve_shape_mix(scene, c, err) : st;
 }

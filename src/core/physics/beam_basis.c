@@ -395,7 +395,7 @@ static int ritz_solve(const build_work* w, long double V[3][3], long double* lam
 
 /* The corrections' constants, signs and CV from V (see the top of the file). */
 static void finish_corrections(f3r_beam_basis* b, const build_work* w, long double V[3][3],
-                               const long double* lambda) {
+                               const long double* lambda, int functions) {
   const int r = b->modes, p = w->p;
   long double tc[3][3]; /* mean, first moment and tip of the residuals t_k */
   for (int k = 0; k < p; ++k) {
@@ -406,7 +406,7 @@ static void finish_corrections(f3r_beam_basis* b, const build_work* w, long doub
     for (int j = 0; j < r; ++j)
       for (int c = 0; c < 3; ++c) tc[k][c] -= w->C[j][k] * w->mode[j][c];
   }
-  for (int m = 0; m < p; ++m) {
+  for (int m = 0; m < functions; ++m) {
     long double key[3] = {0, 0, 0};
     for (int k = 0; k < p; ++k)
       for (int c = 0; c < 3; ++c) key[c] += V[k][m] * tc[k][c];
@@ -431,11 +431,31 @@ static int popcount3(unsigned set) {
   return (int)(set & 1u) + (int)((set >> 1) & 1u) + (int)((set >> 2) & 1u);
 }
 
-int f3r_beam_basis_build(f3r_beam_end end, int modes, unsigned shape_set, f3r_beam_basis* out) {
+/* The mixed correction's V column and stiffness: the residuals' combination (1, mix) over (tip,
+ * uniform), normalised to v^T M_t v = 1, its stiffness the Rayleigh quotient. Returns -1 if its
+ * mass is not positive. */
+static int mixed_direction(const build_work* w, double mix, long double V[3][3],
+                           long double* lambda) {
+  const long double d[2] = {1.0L, (long double)mix};
+  long double mm = 0, kk = 0;
+  for (int k = 0; k < 2; ++k)
+    for (int l = 0; l < 2; ++l) {
+      mm += d[k] * w->Mt[k][l] * d[l];
+      kk += d[k] * w->Kt[k][l] * d[l];
+    }
+  if (!(mm > 0)) return -1;
+  for (int k = 0; k < 2; ++k) V[k][0] = d[k] / sqrtl(mm);
+  lambda[0] = kk / mm;
+  return 0;
+}
+
+/* f3r_beam_basis_build, and with mix (not NULL) build_mixed's single correction. */
+static int build(f3r_beam_end end, int modes, unsigned shape_set, const double* mix,
+                 f3r_beam_basis* out) {
   if (!out || (end != F3R_BEAM_FIXED_FREE && end != F3R_BEAM_FIXED_PINNED)) return -1;
   if (modes < 1 || modes > F3R_MAX_MODES || (shape_set & ~7u)) return -1;
   if (end == F3R_BEAM_FIXED_PINNED && (shape_set & F3R_SHAPE_TIP_FORCE)) return -1;
-  if (modes + popcount3(shape_set) > F3R_MAX_MODES) return -1;
+  if (modes + (mix ? 1 : popcount3(shape_set)) > F3R_MAX_MODES) return -1;
   memset(out, 0, sizeof *out);
   out->end = end;
   out->modes = out->count = modes;
@@ -459,15 +479,28 @@ int f3r_beam_basis_build(f3r_beam_end end, int modes, unsigned shape_set, f3r_be
   long double V[3][3] = {{0}}, lambda[3];
   drop_weak_shapes(&w, ratio);
   if (w.p == 0) return 0;
-  if (ritz_solve(&w, V, lambda)) return -1;
-  finish_corrections(out, &w, V, lambda);
+  const int mixed = mix && w.p == 2, functions = mixed ? 1 : w.p;
+  if (mixed ? mixed_direction(&w, *mix, V, lambda) : ritz_solve(&w, V, lambda)) return -1;
+  finish_corrections(out, &w, V, lambda, functions);
   for (int k = 0; k < w.p; ++k) {
     out->shape_kind[k] = w.shape[k]->kind;
     out->residual_ratio[k] = ratio[k];
   }
   out->shapes = w.p;
-  out->count = modes + w.p;
+  out->corrections = functions;
+  out->count = modes + functions;
+  out->mixed = mixed;
+  out->mix = mixed ? *mix : 0.0;
   return 0;
+}
+
+int f3r_beam_basis_build(f3r_beam_end end, int modes, unsigned shape_set, f3r_beam_basis* out) {
+  return build(end, modes, shape_set, NULL, out);
+}
+
+int f3r_beam_basis_build_mixed(int modes, double mix, f3r_beam_basis* out) {
+  if (!isfinite(mix)) return -1;
+  return build(F3R_BEAM_FIXED_FREE, modes, F3R_SHAPE_TIP_FORCE | F3R_SHAPE_UNIFORM_LOAD, &mix, out);
 }
 
 /* Evaluated in long double, so the cancellation in V s - CV psi costs 2048x less. */

@@ -36,13 +36,16 @@ enum { F3R_SHAPE_TIP_FORCE = 1, F3R_SHAPE_UNIFORM_LOAD = 2, F3R_SHAPE_LINEAR_LOA
 
 typedef struct {
   f3r_beam_end end;
-  int modes;                   /* r: the paper's modes, functions 0..r-1 */
-  int shapes;                  /* p: static shapes kept after the drop test, functions r..r+p-1 */
-  int count;                   /* r + p <= F3R_MAX_MODES */
-  unsigned shape_kind[3];      /* the F3R_SHAPE_* bit of kept shape k (the rows of V) */
-  double alpha[F3R_MAX_MODES]; /* roots of the modes; alpha_equiv = stiffness^(1/4) beyond r */
-  double stiffness[F3R_MAX_MODES];    /* int phi_j''^2: alpha_j^4 for a mode, lambda beyond */
-  double mean[F3R_MAX_MODES];         /* int phi_j */
+  int modes;                       /* r: the paper's modes, functions 0..r-1 */
+  int shapes;                      /* p: static shapes kept after the drop test (the rows of V) */
+  int corrections;                 /* functions r..count-1 made of them: p, or 1 when mixed */
+  int count;                       /* r + corrections <= F3R_MAX_MODES */
+  int mixed;                       /* 1: the correction is tip + mix uniform (build_mixed) */
+  double mix;                      /* then q l / F of its loads */
+  unsigned shape_kind[3];          /* the F3R_SHAPE_* bit of kept shape k (the rows of V) */
+  double alpha[F3R_MAX_MODES];     /* roots of the modes; alpha_equiv = stiffness^(1/4) beyond r */
+  double stiffness[F3R_MAX_MODES]; /* int phi_j''^2: alpha_j^4 for a mode, lambda beyond */
+  double mean[F3R_MAX_MODES];      /* int phi_j */
   double first_moment[F3R_MAX_MODES]; /* int xi phi_j */
   double tip[F3R_MAX_MODES];          /* phi_j(1): exactly 0 for fixed-pinned */
   double residual_ratio[3];           /* ||t_k|| / ||s_k|| (mass norm) of each kept shape */
@@ -62,6 +65,16 @@ typedef struct {
  * 1..F3R_MAX_MODES, unknown bits, a tip-force shape on a fixed-pinned link, or modes plus the
  * requested shapes above F3R_MAX_MODES. No allocation. */
 int f3r_beam_basis_build(f3r_beam_end end, int modes, unsigned shape_set, f3r_beam_basis* out);
+
+/* A fixed-free basis of `modes` paper modes and one correction: the static deflection under a tip
+ * force F together with a uniform load q along the link, mix = q l / F, orthogonalised as above
+ * (its residual t = t_tip + mix t_uniform, normalised in mass; its stiffness the Rayleigh
+ * quotient). One function where the pair has two: the mechanism's slow modes load a link in one
+ * ratio, which f3r_shape_mix_fit (accuracy layer) finds, and the pair's stiffer combination only
+ * adds a fast mode (docs/benchmarks/fast_shapes.md). When the drop test leaves one shape, that
+ * shape is the correction, unmixed. Returns -1 where f3r_beam_basis_build would, and for a
+ * non-finite mix. */
+int f3r_beam_basis_build_mixed(int modes, double mix, f3r_beam_basis* out);
 
 /* phi_j, phi_j' and phi_j'' (derivatives with respect to xi) of function j (0-based, < count)
  * at xi in [0, 1]. Any output may be NULL. */

@@ -87,6 +87,11 @@ static f3r_status check_modes_resolved(const f3r_scene* scene, f3r_error* err) {
                            "links[%d].modes: left open (auto, or none under an accuracy request): "
                            "resolve it with f3r_accuracy_resolve before building the model",
                            i);
+    if (L->static_correction && L->shape_mix_kind == F3R_SHAPE_MIX_FIT)
+      return f3r_error_set(err, F3R_ERR_SCENE,
+                           "links[%d].shape_mix: fit: resolve it with f3r_accuracy_resolve before "
+                           "building the model",
+                           i);
   }
   return F3R_OK;
 }
@@ -103,6 +108,12 @@ static unsigned correction_shapes(const f3r_link_scene* L) {
   return F3R_SHAPE_UNIFORM_LOAD | F3R_SHAPE_LINEAR_LOAD;
 }
 
+/* Whether link L's fixed-free correction is one mixed shape (beam_basis.h). */
+static int mixed(const f3r_link_scene* L) {
+  return L->static_correction && L->model == F3R_LINK_FIXED_FREE &&
+         L->shape_mix_kind == F3R_SHAPE_MIXED;
+}
+
 /* An earlier link whose basis link i's would repeat (the same end, modes and shapes), or -1. A
  * basis with static shapes costs thousands of long double sin, cos and exp (beam_basis.c), and
  * the accuracy knob builds tens of models while it chooses. */
@@ -111,7 +122,8 @@ static int same_basis_as(const f3r_model* m, int i) {
   for (int j = 0; j < i; ++j) {
     const f3r_link_scene* K = &m->scene.links[j];
     if (K->model == L->model && K->modes == L->modes &&
-        correction_shapes(K) == correction_shapes(L))
+        correction_shapes(K) == correction_shapes(L) && mixed(K) == mixed(L) &&
+        (!mixed(L) || K->shape_mix == L->shape_mix))
       return j;
   }
   return -1;
@@ -126,11 +138,13 @@ static f3r_status fill_link_constants(f3r_model* m, int i, double* room, f3r_err
   const int same = same_basis_as(m, i);
   if (same >= 0)
     *b = m->basis[same]; /* the build is a function of these alone: the same numbers, once */
-  else if (f3r_beam_basis_build((f3r_beam_end)lp->model, L->modes, correction_shapes(L), b))
+  else if (mixed(L)
+               ? f3r_beam_basis_build_mixed(L->modes, L->shape_mix, b)
+               : f3r_beam_basis_build((f3r_beam_end)lp->model, L->modes, correction_shapes(L), b))
     return f3r_error_set(err, F3R_ERR_SCENE, "links[%d].modes: %d is out of range 1..%d", i,
                          L->modes, F3R_MAX_MODES - (f3r_link_scene_functions(L) - L->modes));
   lp->modes = b->count;
-  lp->static_shapes = b->shapes;
+  lp->static_shapes = b->corrections;
   for (int j = b->count; j < f3r_link_scene_functions(L); ++j)
     if (L->eta0[j] != 0.0 || L->eta_rate0[j] != 0.0)
       return f3r_error_set(err, F3R_ERR_SCENE,
@@ -326,6 +340,9 @@ const char* f3r_model_link_basis_name(const f3r_model* m, int link, char* text, 
   const int r = lp->modes - lp->static_shapes;
   if (lp->model == F3R_LINK_RIGID)
     snprintf(text, size, "rigid");
+  else if (m->basis[link].mixed)
+    snprintf(text, size, "%s, %d mode%s + 1 static shape (tip force + %.4g uniform load)",
+             f3r_link_model_name(lp->model), r, r == 1 ? "" : "s", m->basis[link].mix);
   else if (lp->static_shapes)
     snprintf(text, size, "%s, %d mode%s + %d static shape%s", f3r_link_model_name(lp->model), r,
              r == 1 ? "" : "s", lp->static_shapes, lp->static_shapes == 1 ? "" : "s");

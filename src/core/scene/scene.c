@@ -341,7 +341,25 @@ int f3r_link_static_shapes(f3r_link_model model) {
 
 int f3r_link_scene_functions(const f3r_link_scene* L) {
   if (L->model == F3R_LINK_RIGID) return 0;
-  return L->modes + (L->static_correction ? f3r_link_static_shapes(L->model) : 0);
+  if (!L->static_correction) return L->modes;
+  return L->modes + (L->shape_mix_kind == F3R_SHAPE_PAIR ? f3r_link_static_shapes(L->model) : 1);
+}
+
+/* links[i].shape_mix: one mixed shape stands for a fixed-free link's pair. */
+static f3r_status validate_shape_mix(const f3r_link_scene* L, int i, f3r_error* err) {
+  char name[64];
+  snprintf(name, sizeof name, "links[%d].shape_mix", i);
+  if (L->shape_mix_kind == F3R_SHAPE_PAIR) return F3R_OK;
+  if (L->shape_mix_kind != F3R_SHAPE_MIXED && L->shape_mix_kind != F3R_SHAPE_MIX_FIT)
+    return f3r_scene_error(err, name, NULL, "kind %d is not a number or fit",
+                           (int)L->shape_mix_kind);
+  if (L->model != F3R_LINK_FIXED_FREE || !L->static_correction)
+    return f3r_scene_error(err, name, NULL,
+                           "given for a link without the fixed-free static correction (allowed "
+                           "with model fixed_free and static_correction true)");
+  if (L->shape_mix_kind == F3R_SHAPE_MIXED)
+    CHECK_RANGE(name, L->shape_mix, -F3R_SHAPE_MIX_LIMIT, F3R_SHAPE_MIX_LIMIT);
+  return F3R_OK;
 }
 
 /* links[i].static_correction: a flexible link with a number of modes that leaves room for the
@@ -393,6 +411,7 @@ static f3r_status validate_link(const f3r_scene* s, int i, f3r_error* err) {
     return f3r_scene_error(err, name, NULL, "%d is out of range 1..%d", L->modes, F3R_MAX_MODES);
   }
   f3r_status st = validate_static_correction(s, i, err);
+  if (st == F3R_OK) st = validate_shape_mix(L, i, err);
   if (st != F3R_OK) return st;
   const int functions = f3r_link_scene_functions(L);
   for (int j = 0; j < F3R_MAX_MODES; ++j) {

@@ -46,6 +46,17 @@ static f3r_status read_link(loader* L, const yaml_node_t* map, int i) {
       if ((st = f3r_yaml_bool(L, value, name, &link->static_correction)) != F3R_OK) return st;
       L->scene->explicit_settings |= F3R_EXPLICIT_STATIC_CORRECTION << i;
       f3r_yaml_remember(L, name, value);
+    } else if (!strcmp(key, "shape_mix")) {
+      const char* v = f3r_yaml_scalar(value);
+      if (v && !strcmp(v, "fit")) {
+        link->shape_mix_kind = F3R_SHAPE_MIX_FIT;
+      } else if (f3r_yaml_number(L, value, name, &link->shape_mix) != F3R_OK) {
+        return f3r_yaml_fail(L, value, name, "expected a number in -%g..%g or fit",
+                             F3R_SHAPE_MIX_LIMIT, F3R_SHAPE_MIX_LIMIT);
+      } else {
+        link->shape_mix_kind = F3R_SHAPE_MIXED;
+      }
+      f3r_yaml_remember(L, name, value);
     } else if (!strcmp(key, "damping_ratio")) {
       if ((st = f3r_yaml_number(L, value, name, &link->damping_ratio)) != F3R_OK) return st;
     } else if (!strcmp(key, "initial_deflection") || !strcmp(key, "initial_rate")) {
@@ -59,8 +70,8 @@ static f3r_status read_link(loader* L, const yaml_node_t* map, int i) {
       if ((st = f3r_yaml_vector(L, value, name, target, len)) != F3R_OK) return st;
     } else {
       return f3r_yaml_fail(L, value, name,
-                           "unknown key (allowed: model, modes, static_correction, auto_tolerance, "
-                           "damping_ratio, initial_deflection, initial_rate)");
+                           "unknown key (allowed: model, modes, static_correction, shape_mix, "
+                           "auto_tolerance, damping_ratio, initial_deflection, initial_rate)");
     }
   }
   return F3R_OK;
