@@ -37,6 +37,8 @@ typedef struct {
   double request;           /* m; 0 when only modes: auto asked */
   int modes[3];             /* per link; 0 for rigid links */
   int static_correction[3]; /* 1: link i's basis adds its static shapes to its modes */
+  double shape_mix[3];      /* with it, the one mixed shape's load ratio (links[i].shape_mix);
+                             * NaN: the pair of shapes, or the scene's own fit, resolved later */
   int exact_kinematics;
   f3r_formulation formulation;
   f3r_integrator integrator;

@@ -220,6 +220,9 @@ f3r_status f3r_scene_validate(const f3r_scene* scene, f3r_error* err);
  * fixed-pinned, 0 rigid), and the number of modal coordinates of a link scene with a numeric
  * mode count: modes, plus those shapes when static_correction is on. */
 int f3r_link_static_shapes(f3r_link_model model);
+/* The functions a link's static correction adds to its modes: 0 without it, 1 for one mixed
+ * shape (shape_mix), else f3r_link_static_shapes. */
+int f3r_link_correction_functions(const f3r_link_scene* link);
 int f3r_link_scene_functions(const f3r_link_scene* link);
 
 /* The Butcher tables an integrator offers by name (those the benchmark measures), NULL-ended:

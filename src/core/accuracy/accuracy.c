@@ -343,8 +343,12 @@ f3r_status f3r_accuracy_choose(const f3r_scene* scene, double request, int comma
   f3r_status st = search_modes(&run, c, err);
   if (st == F3R_OK) st = check_modes(&run, c, err);
   if (st == F3R_OK) st = f3r_choice_compare_bases(&run, c, err);
-  for (int i = 0; i < 3; ++i)
+  for (int i = 0; i < 3; ++i) {
     c->static_correction[i] = f3r_is_flexible(&s, i) && s.links[i].static_correction;
+    c->shape_mix[i] = c->static_correction[i] && s.links[i].shape_mix_kind == F3R_SHAPE_MIXED
+                          ? s.links[i].shape_mix
+                          : NAN;
+  }
   c->linear_evaluations = run.ms.evaluations;
   if (st == F3R_OK) {
     f3r_summarise_modes(&run, c);
@@ -362,6 +366,10 @@ void f3r_accuracy_apply(const f3r_accuracy_choice* c, f3r_scene* s) {
     if (f3r_is_flexible(s, i)) {
       s->links[i].modes = c->modes[i];
       s->links[i].static_correction = c->static_correction[i];
+      if (c->static_correction[i] && isfinite(c->shape_mix[i])) {
+        s->links[i].shape_mix_kind = F3R_SHAPE_MIXED;
+        s->links[i].shape_mix = c->shape_mix[i];
+      }
     }
   s->exact_kinematics = c->exact_kinematics;
   s->formulation = c->formulation;

@@ -36,6 +36,61 @@ int f3r_choice_plain_search_may_wait(const choice_run* run) {
   return !run->ms.at_rest && !run->impacts && !run->long_run && correctable_links(run);
 }
 
+/* The correctable links' static correction as one mixed shape (beam_basis.h), its load ratio
+ * fitted at the counts `modes` (f3r_shape_mix_fit): it keeps the pair's first frequency and drops
+ * its stiff combination, whose 3 kHz modes set IDA's step (about half the steps on paper
+ * simulation 3: docs/benchmarks/fast_shapes.md). */
+static f3r_status mix_corrected_shapes(const choice_run* run, const int modes[3],
+                                       f3r_scene* corrected, f3r_error* err) {
+  f3r_scene at = *corrected; /* a view of the same tables */
+  at.accuracy = 0.0;
+  for (int i = 0; i < 3; ++i)
+    if (f3r_is_flexible(&at, i)) at.links[i].modes = modes[i];
+  double mix[3];
+  const f3r_status st = f3r_shape_mix_fit(&at, run->correctable, mix, err);
+  for (int i = 0; i < 3 && st == F3R_OK; ++i)
+    if (run->correctable >> i & 1) {
+      corrected->links[i].shape_mix_kind = F3R_SHAPE_MIXED;
+      corrected->links[i].shape_mix = mix[i];
+    }
+  return st;
+}
+
+/* Where the pair's search kept a uniform count r (the counts it tries at r), the same counts with
+ * one mixed shape instead (mix_corrected_shapes), estimated against the pair's own reference
+ * there (3 r + 3 modes and the pair): taken into `corrected` and ms where it fits the model's
+ * share and costs less. On paper simulation 3 it halves the run's steps at 1e-4 m (r = 1) and at
+ * 1e-5 m (r = 2). */
+static f3r_status try_mixed_shape(choice_run* run, const f3r_accuracy_choice* c,
+                                  f3r_scene* corrected, f3r_mode_search* ms, double ratio,
+                                  double* estimate, f3r_error* err) {
+  int r = 0, at_r[3], fits = 0;
+  for (int i = 0; i < 3 && !r; ++i)
+    if (run->correctable >> i & 1) r = run->corrected_modes[i];
+  f3r_mode_search_uniform(ms, r, at_r);
+  if (r < 1 || r > 3 || memcmp(at_r, run->corrected_modes, sizeof at_r)) return F3R_OK;
+  f3r_scene mixed = *corrected; /* a view of the same tables */
+  f3r_status st = mix_corrected_shapes(run, at_r, &mixed, err);
+  if (st == F3R_OK) st = f3r_mode_search_fits(corrected, ms, r, 0.0, &fits, err); /* the ref */
+  ms->mixed = run->correctable;
+  if (st == F3R_OK) st = f3r_mode_search_path(&mixed, ms, at_r, ms->order, ms->path, err);
+  const double e = st == F3R_OK ? f3r_max_distance(ms->path, ms->ref, ms->count) : 0.0;
+  double cost = 0.0;
+  if (st == F3R_OK && e <= run->model_target / ratio) st = f3r_basis_cost(&mixed, at_r, &cost, err);
+  const double solver = f3r_choice_solver_cost(run, c, at_r, ratio * e, 1);
+  if (st != F3R_OK || !(cost > 0.0) ||
+      !(cost * solver < run->corrected_cost * run->corrected_solver_cost)) {
+    ms->mixed = 0;
+    return st;
+  }
+  *corrected = mixed;
+  *estimate = e;
+  run->corrected_error = ratio * e;
+  run->corrected_cost = cost;
+  run->corrected_solver_cost = solver;
+  return F3R_OK;
+}
+
 /* The cost of the least static correction: one mode + shapes on the correctable links. */
 static f3r_status least_correction_cost(const choice_run* run, const f3r_scene* corrected,
                                         double* cost, f3r_error* err) {
@@ -191,6 +246,8 @@ f3r_status f3r_choice_compare_bases(choice_run* run, f3r_accuracy_choice* c, f3r
     st = f3r_basis_cost(&corrected, run->corrected_modes, &run->corrected_cost, err);
   run->corrected_solver_cost =
       f3r_choice_solver_cost(run, c, run->corrected_modes, run->corrected_error, 1);
+  if (st == F3R_OK && run->corrected_found)
+    st = try_mixed_shape(run, c, &corrected, &ms, ratio, &estimate, err);
   if (st == F3R_OK) st = settle_plain_search(run, c, least_cost, err);
   run->plain_solver_cost =
       run->plain_beyond ? 1.0

@@ -41,6 +41,7 @@ typedef struct {
   int low[3];
   int fixed[3];       /* the modes of the links not chosen */
   unsigned corrected; /* the links whose basis adds the static shapes (the scene's flags) */
+  unsigned mixed;     /* of those, the links whose correction is one mixed shape (shape_mix) */
   int most[3];        /* the most modes link i may take: F3R_MAX_MODES less its shapes */
   int order;
   int ref_r;       /* the uniform count the reference in ref has on the chosen links, 0: none */
@@ -58,7 +59,7 @@ typedef struct {
   struct {
     int modes[3];
     int order;
-    unsigned corrected;
+    unsigned corrected, mixed;
     double* pose; /* 3 count */
   } memo[F3R_PATH_MEMO];
   int memo_used, memo_next;
@@ -87,6 +88,9 @@ f3r_status f3r_mode_search_fits(const f3r_scene* s, f3r_mode_search* ms, int r, 
 /* The least mode counts the search may give: one mode, or the initial state's highest, on each
  * chosen link; the other links keep theirs. */
 void f3r_mode_search_least(const f3r_mode_search* ms, int modes[3]);
+/* r on the chosen links (at least their initial state's, at most their room), the scene's counts
+ * on the others: the counts the search tries at r. */
+void f3r_mode_search_uniform(const f3r_mode_search* ms, int r, int modes[3]);
 /* 1 when the search found counts within its target (0: the chosen links are at their most). */
 int f3r_mode_search_found(const f3r_mode_search* ms, const int modes[3]);
 /* The relative CPU cost of a run at modes: sqrt(highest linearised frequency) times the

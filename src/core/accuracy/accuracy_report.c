@@ -118,8 +118,11 @@ void f3r_summarise_modes(const choice_run* run, f3r_accuracy_choice* c) {
       run->request, F3R_ACCURACY_MODEL_SHARE, F3R_ACCURACY_KINEMATICS_SHARE,
       F3R_ACCURACY_SOLVER_SHARE);
   for (int i = 0; i < 3; ++i) {
-    char shapes[48] = "";
-    if (c->static_correction[i])
+    char shapes[80] = "";
+    if (c->static_correction[i] && isfinite(c->shape_mix[i]))
+      snprintf(shapes, sizeof shapes, " + 1 static shape (tip force + %.3g uniform load)",
+               c->shape_mix[i]);
+    else if (c->static_correction[i])
       snprintf(shapes, sizeof shapes, " + %d static shapes",
                f3r_link_static_shapes(run->scene->links[i].model));
     if (!f3r_is_flexible(run->scene, i))

@@ -28,7 +28,20 @@ f3r_status f3r_model_with_modes(const f3r_scene* base, const int modes[3], int e
   f3r_scene s = *base;
   s.accuracy = 0.0;
   s.exact_kinematics = exact_kinematics;
-  for (int i = 0; i < 3; ++i) s.links[i].modes = f3r_is_flexible(&s, i) ? modes[i] : 0;
+  unsigned fit = 0; /* the scene's own shape_mix: fit, at these counts */
+  for (int i = 0; i < 3; ++i) {
+    s.links[i].modes = f3r_is_flexible(&s, i) ? modes[i] : 0;
+    if (s.links[i].static_correction && s.links[i].shape_mix_kind == F3R_SHAPE_MIX_FIT)
+      fit |= 1u << i;
+  }
+  double mix[3];
+  const f3r_status st = fit ? f3r_shape_mix_fit(&s, fit, mix, err) : F3R_OK;
+  if (st != F3R_OK) return st;
+  for (int i = 0; i < 3; ++i)
+    if (fit >> i & 1) {
+      s.links[i].shape_mix_kind = F3R_SHAPE_MIXED;
+      s.links[i].shape_mix = mix[i];
+    }
   return f3r_model_create(&s, model, err);
 }
 
@@ -153,6 +166,10 @@ static int top_modes(const f3r_mode_search* ms) {
 
 void f3r_mode_search_least(const f3r_mode_search* ms, int modes[3]) { uniform(ms, 1, modes); }
 
+void f3r_mode_search_uniform(const f3r_mode_search* ms, int r, int modes[3]) {
+  uniform(ms, r, modes);
+}
+
 int f3r_mode_search_found(const f3r_mode_search* ms, const int modes[3]) {
   for (int i = 0; i < 3; ++i)
     if ((ms->chosen >> i & 1) && modes[i] < ms->most[i]) return 1;
@@ -177,6 +194,7 @@ f3r_status f3r_mode_search_path(const f3r_scene* s, f3r_mode_search* ms, const i
   const size_t bytes = (size_t)ms->count * 3 * sizeof(double);
   for (int k = 0; k < ms->memo_used; ++k)
     if (ms->memo[k].order == order && ms->memo[k].corrected == ms->corrected &&
+        ms->memo[k].mixed == ms->mixed &&
         !memcmp(ms->memo[k].modes, modes, sizeof ms->memo[k].modes)) {
       memcpy(pose, ms->memo[k].pose, bytes);
       return F3R_OK;
@@ -196,6 +214,7 @@ f3r_status f3r_mode_search_path(const f3r_scene* s, f3r_mode_search* ms, const i
     memcpy(ms->memo[k].modes, modes, sizeof ms->memo[k].modes);
     ms->memo[k].order = order;
     ms->memo[k].corrected = ms->corrected;
+    ms->memo[k].mixed = ms->mixed;
     memcpy(ms->memo[k].pose, pose, bytes);
   } else {
     ms->memo[k].order = -1;
@@ -310,7 +329,8 @@ f3r_status f3r_mode_search_init(const f3r_scene* s, unsigned chosen, f3r_mode_se
     ms->fixed[i] = f3r_is_flexible(s, i) ? s->links[i].modes : 0;
     const int corrected = f3r_is_flexible(s, i) && s->links[i].static_correction;
     ms->corrected |= (unsigned)corrected << i;
-    ms->most[i] = F3R_MAX_MODES - (corrected ? f3r_link_static_shapes(s->links[i].model) : 0);
+    ms->mixed |= (unsigned)(corrected && s->links[i].shape_mix_kind == F3R_SHAPE_MIXED) << i;
+    ms->most[i] = F3R_MAX_MODES - f3r_link_correction_functions(&s->links[i]);
   }
   ms->chosen = chosen;
   ms->order = 1;

@@ -339,10 +339,13 @@ int f3r_link_static_shapes(f3r_link_model model) {
   return model == F3R_LINK_FIXED_FREE ? 2 : model == F3R_LINK_FIXED_PINNED ? 2 : 0;
 }
 
+int f3r_link_correction_functions(const f3r_link_scene* L) {
+  if (L->model == F3R_LINK_RIGID || !L->static_correction) return 0;
+  return L->shape_mix_kind == F3R_SHAPE_PAIR ? f3r_link_static_shapes(L->model) : 1;
+}
+
 int f3r_link_scene_functions(const f3r_link_scene* L) {
-  if (L->model == F3R_LINK_RIGID) return 0;
-  if (!L->static_correction) return L->modes;
-  return L->modes + (L->shape_mix_kind == F3R_SHAPE_PAIR ? f3r_link_static_shapes(L->model) : 1);
+  return L->model == F3R_LINK_RIGID ? 0 : L->modes + f3r_link_correction_functions(L);
 }
 
 /* links[i].shape_mix: one mixed shape stands for a fixed-free link's pair. */
@@ -375,7 +378,7 @@ static f3r_status validate_static_correction(const f3r_scene* s, int i, f3r_erro
     return f3r_scene_error(err, name, NULL,
                            "true given for a rigid link, which has no modes (allowed with "
                            "model fixed_free or fixed_pinned)");
-  const int shapes = f3r_link_static_shapes(L->model);
+  const int shapes = f3r_link_correction_functions(L);
   /* open modes (auto, or left to the accuracy knob): the search adds the shapes to its counts */
   if (L->modes + shapes > F3R_MAX_MODES) {
     snprintf(name, sizeof name, "links[%d].modes", i);
