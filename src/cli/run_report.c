@@ -104,6 +104,13 @@ static void json_links(f3r_json* j, const f3r_scene* scene, const f3r_accuracy_c
                          ? f3r_link_scene_functions(&scene->links[i]) - scene->links[i].modes
                          : 0);
   f3r_json_close(j);
+  f3r_json_array(j, "shape_mix"); /* the one mixed shape's load ratio, null for the pair */
+  for (int i = 0; i < 3; ++i)
+    if (c->static_correction[i] && isfinite(c->shape_mix[i]))
+      f3r_json_number(j, NULL, c->shape_mix[i]);
+    else
+      f3r_json_null(j, NULL);
+  f3r_json_close(j);
 }
 
 /* The accuracy knob's choice and estimates: with a request (--accuracy, scene accuracy), or the

@@ -36,7 +36,8 @@ KEYS = {
             "real_time_factor_wall",
             "max_constraint_residual_m", "energy_balance_error_J", "energy_balance_relative", "max_deflection_m",
             "max_tip_deflection_m", "final_x_p_m", "final_y_p_m", "final_phi_p_rad", "csv"},
-    "accuracy": {"request_m", "rigid", "modes", "static_correction", "static_shapes", "model_error_m", "extent_m",
+    "accuracy": {"request_m", "rigid", "modes", "static_correction", "static_shapes", "shape_mix", "model_error_m",
+                 "extent_m",
                  "linear_evaluations", "choice_cpu_time_s", "exact_kinematics", "formulation", "integrator", "table",
                  "rtol", "atol", "kinematics_error_m", "kinematics_effect_m", "kinematics_linear_m", "solver_error_m",
                  "pilot", "pilot_ratio", "estimated_error_m", "request_met", "summary", "brief"},
@@ -138,10 +139,15 @@ class Summary(unittest.TestCase):
             if k["rigid"][i]:
                 self.assertEqual(line, "rigid")
                 continue
-            m = re.match(r"(\d+) modes(?: \+ (\d+) static shapes)?", line)
+            m = re.match(r"(\d+) modes(?: \+ (\d+) static shapes?(?: \(tip force \+ (\S+) uniform load\))?)?",
+                         line)
             self.assertEqual(int(m.group(1)), k["modes"][i])
             self.assertEqual(bool(m.group(2)), k["static_correction"][i])
             self.assertEqual(int(m.group(2) or 0), k["static_shapes"][i])
+            if m.group(3):  # one mixed shape: its load ratio, to the 3 digits the text gives
+                self.assertEqual(g(k["shape_mix"][i], ".3g"), m.group(3))
+            else:
+                self.assertIsNone(k["shape_mix"][i])
         ek = re.search(r"^exact kinematics: (on|off)", human, re.M)
         if ek:
             self.assertEqual(ek.group(1) == "on", k["exact_kinematics"])
