@@ -100,9 +100,7 @@ static void json_links(f3r_json* j, const f3r_scene* scene, const f3r_accuracy_c
   f3r_json_array(j, "static_shapes");
   for (int i = 0; i < 3; ++i)
     f3r_json_integer(j, NULL,
-                     c->static_correction[i]
-                         ? f3r_link_scene_functions(&scene->links[i]) - scene->links[i].modes
-                         : 0);
+                     c->static_correction[i] ? f3r_link_correction_functions(&scene->links[i]) : 0);
   f3r_json_close(j);
   f3r_json_array(j, "shape_mix"); /* the one mixed shape's load ratio, null for the pair */
   for (int i = 0; i < 3; ++i)

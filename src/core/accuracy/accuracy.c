@@ -381,22 +381,16 @@ void f3r_accuracy_apply(const f3r_accuracy_choice* c, f3r_scene* s) {
 
 /* The links with shape_mix: fit, fitted at their resolved mode counts (f3r_shape_mix_fit). */
 static f3r_status resolve_shape_mix(f3r_scene* scene, f3r_accuracy_choice* c, f3r_error* err) {
-  unsigned fit = 0;
-  for (int i = 0; i < 3; ++i)
-    if (scene->links[i].static_correction && scene->links[i].shape_mix_kind == F3R_SHAPE_MIX_FIT)
-      fit |= 1u << i;
+  const unsigned fit = f3r_shape_mix_open(scene);
   if (!fit) return F3R_OK;
   double mix[3];
-  const f3r_status st = f3r_shape_mix_fit(scene, fit, mix, err);
+  const f3r_status st = f3r_shape_mix_set_fitted(scene, fit, scene, mix, err);
   if (st != F3R_OK) return st;
   for (int i = 0; i < 3; ++i)
-    if (fit >> i & 1) {
-      scene->links[i].shape_mix_kind = F3R_SHAPE_MIXED;
-      scene->links[i].shape_mix = mix[i];
+    if (fit >> i & 1)
       f3r_accuracy_append(
           c->summary, sizeof c->summary,
           "links[%d]: shape_mix fit -> %.6g (the load ratio of its slowest modes)\n", i, mix[i]);
-    }
   return F3R_OK;
 }
 

@@ -46,14 +46,7 @@ static f3r_status mix_corrected_shapes(const choice_run* run, const int modes[3]
   at.accuracy = 0.0;
   for (int i = 0; i < 3; ++i)
     if (f3r_is_flexible(&at, i)) at.links[i].modes = modes[i];
-  double mix[3];
-  const f3r_status st = f3r_shape_mix_fit(&at, run->correctable, mix, err);
-  for (int i = 0; i < 3 && st == F3R_OK; ++i)
-    if (run->correctable >> i & 1) {
-      corrected->links[i].shape_mix_kind = F3R_SHAPE_MIXED;
-      corrected->links[i].shape_mix = mix[i];
-    }
-  return st;
+  return f3r_shape_mix_set_fitted(&at, run->correctable, corrected, NULL, err);
 }
 
 /* Where the pair's search kept a uniform count r (the counts it tries at r), the same counts with

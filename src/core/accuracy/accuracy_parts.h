@@ -91,6 +91,14 @@ void f3r_mode_search_least(const f3r_mode_search* ms, int modes[3]);
 /* r on the chosen links (at least their initial state's, at most their room), the scene's counts
  * on the others: the counts the search tries at r. */
 void f3r_mode_search_uniform(const f3r_mode_search* ms, int r, int modes[3]);
+
+/* The links of s with static_correction and shape_mix: fit (bit i). */
+unsigned f3r_shape_mix_open(const f3r_scene* s);
+/* Fits the links in the mask `links` on scene `at` (f3r_shape_mix_fit, at its counts) and makes
+ * each of them one mixed shape of that ratio in `out` (which may be `at`); the ratios into mix
+ * (may be NULL). */
+f3r_status f3r_shape_mix_set_fitted(const f3r_scene* at, unsigned links, f3r_scene* out,
+                                    double* mix, f3r_error* err);
 /* 1 when the search found counts within its target (0: the chosen links are at their most). */
 int f3r_mode_search_found(const f3r_mode_search* ms, const int modes[3]);
 /* The relative CPU cost of a run at modes: sqrt(highest linearised frequency) times the

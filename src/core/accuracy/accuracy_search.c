@@ -28,21 +28,10 @@ f3r_status f3r_model_with_modes(const f3r_scene* base, const int modes[3], int e
   f3r_scene s = *base;
   s.accuracy = 0.0;
   s.exact_kinematics = exact_kinematics;
-  unsigned fit = 0; /* the scene's own shape_mix: fit, at these counts */
-  for (int i = 0; i < 3; ++i) {
-    s.links[i].modes = f3r_is_flexible(&s, i) ? modes[i] : 0;
-    if (s.links[i].static_correction && s.links[i].shape_mix_kind == F3R_SHAPE_MIX_FIT)
-      fit |= 1u << i;
-  }
-  double mix[3];
-  const f3r_status st = fit ? f3r_shape_mix_fit(&s, fit, mix, err) : F3R_OK;
-  if (st != F3R_OK) return st;
-  for (int i = 0; i < 3; ++i)
-    if (fit >> i & 1) {
-      s.links[i].shape_mix_kind = F3R_SHAPE_MIXED;
-      s.links[i].shape_mix = mix[i];
-    }
-  return f3r_model_create(&s, model, err);
+  for (int i = 0; i < 3; ++i) s.links[i].modes = f3r_is_flexible(&s, i) ? modes[i] : 0;
+  const unsigned fit = f3r_shape_mix_open(&s); /* the scene's own shape_mix: fit, at these counts */
+  const f3r_status st = fit ? f3r_shape_mix_set_fitted(&s, fit, &s, NULL, err) : F3R_OK;
+  return st == F3R_OK ? f3r_model_create(&s, model, err) : st;
 }
 
 /* The scene's inputs at the search's sampling, sampled with the first model that needs them: the

@@ -101,3 +101,24 @@ f3r_status f3r_shape_mix_fit(const f3r_scene* scene, unsigned links, double mix[
   f3r_model_destroy(m);
   return st;
 }
+
+unsigned f3r_shape_mix_open(const f3r_scene* s) {
+  unsigned open = 0;
+  for (int i = 0; i < 3; ++i)
+    if (s->links[i].static_correction && s->links[i].shape_mix_kind == F3R_SHAPE_MIX_FIT)
+      open |= 1u << i;
+  return open;
+}
+
+f3r_status f3r_shape_mix_set_fitted(const f3r_scene* at, unsigned links, f3r_scene* out,
+                                    double* mix, f3r_error* err) {
+  double fitted[3];
+  const f3r_status st = f3r_shape_mix_fit(at, links, fitted, err);
+  for (int i = 0; i < 3 && st == F3R_OK; ++i)
+    if (links >> i & 1) {
+      out->links[i].shape_mix_kind = F3R_SHAPE_MIXED;
+      out->links[i].shape_mix = fitted[i];
+    }
+  if (mix) memcpy(mix, fitted, sizeof fitted);
+  return st;
+}
