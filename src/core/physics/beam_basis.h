@@ -63,7 +63,9 @@ typedef struct {
  * many stay). Corrections are sorted by stiffness ascending, with the sign fixed-free
  * phi(1) > 0, fixed-pinned int phi > 0. Returns 0, or -1 for a bad end, modes outside
  * 1..F3R_MAX_MODES, unknown bits, a tip-force shape on a fixed-pinned link, or modes plus the
- * requested shapes above F3R_MAX_MODES. No allocation. */
+ * requested shapes above F3R_MAX_MODES, or F3R_BASIS_NO_MEMORY when its table of the modes at
+ * the quadrature nodes (freed before it returns) cannot be allocated. */
+#define F3R_BASIS_NO_MEMORY (-2)
 int f3r_beam_basis_build(f3r_beam_end end, int modes, unsigned shape_set, f3r_beam_basis* out);
 
 /* A fixed-free basis of `modes` paper modes and one correction: the static deflection under a tip
@@ -72,7 +74,7 @@ int f3r_beam_basis_build(f3r_beam_end end, int modes, unsigned shape_set, f3r_be
  * quotient). One function where the pair has two: the mechanism's slow modes load a link in one
  * ratio, which f3r_shape_mix_fit (accuracy layer) finds, and the pair's stiffer combination only
  * adds a fast mode (docs/benchmarks/fast_shapes.md). When the drop test leaves one shape, that
- * shape is the correction, unmixed. Returns -1 where f3r_beam_basis_build would, and for a
+ * shape is the correction, unmixed. Returns what f3r_beam_basis_build would, and -1 for a
  * non-finite mix. */
 int f3r_beam_basis_build_mixed(int modes, double mix, f3r_beam_basis* out);
 
