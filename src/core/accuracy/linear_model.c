@@ -243,6 +243,41 @@ static void project(const f3r_linear_model* lin, int count, const double* F, dou
   }
 }
 
+/* Mode phi's load phi^T (f0 + U u) as a constant and a gain per applied force. */
+static void modal_load(const f3r_linear_model* lin, const double* phi, double* constant,
+                       double gain[F3R_RIGID_FORCES]) {
+  const int n = lin->n;
+  *constant = 0.0;
+  for (int f = 0; f < F3R_RIGID_FORCES; ++f) gain[f] = 0.0;
+  for (int a = 0; a < n; ++a) {
+    *constant += phi[a] * lin->static_force[a];
+    for (int f = 0; f < F3R_RIGID_FORCES; ++f) gain[f] += phi[a] * F3R_AT(lin->input, n, a, f);
+  }
+}
+
+/* The modal load at one sample of the applied forces u (F3R_RIGID_FORCES of them). */
+static double modal_force(double constant, const double gain[F3R_RIGID_FORCES], const double* u) {
+  double v = constant;
+  for (int f = 0; f < F3R_RIGID_FORCES; ++f) v += gain[f] * u[f];
+  return v;
+}
+
+/* Mode phi's initial coordinate and rate: phi^T M dz0 and phi^T M vz0. */
+static void modal_start(const f3r_linear_model* lin, const double* phi, const double* dz0,
+                        const double* vz0, double* xi, double* rate) {
+  const int n = lin->n;
+  *xi = *rate = 0.0;
+  for (int a = 0; a < n; ++a) {
+    double mdz = 0.0, mvz = 0.0;
+    for (int b = 0; b < n; ++b) {
+      mdz += F3R_AT(lin->mass, n, a, b) * dz0[b];
+      mvz += F3R_AT(lin->mass, n, a, b) * vz0[b];
+    }
+    *xi += phi[a] * mdz;
+    *rate += phi[a] * mvz;
+  }
+}
+
 /* One modal superposition of modal forces P (linear between samples) from the initial deviation
  * dz0 and rate vz0 in z. Adds the pose deviation to pose (3 per sample) and, when z is not NULL,
  * writes the deviation, rate and acceleration of every coordinate (z, zd, zdd: n per sample). */
@@ -258,16 +293,8 @@ static void superpose(const f3r_linear_model* lin, double dt, int count, const d
   for (int j = 0; j < n; ++j) {
     const double* phi = lin->shapes + (size_t)j * n;
     const double* p = P + (size_t)j * count;
-    double xi = 0.0, rate = 0.0;
-    for (int a = 0; a < n; ++a) { /* xi0 = phi^T M dz0 */
-      double mdz = 0.0, mvz = 0.0;
-      for (int b = 0; b < n; ++b) {
-        mdz += F3R_AT(lin->mass, n, a, b) * dz0[b];
-        mvz += F3R_AT(lin->mass, n, a, b) * vz0[b];
-      }
-      xi += phi[a] * mdz;
-      rate += phi[a] * mvz;
-    }
+    double xi, rate;
+    modal_start(lin, phi, dz0, vz0, &xi, &rate);
     double E[4][4];
     const double k2 = lin->omega2[j], c = lin->modal_damping[j];
     mode_transition(k2, c, dt, E);
@@ -289,6 +316,73 @@ static void superpose(const f3r_linear_model* lin, double dt, int count, const d
           zddk[a] += phi[a] * acc;
         }
       }
+    }
+  }
+}
+
+/* The modes superposed side by side in pose_superpose: each mode's step is a chain of dependent
+ * sums, and POSE_BLOCK modes in the lanes of one vector (GCC's and Clang's vector extension)
+ * step together. Each vector operation is the same IEEE operation on every lane, so the lanes
+ * hold the scalar code's values. */
+#define POSE_BLOCK 4
+typedef double pose_lanes __attribute__((vector_size(POSE_BLOCK * sizeof(double))));
+
+/* POSE_BLOCK modes from j0, a mode a lane (the last block padded with lanes that stay zero). */
+typedef struct {
+  int count;                         /* the real modes in the block */
+  const double* phi[POSE_BLOCK];     /* their shapes */
+  pose_lanes constant;               /* modal_load's constant */
+  pose_lanes gain[F3R_RIGID_FORCES]; /* and gains */
+  pose_lanes E[2][4];                /* mode_transition's first two rows */
+  pose_lanes xi, rate, p_prev;       /* the modal coordinate, its rate and the last load */
+} pose_block;
+
+static void pose_block_start(const f3r_linear_model* lin, int j0, double dt, const double* u0,
+                             const double* dz0, const double* vz0, pose_block* pb) {
+  memset(pb, 0, sizeof *pb);
+  pb->count = lin->n - j0 < POSE_BLOCK ? lin->n - j0 : POSE_BLOCK;
+  for (int m = 0; m < pb->count; ++m) {
+    const int j = j0 + m;
+    const double* phi = pb->phi[m] = lin->shapes + (size_t)j * lin->n;
+    double constant, gain[F3R_RIGID_FORCES], E[4][4], xi, rate;
+    modal_load(lin, phi, &constant, gain);
+    modal_start(lin, phi, dz0, vz0, &xi, &rate);
+    mode_transition(lin->omega2[j], lin->modal_damping[j], dt, E);
+    pb->constant[m] = constant;
+    for (int f = 0; f < F3R_RIGID_FORCES; ++f) pb->gain[f][m] = gain[f];
+    for (int r = 0; r < 2; ++r)
+      for (int c = 0; c < 4; ++c) pb->E[r][c][m] = E[r][c];
+    pb->xi[m] = xi;
+    pb->rate[m] = rate;
+    pb->p_prev[m] = modal_force(constant, gain, u0);
+  }
+}
+
+/* The first-order pose alone (superpose with z NULL and P = phi_j^T (f0 + U u_k)), fused: the
+ * modal forces are formed per sample instead of stored, and POSE_BLOCK modes step side by side.
+ * Every sum is formed in the same order as superpose's (pose[k] gains the modes by ascending j),
+ * so the pose is bit-identical to it. On paper simulation 3 at 1e-4 m, where the choosing forms
+ * nine such paths of 6 to 39 coordinates, it took the choosing from 7.4 to 6.4 ms. */
+static void pose_superpose(const f3r_linear_model* lin, double dt, int count, const double* u,
+                           const double* dz0, const double* vz0, double* pose) {
+  for (int j0 = 0; j0 < lin->n; j0 += POSE_BLOCK) {
+    pose_block b;
+    pose_block_start(lin, j0, dt, u, dz0, vz0, &b);
+    for (int m = 0; m < b.count; ++m)
+      for (int a = 0; a < 3; ++a) pose[a] += b.phi[m][a] * b.xi[m];
+    for (int k = 1; k < count; ++k) {
+      const double* uk = u + (size_t)k * F3R_RIGID_FORCES;
+      pose_lanes p = b.constant;
+      for (int f = 0; f < F3R_RIGID_FORCES; ++f) p += b.gain[f] * uk[f];
+      const pose_lanes slope = (p - b.p_prev) / dt;
+      const pose_lanes xi =
+          b.E[0][0] * b.xi + b.E[0][1] * b.rate + b.E[0][2] * b.p_prev + b.E[0][3] * slope;
+      b.rate = b.E[1][0] * b.xi + b.E[1][1] * b.rate + b.E[1][2] * b.p_prev + b.E[1][3] * slope;
+      b.xi = xi;
+      b.p_prev = p;
+      double* pk = pose + 3 * (size_t)k;
+      for (int m = 0; m < b.count; ++m)
+        for (int a = 0; a < 3; ++a) pk[a] += b.phi[m][a] * xi[m];
     }
   }
 }
@@ -366,13 +460,13 @@ static f3r_status response(const f3r_linear_model* lin, const f3r_model* model,
   const int second = order >= 2 || other;
   double* sampled = inputs ? NULL : malloc((size_t)count * F3R_RIGID_FORCES * sizeof(double));
   const double* u = inputs ? inputs : sampled;
-  double* P = malloc(series * sizeof(double));
+  double* P = second ? malloc(series * sizeof(double)) : NULL;
   double* F = second ? malloc(series * sizeof(double)) : NULL;
   double* z = second ? malloc(series * sizeof(double)) : NULL;
   double* zd = second ? malloc(series * sizeof(double)) : NULL;
   double* zdd = second ? malloc(series * sizeof(double)) : NULL;
   f3r_status st = F3R_OK;
-  if (!u || !P || (second && (!F || !z || !zd || !zdd))) {
+  if (!u || (second && (!P || !F || !z || !zd || !zdd))) {
     st = f3r_error_set(err, F3R_ERR_MEMORY, "linear response: out of memory");
     goto done;
   }
@@ -387,31 +481,27 @@ static f3r_status response(const f3r_linear_model* lin, const f3r_model* model,
     }
   for (int k = 0; k < count; ++k)
     for (int c = 0; c < 3; ++c) pose[3 * k + c] = s->platform_pose0[c];
+  if (!second) {
+    pose_superpose(lin, dt, count, u, dz0, vz0, pose);
+    goto done;
+  }
   for (int j = 0; j < n; ++j) { /* modal forces phi_j^T (f0 + U u): 10 products a sample */
     const double* phi = lin->shapes + (size_t)j * n;
-    double constant = 0.0, gain[F3R_RIGID_FORCES] = {0};
-    for (int a = 0; a < n; ++a) {
-      constant += phi[a] * lin->static_force[a];
-      for (int f = 0; f < F3R_RIGID_FORCES; ++f) gain[f] += phi[a] * F3R_AT(lin->input, n, a, f);
-    }
+    double constant, gain[F3R_RIGID_FORCES];
+    modal_load(lin, phi, &constant, gain);
     double* Pj = P + (size_t)j * count;
-    for (int k = 0; k < count; ++k) {
-      double v = constant;
-      for (int f = 0; f < F3R_RIGID_FORCES; ++f) v += gain[f] * u[(size_t)k * F3R_RIGID_FORCES + f];
-      Pj[k] = v;
-    }
+    for (int k = 0; k < count; ++k)
+      Pj[k] = modal_force(constant, gain, u + (size_t)k * F3R_RIGID_FORCES);
   }
   superpose(lin, dt, count, P, dz0, vz0, pose, z, zd, zdd);
   if (other) memset(pose, 0, (size_t)count * 3 * sizeof(double));
-  if (second) {
-    int missed = 0;
-    st = second_order_remainder(lin, model, other, count, u, z, zd, zdd, F, &missed, err);
-    if (st == F3R_OK) {
-      project(lin, count, F, P);
-      superpose(lin, dt, count, P, zero, zero, pose, NULL, NULL, NULL);
-    }
-    if (unreachable) *unreachable = missed;
+  int missed = 0;
+  st = second_order_remainder(lin, model, other, count, u, z, zd, zdd, F, &missed, err);
+  if (st == F3R_OK) {
+    project(lin, count, F, P);
+    superpose(lin, dt, count, P, zero, zero, pose, NULL, NULL, NULL);
   }
+  if (unreachable) *unreachable = missed;
 done:
   free(sampled), free(P), free(F), free(z), free(zd), free(zdd);
   return st;
