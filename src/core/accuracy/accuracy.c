@@ -127,7 +127,7 @@ static void open_choice(const f3r_scene* scene, double request, int commanded, f
  * faithful model where there are impacts. */
 static f3r_status search_modes(choice_run* run, f3r_accuracy_choice* c, f3r_error* err) {
   const f3r_mode_search* ms = &run->ms;
-  f3r_status st = f3r_mode_search_init(run->s, run->chosen, &run->ms, err);
+  f3r_status st = f3r_mode_search_init(run->s, run->chosen, NULL, &run->ms, err);
   run->impacts = st == F3R_OK && run->s->end_stops && !ms->at_rest;
   /* A run longer than the benchmark's scenes drifts further than their relations say (a phase
    * error grows with time): a pilot then measures the chosen solver on this scene as well. */

@@ -229,7 +229,7 @@ f3r_status f3r_choice_compare_bases(choice_run* run, f3r_accuracy_choice* c, f3r
       (st = cheaper_than_any_correction(run, &corrected, c, err)) != F3R_OK)
     return st;
   if (run->least_corrected_cost > 0.0 || !run->correctable) return F3R_OK;
-  st = f3r_mode_search_init(&corrected, run->chosen, &ms, err);
+  st = f3r_mode_search_init(&corrected, run->chosen, &run->ms, &ms, err);
   if (st == F3R_OK)
     st = f3r_mode_search_run(&corrected, &ms, run->model_target / ratio, run->corrected_modes,
                              &estimate, err);

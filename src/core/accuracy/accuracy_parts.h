@@ -69,9 +69,11 @@ typedef struct {
  * with the second-order correction. */
 f3r_status f3r_linear_path(const f3r_scene* s, f3r_mode_search* ms, const int modes[3], int order,
                            double* pose, f3r_error* err);
-/* Sampling, links and the order of the estimate for a scene; f3r_mode_search_free after. */
-f3r_status f3r_mode_search_init(const f3r_scene* s, unsigned chosen, f3r_mode_search* ms,
-                                f3r_error* err);
+/* Sampling, links and the order of the estimate for a scene; f3r_mode_search_free after. `same`
+ * (or NULL): a search of a scene with the same inputs, duration and output step, whose sampled
+ * inputs it starts from instead of sampling them again. */
+f3r_status f3r_mode_search_init(const f3r_scene* s, unsigned chosen, const f3r_mode_search* same,
+                                f3r_mode_search* ms, f3r_error* err);
 /* The linear path (order 1 or 2) at modes, at the search's sampling, from the memo or computed
  * into it: pose gets 3 count values. */
 f3r_status f3r_mode_search_path(const f3r_scene* s, f3r_mode_search* ms, const int modes[3],
