@@ -327,6 +327,15 @@ static void superpose(const f3r_linear_model* lin, double dt, int count, const d
 #define POSE_BLOCK 4
 typedef double pose_lanes __attribute__((vector_size(POSE_BLOCK * sizeof(double))));
 
+/* On x86-64, pose_superpose also in an AVX2 clone, chosen at load time where the processor has it:
+ * its four lanes in one register. AVX2 without FMA: the same operations, the same bits. On
+ * paper simulation 3 at 1e-4 m: the choosing 5.46 -> 5.18 ms. */
+#if defined(__x86_64__) && defined(__GNUC__)
+#define POSE_CLONES __attribute__((target_clones("avx2", "default")))
+#else
+#define POSE_CLONES
+#endif
+
 /* POSE_BLOCK modes from j0, a mode a lane (the last block padded with lanes that stay zero). */
 typedef struct {
   int count;                         /* the real modes in the block */
@@ -363,8 +372,9 @@ static void pose_block_start(const f3r_linear_model* lin, int j0, double dt, con
  * Every sum is formed in the same order as superpose's (pose[k] gains the modes by ascending j),
  * so the pose is bit-identical to it. On paper simulation 3 at 1e-4 m, where the choosing forms
  * nine such paths of 6 to 39 coordinates, it took the choosing from 7.4 to 6.4 ms. */
-static void pose_superpose(const f3r_linear_model* lin, double dt, int count, const double* u,
-                           const double* dz0, const double* vz0, double* pose) {
+POSE_CLONES static void pose_superpose(const f3r_linear_model* lin, double dt, int count,
+                                       const double* u, const double* dz0, const double* vz0,
+                                       double* pose) {
   for (int j0 = 0; j0 < lin->n; j0 += POSE_BLOCK) {
     pose_block b;
     pose_block_start(lin, j0, dt, u, dz0, vz0, &b);
