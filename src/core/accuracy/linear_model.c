@@ -443,14 +443,21 @@ static f3r_status second_order_remainder(const f3r_linear_model* lin, const f3r_
       for (int a = 0; a < n; ++a) ek[a] = res[n + a] - res_other[n + a];
       continue;
     }
-    for (int a = 0; a < n; ++a) {
-      double linear = -lin->static_force[a];
-      for (int b = 0; b < n; ++b)
-        linear += F3R_AT(lin->mass, n, a, b) * zddk[b] + F3R_AT(lin->damping, n, a, b) * zdk[b] +
-                  F3R_AT(lin->stiffness, n, a, b) * zk[b];
-      for (int f = 0; f < F3R_RIGID_FORCES; ++f) linear -= F3R_AT(lin->input, n, a, f) * held[f];
-      ek[a] = -(res[n + a] - linear); /* a force: the correction solves M dz'' + ... = -e */
+    /* The linear part a column at a time: contiguous in the column-major matrices, where row by
+     * row strode across them; each sum keeps its order, so e is the same to the bit. */
+    double linear[F3R_MAX_Q];
+    for (int a = 0; a < n; ++a) linear[a] = -lin->static_force[a];
+    for (int b = 0; b < n; ++b) {
+      const double *M = &F3R_AT(lin->mass, n, 0, b), *D = &F3R_AT(lin->damping, n, 0, b),
+                   *K = &F3R_AT(lin->stiffness, n, 0, b);
+      for (int a = 0; a < n; ++a) linear[a] += M[a] * zddk[b] + D[a] * zdk[b] + K[a] * zk[b];
     }
+    for (int f = 0; f < F3R_RIGID_FORCES; ++f) {
+      const double* U = &F3R_AT(lin->input, n, 0, f);
+      for (int a = 0; a < n; ++a) linear[a] -= U[a] * held[f];
+    }
+    for (int a = 0; a < n; ++a)
+      ek[a] = -(res[n + a] - linear[a]); /* a force: the correction solves M dz'' + ... = -e */
   }
   f3r_workspace_destroy(ws);
   free(y), free(yp), free(res), free(res_other), free(o), free(m);
