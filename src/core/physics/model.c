@@ -136,11 +136,13 @@ static f3r_status fill_link_constants(f3r_model* m, int i, double* room, f3r_err
   f3r_link_params* lp = &m->link[i];
   f3r_beam_basis* b = &m->basis[i];
   const int same = same_basis_as(m, i);
-  const int built =
-      same >= 0  ? 0
-      : mixed(L) ? f3r_beam_basis_build_mixed(L->modes, L->shape_mix, b)
-                 : f3r_beam_basis_build((f3r_beam_end)lp->model, L->modes, correction_shapes(L), b);
-  if (same >= 0) *b = m->basis[same]; /* the build is a function of these alone: the same numbers */
+  int built = 0;
+  if (same >= 0)
+    *b = m->basis[same]; /* the build is a function of these alone: the same numbers, once */
+  else
+    built = mixed(L)
+                ? f3r_beam_basis_build_mixed(L->modes, L->shape_mix, b)
+                : f3r_beam_basis_build((f3r_beam_end)lp->model, L->modes, correction_shapes(L), b);
   if (built == F3R_BASIS_NO_MEMORY)
     return f3r_error_set(err, F3R_ERR_MEMORY, "links[%d]: out of memory building its basis", i);
   if (built)
