@@ -116,6 +116,15 @@ f3r_status f3r_sim_create(const f3r_model* model, const f3r_solver_settings* set
     st = f3r_error_set(err, F3R_ERR_MEMORY, "f3r_sim_create: out of memory");
     goto fail;
   }
+  /* Fused vector operations: IDA and ARKODE combine several vectors in one pass instead of one
+   * call per term (the predictor, the error test, the stage sums), with each sum in the order the
+   * single operations take it, so every result keeps its bits. The integrators' own vectors are
+   * clones of y and inherit it. */
+  if (N_VEnableFusedOps_Serial(s->y, SUNTRUE) != 0 ||
+      N_VEnableFusedOps_Serial(s->yp, SUNTRUE) != 0) {
+    st = f3r_error_set(err, F3R_ERR_SOLVER, "f3r_sim_create: fused vector operations failed");
+    goto fail;
+  }
   if (f3r_model_initial_state(model, q, v) != F3R_OK) {
     st = f3r_error_set(err, F3R_ERR_SCENE, "initial.platform_pose: the legs cannot reach it");
     goto fail;
