@@ -29,6 +29,9 @@
 /* Where the human summary goes: stdout, or stderr when the JSON takes stdout. */
 static FILE* human;
 
+/* bytes of the CSV's stdio buffer: about 300 rows of paper simulation 3 (800 bytes each) */
+#define CSV_BUFFER_BYTES (256 * 1024)
+
 static void write_header(FILE* f, const f3r_model* m) {
   static const char* rigid[9] = {"rho_1",   "rho_2", "rho_3", "theta_1", "theta_2",
                                  "theta_3", "x_p",   "y_p",   "phi_p"};
@@ -271,6 +274,7 @@ static int run_outputs(const cli_options* o, const f3r_scene* scene, const f3r_m
     }
     track_maxima(r, model, scene->beam_points, shapes, out);
   }
+  if (csv) fflush(csv); /* the last rows' write belongs to the run's time too */
   r->cpu_total = cpu_seconds() - start;
   r->wall_total = monotonic_seconds() - wall_start;
   return rc;
@@ -351,6 +355,7 @@ static int simulate(const cli_options* o, const f3r_scene* scene, const f3r_mode
     return 1;
   }
   FILE* csv = NULL;
+  char* csv_buffer = NULL;
   if (o->out_path) {
     csv = fopen(o->out_path, "w");
     if (!csv) {
@@ -358,12 +363,17 @@ static int simulate(const cli_options* o, const f3r_scene* scene, const f3r_mode
       f3r_sim_destroy(sim);
       return 1;
     }
+    /* glibc's default buffer is the file system's block (4 KB, five rows), and each write() of
+     * it costs a page-cache round trip of its own; without the memory the default stays */
+    if ((csv_buffer = malloc(CSV_BUFFER_BYTES)) != NULL)
+      setvbuf(csv, csv_buffer, _IOFBF, CSV_BUFFER_BYTES);
     write_header(csv, model);
     write_row(csv, model, f3r_sim_outputs(sim));
   }
   run_stats stats = {0};
   const int rc = run_outputs(o, scene, model, sim, csv, &stats);
   if (csv) fclose(csv);
+  free(csv_buffer);
   print_summary(o, scene, model, f3r_sim_outputs(sim), &stats);
   keep_report(f3r_sim_outputs(sim), &stats, report);
   f3r_sim_destroy(sim);
