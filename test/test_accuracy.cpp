@@ -774,6 +774,28 @@ TEST(Accuracy, ThePapersModesAreNotSearchedFurtherWhereTheCorrectionCostsLess) {
   }
 }
 
+// Where the paper's modes need 3 on a link, both bases are weighed with the solver each leaves
+// room for. When r = 3 was tried before the corrected search, resonance.yaml at 3e-4 m found
+// 2/2/3, which cost no more than the least pair of shapes, so the corrected search was spared
+// and the paper's modes kept: 23.5 ms and 1.4e-4 m from the converged path, where 1 mode + the
+// mixed shape takes 14.8 ms and 4.2e-6 m (the knob's CPU with the choosing, medians of 7).
+TEST(Accuracy, WhereThePapersModesNeedThreeTheMixedShapeIsWeighedAgainstThem) {
+  f3r_scene s = OpenScene("resonance.yaml");
+  s.output_step = 1e-3;
+  f3r_accuracy_choice c;
+  f3r_error err{};
+  ASSERT_EQ(f3r_accuracy_choose(&s, 3e-4, 0, &c, &err), F3R_OK) << err.message;
+  for (int i = 0; i < 3; ++i) {
+    EXPECT_EQ(c.static_correction[i], 1) << c.summary;
+    EXPECT_EQ(c.modes[i], 1) << c.summary;
+    EXPECT_TRUE(std::isfinite(c.shape_mix[i])) << c.summary;
+  }
+  EXPECT_NE(std::string(c.summary).find("the paper's modes with 3 or more on a link"),
+            std::string::npos)
+      << c.summary;
+  EXPECT_LE(c.estimated_error, 3e-4) << c.summary;
+}
+
 // Where the paper's modes cost less for the request (a loose one: 2 modes a link, against the
 // least correction's 1 mode + 2 shapes), the knob keeps them and says what the correction would
 // have cost.
