@@ -1,7 +1,7 @@
 /* The accuracy knob's basis (accuracy_choice.h): the paper's modes against the static correction
  * on the links the scene leaves open, with the paper's modes' search beyond r = PLAIN_FIRST_MOST
- * waiting for the corrected one where it can (f3r_choice_plain_search_may_wait). Runs once before a simulation,
- * so it allocates freely. */
+ * waiting for the corrected one where it can (f3r_choice_plain_search_may_wait). Runs once before
+ * a simulation, so it allocates freely. */
 #include <math.h>
 #include <string.h>
 
@@ -160,9 +160,10 @@ static f3r_status plain_search_first_part(choice_run* run, const f3r_scene* corr
 /* The least cost the paper's modes can have once searched again: the counts found so far with the
  * cheapest solver any model error leaves (the most budget; 1 where none fits), or the least
  * counts with one chosen link at r_lo, whichever is more. The search again needs at least r_lo
- * modes on some link: PLAIN_FIRST_MOST + 1, as the counts up to it missed, and at least the uniform count found so far, since
- * every count below it missed a looser target. That it keeps every link at least at the count
- * found so far is the search's own assumption that the difference falls with the modes. */
+ * modes on some link: PLAIN_FIRST_MOST + 1, as the counts up to it missed, and at least the
+ * uniform count found so far, since every count below it missed a looser target. That it keeps
+ * every link at least at the count found so far is the search's own assumption that the
+ * difference falls with the modes. */
 static f3r_status plain_least_cost(choice_run* run, const f3r_accuracy_choice* c, double* cost,
                                    int* r_least, f3r_error* err) {
   int r_lo = PLAIN_FIRST_MOST + 1, least[3];

@@ -55,9 +55,9 @@ typedef struct {
   double plain_solver_cost, corrected_solver_cost; /* the solver each basis leaves room for */
   double least_corrected_cost; /* > 0: the search was spared, the paper's modes cost no more */
   /* > 0: the pilot asked the paper's modes to be searched again within this target; beyond
-   * r = 2 that waits for the corrected search (settle_plain_search). plain_beyond > 0: it was not
-   * needed, as the paper's modes would need that many on some link and cost at least plain_cost
-   * (with their solver) */
+   * r = PLAIN_FIRST_MOST (accuracy_basis.c) that waits for the corrected search
+   * (settle_plain_search). plain_beyond > 0: it was not needed, as the paper's modes would need
+   * that many on some link and cost at least plain_cost (with their solver) */
   double deferred_target;
   int plain_beyond;
   int corrected_first;     /* the corrected search ran while the paper's modes waited */
