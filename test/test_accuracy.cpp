@@ -729,7 +729,7 @@ TEST(Accuracy, TheKnobTakesTheStaticCorrectionWhereItIsCheaperAndMeetsTheRequest
   EXPECT_NE(std::string(c.summary).find("basis: the static correction"), std::string::npos)
       << c.summary;
   // one mixed shape (shape_mix, fitted): the pair's first frequency, half its steps
-  EXPECT_NE(std::string(c.summary).find("1 modes + 1 static shape (tip force + -1.9"),
+  EXPECT_NE(std::string(c.summary).find("1 mode + 1 static shape (tip force + -1.9"),
             std::string::npos)
       << c.summary;
   for (int i = 0; i < 3; ++i) {

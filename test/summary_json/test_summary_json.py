@@ -139,7 +139,7 @@ class Summary(unittest.TestCase):
             if k["rigid"][i]:
                 self.assertEqual(line, "rigid")
                 continue
-            m = re.match(r"(\d+) modes(?: \+ (\d+) static shapes?(?: \(tip force \+ (\S+) uniform load\))?)?",
+            m = re.match(r"(\d+) modes?(?: \+ (\d+) static shapes?(?: \(tip force \+ (\S+) uniform load\))?)?",
                          line)
             self.assertEqual(int(m.group(1)), k["modes"][i])
             self.assertEqual(bool(m.group(2)), k["static_correction"][i])
