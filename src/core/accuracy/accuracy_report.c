@@ -127,12 +127,10 @@ void f3r_summarise_modes(const choice_run* run, f3r_accuracy_choice* c) {
                f3r_link_static_shapes(run->scene->links[i].model));
     if (!f3r_is_flexible(run->scene, i))
       f3r_accuracy_append(text, size, "links[%d]: rigid\n", i);
-    else if (!(run->chosen >> i & 1))
-      f3r_accuracy_append(text, size, "links[%d]: %d mode%s%s, as the scene sets\n", i, c->modes[i],
-                          c->modes[i] == 1 ? "" : "s", shapes);
     else
-      f3r_accuracy_append(text, size, "links[%d]: %d mode%s%s\n", i, c->modes[i],
-                          c->modes[i] == 1 ? "" : "s", shapes);
+      f3r_accuracy_append(text, size, "links[%d]: %d mode%s%s%s\n", i, c->modes[i],
+                          c->modes[i] == 1 ? "" : "s", shapes,
+                          run->chosen >> i & 1 ? "" : ", as the scene sets");
   }
   summarise_basis(run, c);
   if (run->chosen && run->impacts)
