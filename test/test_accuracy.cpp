@@ -742,6 +742,52 @@ TEST(Accuracy, TheKnobTakesTheStaticCorrectionWhereItIsCheaperAndMeetsTheRequest
   EXPECT_LE(MaxDistance(got, ref), 1e-5) << c.summary;
 }
 
+// The model's share (0.5 of the request) is where the search starts, not a bound: on paper
+// simulation 3 over its whole 0.5 s at 1e-5 m, the counts within the share are 2 modes + the
+// pair (estimate 8.6e-7 m, minimal IDA at rtol 1e-4: 43 780 steps), and 1 mode + the mixed shape
+// fits what the request leaves beside the tightest solver (estimate 8.3e-6 m), whose tenth of the
+// rest (1.7e-7 m) Dormand-Prince 5(4) at rtol 1e-4 meets in 6 613 steps. The estimate stays
+// within the request, and the run within it of the independent reference.
+TEST(Accuracy, AModelPastItsShareIsTakenWhereItsTighterSolverCostsLess) {
+  f3r_scene open = OpenScene("paper_sim3_fixed_free.yaml");
+  open.output_step = 1e-3;
+  const int count = static_cast<int>(std::lround(open.duration / open.output_step)) + 1;
+  f3r_scene s = open;
+  s.accuracy = 1e-5;
+  f3r_accuracy_choice c;
+  f3r_error err{};
+  ASSERT_EQ(f3r_accuracy_resolve(&s, 0, &c, &err), F3R_OK) << err.message;
+  for (int i = 0; i < 3; ++i) {
+    EXPECT_EQ(c.static_correction[i], 1) << c.summary;
+    EXPECT_EQ(c.modes[i], 1) << c.summary;
+    EXPECT_EQ(s.links[i].shape_mix_kind, F3R_SHAPE_MIXED) << c.summary;
+  }
+  EXPECT_GT(c.model_error, F3R_ACCURACY_MODEL_SHARE * 1e-5) << c.summary;
+  EXPECT_NE(std::string(c.summary).find("past the model's share"), std::string::npos) << c.summary;
+  // the solver keeps a tenth of what the model leaves, so the estimate stays within the request
+  EXPECT_LE(c.solver_error, 0.1 * (1e-5 - c.model_error - c.kinematics_error)) << c.summary;
+  EXPECT_LE(c.estimated_error, 1e-5) << c.summary;
+  const std::vector<double> ref = CorrectedReferencePath(open, count);
+  const std::vector<double> got = NonlinearPath(s, open.output_step, count, s.rtol);
+  EXPECT_LE(MaxDistance(got, ref), 1e-5) << c.summary;
+}
+
+// Where the scene sets its solver, nothing is left to trade against the model: its estimate
+// keeps to the model's share.
+TEST(Accuracy, WithTheSolverSetTheModelKeepsToItsShare) {
+  f3r_scene s = OpenScene("paper_sim3_fixed_free.yaml");
+  s.output_step = 1e-3;
+  s.explicit_settings |= F3R_EXPLICIT_FORMULATION | F3R_EXPLICIT_INTEGRATOR | F3R_EXPLICIT_RTOL;
+  s.formulation = F3R_FORMULATION_MINIMAL;
+  s.integrator = F3R_INTEGRATOR_IDA;
+  s.rtol = 1e-6;
+  f3r_accuracy_choice c;
+  f3r_error err{};
+  ASSERT_EQ(f3r_accuracy_choose(&s, 1e-5, 0, &c, &err), F3R_OK) << err.message;
+  EXPECT_LE(c.model_error, F3R_ACCURACY_MODEL_SHARE * 1e-5) << c.summary;
+  EXPECT_EQ(std::string(c.summary).find("past the model's share"), std::string::npos) << c.summary;
+}
+
 // Beyond r = 2 (r = 3 against 12 modes, then a bisection against 20, the costly part) the paper's
 // modes' search waits for the corrected one, and is not run where the correction already costs
 // less than any count it could give: after the pilot (paper simulation 3 with fixed-free links at

@@ -54,11 +54,24 @@ static double explicit_scale_of(const int modes[3]) {
  * resonance_damped at 1e-5 m they tie (3 modes, 1 mode + shapes), and the correction's tighter
  * solver made it 1.6 times the CPU time (docs/benchmarks/accuracy_knob.md). */
 /* The solver's budget: what the request leaves beside the model's and the kinematics' errors,
- * at least the solver's share of it. */
+ * at least the solver's share of it where the model keeps to its own share (past it, the model's
+ * error was let in only with room left for a solver: f3r_choice_wide_model_target). */
 static double solver_budget(const choice_run* run, const f3r_accuracy_choice* c,
                             double model_error) {
   const double left = run->request - model_error - c->kinematics_error;
+  if (model_error > run->model_target) return left;
   return fmax(left, F3R_ACCURACY_SOLVER_SHARE * run->request);
+}
+
+double f3r_choice_wide_model_target(const choice_run* run, const f3r_accuracy_choice* c) {
+  if (!run->solver_open) return 0.0;
+  double least = INFINITY; /* the smallest measured error of a solver the scene leaves open */
+  for (double budget = run->request; budget > 0.0; budget = least * 0.5) {
+    const f3r_solver_relation* r = pick_solver(run->scene, run->kind, budget, 1.0);
+    if (!r || !(r->error < least)) break;
+    least = r->error;
+  }
+  return run->request - c->kinematics_error - least / SOLVER_CHECK_SHARE;
 }
 
 double f3r_choice_solver_cost(const choice_run* run, const f3r_accuracy_choice* c,

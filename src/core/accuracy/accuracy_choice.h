@@ -54,6 +54,7 @@ typedef struct {
   double plain_error, corrected_error, plain_cost, corrected_cost;
   double plain_solver_cost, corrected_solver_cost; /* the solver each basis leaves room for */
   double least_corrected_cost; /* > 0: the search was spared, the paper's modes cost no more */
+  int wide_model; /* the corrected counts fit past the model's share (try_fewer_corrected) */
   /* > 0: the pilot asked the paper's modes to be searched again within this target; beyond
    * r = PLAIN_FIRST_MOST (accuracy_basis.c) that waits for the corrected search
    * (settle_plain_search). plain_beyond > 0: it was not needed, as the paper's modes would need
@@ -89,6 +90,10 @@ typedef struct {
  * static correction; 1 where the scene sets its solver or none fits. */
 double f3r_choice_solver_cost(const choice_run* run, const f3r_accuracy_choice* c,
                               const int modes[3], double model_error, int corrected);
+/* The largest model error that still leaves the static correction's solver a measured relation
+ * (a tenth of the budget, as f3r_choice_solver_cost keeps there) beside exact kinematics' error;
+ * 0 where the scene sets its solver. */
+double f3r_choice_wide_model_target(const choice_run* run, const f3r_accuracy_choice* c);
 /* The basis (accuracy_basis.c): the same search with the static shapes on the correctable links,
  * the cheaper basis kept in run->ms and run->s; the paper's modes' search within
  * run->deferred_target, if it waited; whether it may wait for the corrected one. */

@@ -105,6 +105,12 @@ static void summarise_basis(const choice_run* run, f3r_accuracy_choice* c) {
                       "on the static correction)\n",
                       kept ? "the static correction" : "the paper's modes", plain, p_est, corrected,
                       c_est);
+  if (kept && run->wide_model)
+    f3r_accuracy_append(c->summary, sizeof c->summary,
+                        "basis: its estimate takes %.2g of the request, past the model's share: "
+                        "with the tighter solver it leaves room for, it costs less than the "
+                        "counts within the share\n",
+                        run->corrected_error / run->request);
 }
 
 /* The summary's lines on the request, the mode counts and the pilot that checked them. */
