@@ -106,6 +106,11 @@ std::vector<double> CorrectedReferencePath(const f3r_scene& open, int count) {
   return NonlinearPath(reference, open.output_step, count, 1e-9);
 }
 
+// The outputs of a run from 0 to its duration, both ends included.
+int OutputCount(const f3r_scene& s) {
+  return static_cast<int>(std::lround(s.duration / s.output_step)) + 1;
+}
+
 double MaxDistance(const std::vector<double>& a, const std::vector<double>& b) {
   double worst = 0;
   for (size_t k = 0; k < a.size() / 3; ++k)
@@ -450,7 +455,7 @@ TEST(Accuracy, TheChoiceMeetsTheRequestAgainstAHighFidelityRun) {
   f3r_scene reference = open;
   for (int i = 0; i < 3; ++i) reference.links[i].modes = 12;
   reference.exact_kinematics = 1;
-  const int count = static_cast<int>(std::lround(open.duration / open.output_step)) + 1;
+  const int count = OutputCount(open);
   const std::vector<double> ref = NonlinearPath(reference, open.output_step, count, 1e-10);
   for (double request : {1e-4, 1e-5}) {
     f3r_scene s = open;
@@ -714,7 +719,7 @@ TEST(Accuracy, TheKnobTakesTheStaticCorrectionWhereItIsCheaperAndMeetsTheRequest
   f3r_scene open = OpenScene("paper_sim3_fixed_free.yaml");
   open.duration = 0.2;
   open.output_step = 1e-3;
-  const int count = static_cast<int>(std::lround(open.duration / open.output_step)) + 1;
+  const int count = OutputCount(open);
   const std::vector<double> ref = CorrectedReferencePath(open, count);
   f3r_scene s = open;
   s.accuracy = 1e-5;
@@ -751,7 +756,7 @@ TEST(Accuracy, TheKnobTakesTheStaticCorrectionWhereItIsCheaperAndMeetsTheRequest
 TEST(Accuracy, AModelPastItsShareIsTakenWhereItsTighterSolverCostsLess) {
   f3r_scene open = OpenScene("paper_sim3_fixed_free.yaml");
   open.output_step = 1e-3;
-  const int count = static_cast<int>(std::lround(open.duration / open.output_step)) + 1;
+  const int count = OutputCount(open);
   f3r_scene s = open;
   s.accuracy = 1e-5;
   f3r_accuracy_choice c;
@@ -922,7 +927,7 @@ TEST(Accuracy, AStaticCorrectionTheSceneSetsIsKept) {
 TEST(Accuracy, OnTheStaticCorrectionTheSolverKeepsATenthOfItsBudget) {
   f3r_scene open = OpenScene("resonance.yaml");
   open.output_step = 1e-3;
-  const int count = static_cast<int>(std::lround(open.duration / open.output_step)) + 1;
+  const int count = OutputCount(open);
   const std::vector<double> ref = CorrectedReferencePath(open, count);
   f3r_scene s = open;
   s.accuracy = 1e-5;
