@@ -99,6 +99,9 @@ double f3r_choice_wide_model_target(const choice_run* run, const f3r_accuracy_ch
  * run->deferred_target, if it waited; whether it may wait for the corrected one. */
 f3r_status f3r_choice_compare_bases(choice_run* run, f3r_accuracy_choice* c, f3r_error* err);
 f3r_status f3r_choice_resume_plain_search(choice_run* run, f3r_accuracy_choice* c, f3r_error* err);
+/* Whether the paper's modes fit target at a uniform r = 1 .. PLAIN_FIRST_MOST, each against its
+ * own reference: the first part of their search, which never waits. */
+f3r_status f3r_choice_plain_first_part(choice_run* run, double target, int* fits, f3r_error* err);
 int f3r_choice_plain_search_may_wait(const choice_run* run);
 
 /* Appends printf-style text to text (size bytes in all), never past its end. */
