@@ -337,6 +337,42 @@ TEST(Accuracy, ModeSearchStopsWhereTheLinearPathIsWithinTheTarget) {
   (void)count;
 }
 
+// With the static shapes on every chosen link the reference is 2 r + 2 modes and the shapes, not
+// 3 r + 3: the estimate at r = 1 is the first-order linear path's distance from 4 modes + the
+// static shapes (paper simulation 3, fixed-free links).
+TEST(Accuracy, TheCorrectedBasisIsComparedWithTwoRPlusTwoModes) {
+  f3r_scene s = OpenScene("paper_sim3_fixed_free.yaml");
+  s.output_step = 1e-3;
+  for (int i = 0; i < 3; ++i) {
+    s.links[i].static_correction = 1;
+    s.links[i].modes = 1;
+  }
+  f3r_error err{};
+  int modes[3], evals = 0;
+  double estimate = 0, extent = 0;
+  ASSERT_EQ(f3r_accuracy_modes(&s, 7u, 1e-3, modes, &estimate, &extent, &evals, &err), F3R_OK)
+      << err.message;
+  for (int i = 0; i < 3; ++i) ASSERT_EQ(modes[i], 1);
+  auto first = [&](int r, double dt, int n) {
+    f3r_scene sc = s;
+    for (int i = 0; i < 3; ++i) sc.links[i].modes = r;
+    ModelPtr mm = MakeModel(sc);
+    LinearPtr l = Linearise(mm.get());
+    std::vector<double> pose(3 * n);
+    EXPECT_EQ(f3r_linear_response(l.get(), mm.get(), dt, n, 1, pose.data(), nullptr, &err), F3R_OK);
+    return pose;
+  };
+  double fastest = 0;
+  for (const f3r_input& in : s.inputs) fastest = std::max(fastest, f3r_input_max_frequency(&in));
+  const double h = std::min(s.output_step, 1.0 / (20 * fastest));  // the search's sampling
+  const int samples = static_cast<int>(std::ceil(s.duration / h - 1e-9)) + 1;
+  const double dt = s.duration / (samples - 1);
+  const std::vector<double> at = first(1, dt, samples);
+  EXPECT_NEAR(MaxDistance(at, first(4, dt, samples)), estimate, 1e-9 * estimate);
+  // 6 modes (3 r + 3) give another number: 5.6e-4 of it apart
+  EXPECT_GT(std::fabs(MaxDistance(at, first(6, dt, samples)) - estimate), 1e-4 * estimate);
+}
+
 TEST(Accuracy, ExplicitSettingsWinAndAreReported) {
   f3r_scene s;
   f3r_error err{};

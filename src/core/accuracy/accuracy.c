@@ -443,20 +443,23 @@ static f3r_status resolve_modes(f3r_scene* scene, int commanded, f3r_accuracy_ch
   const f3r_status st = f3r_accuracy_modes(&s, chosen, -tolerance, c->modes, &c->model_error,
                                            &c->extent, &c->linear_evaluations, err);
   if (st != F3R_OK) return st;
+  int corrected = 1; /* the search's reference (accuracy_search.c) */
+  for (int i = 0; i < 3; ++i)
+    if (chosen >> i & 1) corrected &= s.links[i].static_correction != 0;
+  const char* reference = corrected ? "2r + 2" : "3r + 3";
   c->estimated_error = c->model_error;
   c->request_met = 1; /* no request: auto_tolerance, of the path's extent, decides */
   snprintf(c->brief, sizeof c->brief,
-           "modes auto: %d/%d/%d (linearised path within %.3g m of 3r + 3 modes, auto_tolerance %g "
+           "modes auto: %d/%d/%d (linearised path within %.3g m of %s modes, auto_tolerance %g "
            "of its extent %.3g m)",
-           c->modes[0], c->modes[1], c->modes[2], c->model_error, tolerance, c->extent);
+           c->modes[0], c->modes[1], c->modes[2], c->model_error, reference, tolerance, c->extent);
   for (int i = 0; i < 3; ++i) {
     if (chosen >> i & 1) scene->links[i].modes = c->modes[i];
     if (chosen >> i & 1)
-      f3r_accuracy_append(
-          c->summary, sizeof c->summary,
-          "links[%d]: modes auto -> %d (linearised path within %.3g m of 3r + 3 modes: "
-          "auto_tolerance %g of its extent %.3g m)\n",
-          i, c->modes[i], c->model_error, tolerance, c->extent);
+      f3r_accuracy_append(c->summary, sizeof c->summary,
+                          "links[%d]: modes auto -> %d (linearised path within %.3g m of %s modes: "
+                          "auto_tolerance %g of its extent %.3g m)\n",
+                          i, c->modes[i], c->model_error, reference, tolerance, c->extent);
   }
   return F3R_OK;
 }

@@ -61,7 +61,7 @@ static f3r_status mix_corrected_shapes(const choice_run* run, const int modes[3]
 }
 
 /* The same counts, uniform r, with one mixed shape instead of the pair (mix_corrected_shapes on
- * `pair`, the scene with the pair), estimated against the pair's own reference there (3 r + 3
+ * `pair`, the scene with the pair), estimated against the pair's own reference there (2 r + 2
  * modes and the pair): taken into `corrected`, ms and run's candidate where it fits target and
  * costs less with its solver. On paper simulation 3 it halves the run's steps at 1e-4 m (r = 1)
  * and at 1e-5 m (r = 2). */
