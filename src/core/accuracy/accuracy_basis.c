@@ -243,24 +243,25 @@ static f3r_status plain_least_cost(choice_run* run, const f3r_accuracy_choice* c
   *r_least = r_lo;
   double so_far = 0.0;
   f3r_status st = f3r_basis_cost(run->s, c->modes, &so_far, err);
-  double one_link = 0.0; /* the cheapest way to have r_lo on some chosen link */
+  double at_r_lo = 0.0; /* the cheapest way to have r_lo on some chosen link (far: on all) */
   if (run->ms.far) {
     int modes[3];
     f3r_mode_search_uniform(&run->ms, r_lo, modes);
-    if (st == F3R_OK) st = f3r_basis_cost(run->s, modes, &one_link, err);
-    one_link *= cheapest_solver_cost(run, c, modes);
+    if (st == F3R_OK) st = f3r_basis_cost(run->s, modes, &at_r_lo, err);
+    at_r_lo *= cheapest_solver_cost(run, c, modes);
+  } else {
+    for (int i = 0; i < 3 && st == F3R_OK; ++i) {
+      if (!(run->chosen >> i & 1) || !f3r_is_flexible(run->s, i)) continue;
+      int modes[3];
+      memcpy(modes, least, sizeof modes);
+      modes[i] = r_lo > least[i] ? r_lo : least[i];
+      double basis = 0.0;
+      st = f3r_basis_cost(run->s, modes, &basis, err);
+      const double total = basis * cheapest_solver_cost(run, c, modes);
+      if (at_r_lo == 0.0 || total < at_r_lo) at_r_lo = total;
+    }
   }
-  for (int i = 0; i < 3 && st == F3R_OK && !run->ms.far; ++i) {
-    if (!(run->chosen >> i & 1) || !f3r_is_flexible(run->s, i)) continue;
-    int modes[3];
-    memcpy(modes, least, sizeof modes);
-    modes[i] = r_lo > least[i] ? r_lo : least[i];
-    double basis = 0.0;
-    st = f3r_basis_cost(run->s, modes, &basis, err);
-    const double total = basis * cheapest_solver_cost(run, c, modes);
-    if (one_link == 0.0 || total < one_link) one_link = total;
-  }
-  *cost = fmax(so_far * cheapest_solver_cost(run, c, c->modes), one_link);
+  *cost = fmax(so_far * cheapest_solver_cost(run, c, c->modes), at_r_lo);
   return st;
 }
 
