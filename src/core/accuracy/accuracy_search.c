@@ -229,7 +229,7 @@ f3r_status f3r_mode_search_path(const f3r_scene* s, f3r_mode_search* ms, const i
 }
 
 static f3r_status reference_for(const f3r_scene* s, f3r_mode_search* ms, int r, f3r_error* err) {
-  const int top = top_modes(ms), R = reference_modes(ms, r) < top ? reference_modes(ms, r) : top;
+  const int top = top_modes(ms), more = reference_modes(ms, r), R = more < top ? more : top;
   if (ms->ref_r == R) return F3R_OK;
   int modes[3];
   uniform(ms, R, modes);
@@ -377,9 +377,9 @@ f3r_status f3r_mode_search_run(const f3r_scene* s, f3r_mode_search* ms, double t
   f3r_status st = F3R_OK;
   double est = 0.0;
   int found = top;
-  /* r = 1, 2, 3 each against its own reference (3 r + 3, or 2 r + 2 with the shapes); beyond, a bisection of 4..19 against
-   * 20 modes (17 with the static shapes), assuming the difference falls with r (it does, if
-   * slowly, for both beam models and both bases). */
+  /* r = 1, 2, 3 each against its own reference (reference_modes); beyond, a bisection of 4..19
+   * against 20 modes (17 with the static shapes), assuming the difference falls with r (it does,
+   * if slowly, for both beam models and both bases). */
   for (int r = 1; r <= 3 && found == top; ++r) {
     int trial[3];
     uniform(ms, r, trial);
