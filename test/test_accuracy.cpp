@@ -1009,15 +1009,15 @@ TEST(Accuracy, OnTheStaticCorrectionTheSolverKeepsATenthOfItsBudget) {
   EXPECT_LE(MaxDistance(got, ref), 1e-5) << c.summary;
 }
 
-// Longer than the benchmark's scenes, the knob keeps the paper's modes and says why: there the
-// static correction's estimates were not validated (free_vibration_long over 2 s, 1e-5 m: 3e-5 m).
-TEST(Accuracy, ALongRunKeepsThePapersModes) {
+// At any run length the knob may take the static correction: the check measures what its
+// estimates cannot promise there. Refused beyond 0.5 s, paper simulation 3's inputs over 1.5 s at
+// 1e-5 m took 18 modes a link and 270 times the 0.5 s run.
+TEST(Accuracy, ALongRunMayTakeTheStaticCorrection) {
   f3r_scene s = OpenScene("paper_sim3_fixed_free.yaml");
   s.duration = 0.6;
   f3r_accuracy_choice c;
   f3r_error err{};
   ASSERT_EQ(f3r_accuracy_choose(&s, 1e-5, 0, &c, &err), F3R_OK) << err.message;
-  for (int i = 0; i < 3; ++i) EXPECT_EQ(c.static_correction[i], 0) << c.summary;
-  EXPECT_NE(std::string(c.summary).find("longer than the benchmark's scenes"), std::string::npos)
-      << c.summary;
+  for (int i = 0; i < 3; ++i) EXPECT_EQ(c.static_correction[i], 1) << c.summary;
+  EXPECT_EQ(std::string(c.summary).find("were not validated"), std::string::npos) << c.summary;
 }

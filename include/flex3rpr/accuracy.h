@@ -59,8 +59,13 @@ typedef struct {
   int request_met;          /* 1 when estimated_error <= request; 0 names the largest part in the
                            * summary and the brief (a scene's own settings, or what no choice
                            * within F3R_MAX_MODES and the measured solvers reaches) */
-  char summary[2048];       /* the choice and why, one line per decision */
-  char brief[256];          /* the same in one line, for a status message */
+  /* The measurement (f3r_accuracy_check_scene), filled in by whoever runs the check (the CLI):
+   * the run's end-effector distance from the check's path at the output times. */
+  int verified;          /* 1: measured_error is a measurement; 0: estimated_error only */
+  double measured_error; /* m; NaN where not measured */
+  int configurations;    /* configurations run for it (the escalations + 1), 0 unmeasured */
+  char summary[2048];    /* the choice and why, one line per decision */
+  char brief[256];       /* the same in one line, for a status message */
 } f3r_accuracy_choice;
 
 /* Chooses for `request` (m, > 0). The scene's explicit settings are kept and reported.
@@ -91,6 +96,24 @@ f3r_status f3r_accuracy_resolve(f3r_scene* scene, int commanded, f3r_accuracy_ch
  * scene->links[i].modes. target <= 0 asks for -target times the path's extent. */
 f3r_status f3r_accuracy_modes(const f3r_scene* scene, unsigned chosen, double target, int modes[3],
                               double* estimate, double* extent, int* evaluations, f3r_error* err);
+
+/* The smallest rtol a check takes: below it IDA's steps gain nothing in double precision. */
+#define F3R_CHECK_RTOL_FLOOR 1e-11
+
+/* The configuration that measures a run of `run` (a resolved scene: no open modes): every
+ * flexible link's basis richer (a fixed-free link one more mode and the static shapes' pair, a
+ * fixed-pinned one two more modes; at most F3R_MAX_MODES functions), exact kinematics on, IDA at
+ * BDF order 5 and f3r_accuracy_check_rtol. With open_only, what the scene fixed itself (explicit_settings, the
+ * BDF order) stays: the next configuration of a run that misses. Returns 1 when *check differs
+ * from *run. *check is a view sharing run's tables. */
+int f3r_accuracy_check_scene(const f3r_scene* run, int open_only, f3r_scene* check);
+
+/* The check's tolerance: a tenth of the run's, at most the request's value in metres (<= 0: no
+ * request), at least F3R_CHECK_RTOL_FLOOR. */
+double f3r_accuracy_check_rtol(double run_rtol, double request);
+
+/* The largest distance between two end-effector paths, (x, y) pairs at the same count times. */
+double f3r_path_distance(const double* a, const double* b, int count);
 
 /* A measured point of the work-precision relation (solver_table.c, written by scripts/bench). */
 typedef struct {

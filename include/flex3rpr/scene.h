@@ -90,6 +90,7 @@ enum {
 };
 
 #define F3R_MODES_AUTO (-1)
+#define F3R_ACCURACY_MAX_ESCALATIONS 6 /* accuracy.escalations allowed */
 
 /* Bits of f3r_scene.explicit_settings: what the scene file (or the caller) fixed itself, which
  * the accuracy knob (accuracy.h) keeps. */
@@ -176,6 +177,10 @@ typedef struct {
 
   /* accuracy knob (accuracy.h): requested end-effector accuracy (m), 0 for none */
   double accuracy;
+  int accuracy_verify;        /* 1 (default): a run for a request is checked against a richer one
+                             * (f3r_accuracy_check_scene); 0: the error is only estimated */
+  int accuracy_escalations;   /* richer configurations tried after a check that misses, 0..6,
+                             * default 3 */
   unsigned explicit_settings; /* F3R_EXPLICIT_* */
 
   /* run */

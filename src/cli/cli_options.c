@@ -18,7 +18,8 @@ void cli_usage(FILE* to) {
       "                    [--fd-jacobian] [--dense-linear-solver] [--exact-kinematics]\n"
       "                    [--ida | --erk | --dirk] [--table NAME]\n"
       "                    [--stop-at-outputs] [--hold T:INDEX:VALUE ...]\n"
-      "                    [--accuracy METRES] [--linear-path FILE.csv] [--linearise FILE.mat]\n"
+      "                    [--accuracy METRES [--no-verify] [--escalations N]]\n"
+      "                    [--linear-path FILE.csv] [--linearise FILE.mat]\n"
       "                    [--set FIELD=VALUE ...]   (any scene field: --set links[0].modes=4)\n"
       "                    [--summary-json FILE|-]   (the summary as JSON; -: on stdout)\n"
       "       flex3rpr_sim --modal SCENE.yaml [--modal-csv FILE.csv] [--set FIELD=VALUE ...]\n"
@@ -78,6 +79,7 @@ static const option_field switches[] = {
     {"--ida", offsetof(cli_options, integrator_ida)},
     {"--erk", offsetof(cli_options, integrator_erk)},
     {"--dirk", offsetof(cli_options, integrator_dirk)},
+    {"--no-verify", offsetof(cli_options, no_verify)},
 };
 static const option_field paths[] = {
     {"--table", offsetof(cli_options, table)},
@@ -95,6 +97,7 @@ static const option_field numbers[] = {
     {"--max-order", offsetof(cli_options, max_order)},
     {"--output-step", offsetof(cli_options, output_step)},
     {"--duration", offsetof(cli_options, duration)},
+    {"--escalations", offsetof(cli_options, escalations)},
 };
 #define COUNT(a) (sizeof(a) / sizeof((a)[0]))
 

@@ -27,6 +27,8 @@ typedef struct {
   int exact_kinematics;
   const char* formulation;
   double rtol, atol, max_order, output_step, duration, accuracy;
+  int no_verify;      /* --no-verify: accuracy.verify = false */
+  double escalations; /* --escalations N: accuracy.escalations = N */
   const char* linear_path;
   const char* linearise_path; /* --linearise FILE.mat: the state-space model, and FILE.json */
   const char* summary_json;   /* --summary-json FILE: the summary as JSON; "-": on stdout */

@@ -32,6 +32,10 @@ static FILE* human;
 /* bytes of the CSV's stdio buffer: about 300 rows of paper simulation 3 (800 bytes each) */
 #define CSV_BUFFER_BYTES (256 * 1024)
 
+/* The exit code of a run whose accuracy request the measurement found unmet (the path written is
+ * the closest measured): 1 is a failure, 2 a usage error. */
+#define F3R_EXIT_ACCURACY_NOT_MET 3
+
 static void write_header(FILE* f, const f3r_model* m) {
   static const char* rigid[9] = {"rho_1",   "rho_2", "rho_3", "theta_1", "theta_2",
                                  "theta_3", "x_p",   "y_p",   "phi_p"};
@@ -96,7 +100,7 @@ static double monotonic_seconds(void) {
 /* The scene fields the options set, as overrides "FIELD=VALUE" for the loader (numbers with
  * %.17g, which round-trip): they pass the file's checks and fix what the file would, so the
  * accuracy knob keeps them. */
-#define MAX_OPTION_SETS 12
+#define MAX_OPTION_SETS 16
 typedef struct {
   char own[MAX_OPTION_SETS][96];
   const char* all[MAX_OPTION_SETS + MAX_SETS];
@@ -135,6 +139,8 @@ static void build_overrides(const cli_options* o, int force_minimal, override_li
   add_number(l, "solver.max_order", o->max_order);
   add_number(l, "run.output_step", o->output_step);
   add_number(l, "run.duration", o->duration);
+  add_number(l, "accuracy.escalations", o->escalations);
+  if (o->no_verify) snprintf(l->own[l->n_own++], sizeof l->own[0], "%s", "accuracy.verify=false");
   if (o->exact_kinematics)
     snprintf(l->own[l->n_own++], sizeof l->own[0], "%s", "effects.exact_kinematics=true");
   for (int k = 0; k < l->n_own; ++k) l->all[l->n_all++] = l->own[k];
@@ -190,7 +196,7 @@ static int resolve_model(const cli_options* o, f3r_scene* scene, f3r_accuracy_ch
 static void report_choice(const cli_options* o, const f3r_scene* scene,
                           const f3r_accuracy_choice* choice, double choose_cpu) {
   if (choice->summary[0]) fprintf(human, "%s\n", choice->summary);
-  if (scene->accuracy > 0 && !choice->request_met)
+  if (scene->accuracy > 0 && !scene->accuracy_verify && !choice->request_met)
     fprintf(stderr,
             "flex3rpr_sim: warning: %s: the accuracy request %g m is not met: estimated %.3g m "
             "(see the summary)\n",
@@ -228,6 +234,11 @@ static void track_maxima(run_stats* r, const f3r_model* model, int beam_points,
   }
 }
 
+/* Outputs after t = 0 over the scene's duration. */
+static long output_count(const f3r_scene* scene) {
+  return (long)llround(scene->duration / scene->output_step);
+}
+
 /* Held forces change only at output times, exactly as in the node. */
 static f3r_status apply_holds(const cli_options* o, double output_step, f3r_sim* sim, double* held,
                               f3r_error* err) {
@@ -243,15 +254,20 @@ static f3r_status apply_holds(const cli_options* o, double output_step, f3r_sim*
 }
 
 /* Advances to the scene's duration output step by output step, writing rows to csv (when not
- * NULL); returns 1 when the simulation failed (reported), 0 otherwise. */
+ * NULL) and the end-effector's (x, y) at every output to path (when not NULL; t = 0 first);
+ * returns 1 when the simulation failed (reported), 0 otherwise. */
 static int run_outputs(const cli_options* o, const f3r_scene* scene, const f3r_model* model,
-                       f3r_sim* sim, FILE* csv, run_stats* r) {
+                       f3r_sim* sim, FILE* csv, double* path, run_stats* r) {
   static double shapes[3][101][F3R_MAX_MODES]; /* mode shapes at the stations */
   eval_mode_shapes(model, scene->beam_points, shapes);
-  const long steps = (long)llround(scene->duration / scene->output_step);
+  const long steps = output_count(scene);
   double held[F3R_MAX_Q] = {0};
   f3r_error err = {0};
   int rc = 0;
+  if (path) {
+    path[0] = f3r_sim_outputs(sim)->q[F3R_Q_X];
+    path[1] = f3r_sim_outputs(sim)->q[F3R_Q_Y];
+  }
   const double start = cpu_seconds(), wall_start = monotonic_seconds();
   for (long k = 1; k <= steps; ++k) {
     const double t = k == steps ? scene->duration : (double)k * scene->output_step;
@@ -271,6 +287,10 @@ static int run_outputs(const cli_options* o, const f3r_scene* scene, const f3r_m
       cli_fail(f3r_status_name(st), "%s", err.message);
       rc = 1;
       break;
+    }
+    if (path) {
+      path[2 * k] = out->q[F3R_Q_X];
+      path[2 * k + 1] = out->q[F3R_Q_Y];
     }
     track_maxima(r, model, scene->beam_points, shapes, out);
   }
@@ -313,6 +333,13 @@ static void print_summary(const cli_options* o, const f3r_scene* scene, const f3
   fprintf(human, "max constraint res  %.3e m\n", r->max_constraint);
   fprintf(human, "energy balance err  %.3e J (%.3e of max T+V)\n", r->max_energy_error,
           cli_energy_relative(r));
+  if (cli_energy_guard(r))
+    fprintf(stderr,
+            "flex3rpr_sim: warning: %s: the energy balance error reached %.3g of the largest "
+            "T + V (the guard is %g; correct runs stay below 2.6e-2): the integrator has likely "
+            "gone unstable and the path is suspect; try a tighter rtol, IDA at max BDF order 5, "
+            "or another Butcher table\n",
+            o->scene_path, cli_energy_relative(r), F3R_ENERGY_GUARD);
   fprintf(human,
           "max deflection      %.6e m (largest |w| at %d stations a link; at the tips %.6e m)\n",
           r->max_deflection, scene->beam_points, r->max_tip);
@@ -334,23 +361,222 @@ static void keep_report(const f3r_outputs* out, const run_stats* stats, run_repo
   report->stats = *stats;
 }
 
-/* The simulation with its CSV and summary (and what it leaves in *report); returns the exit
- * code. */
-static int simulate(const cli_options* o, const f3r_scene* scene, const f3r_model* model,
-                    run_report* report) {
+/* One configuration's run: its scene (a view of the loaded scene's tables) and model, its CSV in
+ * memory (when one is asked for), its end-effector path and what it measured. */
+typedef struct {
+  f3r_scene scene;
+  f3r_model* model;
+  char* rows; /* the CSV, header included (open_memstream) */
+  size_t rows_size;
+  double* path; /* (x, y) at each output, t = 0 first */
+  run_stats stats;
+  f3r_outputs last;
+  double measured; /* m from its check's path; NaN until checked */
+  int rc;
+} config_run;
+
+static void free_config_run(config_run* c) {
+  f3r_model_destroy(c->model);
+  free(c->rows);
+  free(c->path);
+  memset(c, 0, sizeof *c);
+}
+
+/* The solver settings of a scene, with the command line's Jacobian and linear solver. */
+static f3r_solver_settings cli_settings(const cli_options* o, const f3r_scene* scene) {
   f3r_solver_settings settings = f3r_solver_settings_from_scene(scene);
   settings.analytic_jacobian = !o->fd_jacobian;
   settings.dense_linear_solver = o->dense_linear_solver;
   settings.stop_at_outputs = o->stop_at_outputs;
-  for (int h = 0; h < o->n_holds; ++h)
-    if (o->holds[h].index >= f3r_model_nq(model)) {
-      cli_fail("usage", "--hold index %d is beyond nq = %d", o->holds[h].index,
-               f3r_model_nq(model));
-      return 2;
-    }
+  return settings;
+}
+
+/* Runs c->scene on c->model (built here when NULL), the CSV into memory when with_csv; 0 or 1
+ * with the failure reported (in c->rc as well). */
+static int run_config(const cli_options* o, int with_csv, config_run* c) {
   f3r_error err = {0};
   f3r_sim* sim = NULL;
-  if (f3r_sim_create(model, &settings, &sim, &err) != F3R_OK) {
+  c->measured = NAN;
+  c->rc = 1;
+  const long count = output_count(&c->scene) + 1;
+  if (!c->model && f3r_model_create(&c->scene, &c->model, &err) != F3R_OK) {
+    cli_fail(f3r_status_name(err.code), "%s: the accuracy check: %s", o->scene_path, err.message);
+    return 1;
+  }
+  const f3r_solver_settings settings = cli_settings(o, &c->scene);
+  if (!(c->path = malloc((size_t)count * 2 * sizeof(double)))) {
+    cli_fail("memory", "no memory for a path of %ld outputs", count);
+    return 1;
+  }
+  if (f3r_sim_create(c->model, &settings, &sim, &err) != F3R_OK) {
+    cli_fail(f3r_status_name(err.code), "%s", err.message);
+    return 1;
+  }
+  FILE* csv = with_csv ? open_memstream(&c->rows, &c->rows_size) : NULL;
+  if (csv) {
+    write_header(csv, c->model);
+    write_row(csv, c->model, f3r_sim_outputs(sim));
+  }
+  c->rc = run_outputs(o, &c->scene, c->model, sim, csv, c->path, &c->stats);
+  if (csv) fclose(csv);
+  c->last = *f3r_sim_outputs(sim);
+  f3r_sim_destroy(sim);
+  return c->rc;
+}
+
+/* A configuration in one line: each link's modes + static shapes ("1+2s", "-" for rigid), the
+ * exact kinematics, the integrator and its tolerance. */
+static void describe_config(const f3r_scene* s, char* text, size_t size) {
+  int n = 0;
+  for (int i = 0; i < 3; ++i) {
+    const f3r_link_scene* l = &s->links[i];
+    const int shapes = l->static_correction ? f3r_link_correction_functions(l) : 0;
+    n += l->model == F3R_LINK_RIGID ? snprintf(text + n, size - (size_t)n, "%s-", i ? "/" : "")
+         : shapes ? snprintf(text + n, size - (size_t)n, "%s%d+%ds", i ? "/" : "", l->modes, shapes)
+                  : snprintf(text + n, size - (size_t)n, "%s%d", i ? "/" : "", l->modes);
+  }
+  snprintf(text + n, size - (size_t)n, "%s, %s%s%s rtol %g", s->exact_kinematics ? " exact" : "",
+           f3r_integrator_name(s->integrator), s->table[0] ? " " : "", s->table, s->rtol);
+}
+
+/* A run measured against its check (f3r_accuracy_check_scene); where the measurement misses the
+ * request, the next configuration (the check's, within what the scene fixes) runs and is checked
+ * in turn, up to accuracy.escalations. The configuration written is the one that met the request,
+ * else the one measured closest: the measured error is always that of the path written. The
+ * check's own path is not written: its error is not measured. Returns the exit code (3: the
+ * request was not met). runs[0] holds the knob's choice on entry. */
+#define MAX_CONFIGS (2 * (F3R_ACCURACY_MAX_ESCALATIONS + 1))
+typedef struct {
+  config_run runs[MAX_CONFIGS];
+  int count;
+  int accepted;     /* the run written */
+  double check_cpu; /* s of CPU time of every run but the written one */
+  char attempts[1024];
+} verification;
+
+static int verify_runs(const cli_options* o, f3r_accuracy_choice* choice, verification* v) {
+  const f3r_scene* scene = &v->runs[0].scene;
+  const double request = scene->accuracy;
+  int current = 0, best = 0;
+  v->count = 1;
+  if (run_config(o, o->out_path != NULL, &v->runs[0])) return 1;
+  for (int attempt = 0;; ++attempt) {
+    config_run* run = &v->runs[current];
+    config_run* check = &v->runs[v->count++];
+    f3r_accuracy_check_scene(&run->scene, 0, &check->scene);
+    char text[256], checked[128];
+    describe_config(&run->scene, text, sizeof text);
+    describe_config(&check->scene, checked, sizeof checked);
+    if (run_config(o, 0, check)) { /* reported; the run stands unmeasured */
+      snprintf(v->attempts + strlen(v->attempts), sizeof v->attempts - strlen(v->attempts),
+               "%s%s: its check %s failed", attempt ? "\n                    " : "", text, checked);
+      break;
+    }
+    run->measured = f3r_path_distance(run->path, check->path, (int)output_count(scene) + 1);
+    snprintf(v->attempts + strlen(v->attempts), sizeof v->attempts - strlen(v->attempts),
+             "%s%s: measured %.3g m against %s", attempt ? "\n                    " : "", text,
+             run->measured, checked);
+    if (current == 0 || run->measured < v->runs[best].measured) best = current;
+    if (run->measured <= request || attempt == scene->accuracy_escalations) break;
+    f3r_scene next;
+    if (!f3r_accuracy_check_scene(&run->scene, 1, &next)) break; /* the scene fixes the rest */
+    if (!memcmp(&next, &check->scene, sizeof next) && !o->out_path) {
+      current = v->count - 1; /* the check is the next configuration, and has run */
+      continue;
+    }
+    /* the next configuration runs (again, where it was the check: with its CSV, which the
+     * check's run does not format, as that took 40 % of a run with 1e-4 s outputs) */
+    current = v->count++;
+    v->runs[current].scene = next;
+    if (run_config(o, o->out_path != NULL, &v->runs[current])) return 1;
+  }
+  v->accepted = best;
+  for (int k = 0; k < v->count; ++k)
+    if (k != best) v->check_cpu += v->runs[k].stats.cpu_total;
+  choice->verified = 1;
+  choice->measured_error = v->runs[best].measured;
+  choice->configurations = v->count;
+  choice->request_met = choice->measured_error <= request; /* false when unmeasured (NaN) */
+  return choice->request_met ? 0 : F3R_EXIT_ACCURACY_NOT_MET;
+}
+
+/* The CSV of the run written, from memory. */
+static int write_rows(const cli_options* o, const config_run* c) {
+  FILE* f = fopen(o->out_path, "w");
+  if (!f || fwrite(c->rows, 1, c->rows_size, f) != c->rows_size || fclose(f)) {
+    cli_fail("io", "cannot write %s", o->out_path);
+    return 1;
+  }
+  return 0;
+}
+
+/* The summary's lines on the measurement, and the warnings of a request not met. */
+static void report_measurement(const cli_options* o, const f3r_accuracy_choice* choice,
+                               const verification* v) {
+  const double request = v->runs[0].scene.accuracy;
+  const config_run* written = &v->runs[v->accepted];
+  fprintf(human,
+          "accuracy            measured %.3g m against a richer run (estimate %.3g m); "
+          "request %g m %s\n",
+          choice->measured_error, choice->estimated_error, request,
+          choice->request_met ? "met (measured)" : "NOT met (measured)");
+  fprintf(human, "check cpu time      %.6f s (%.2f of the run's %.6f s; %d configurations run)\n",
+          v->check_cpu, written->stats.cpu_total > 0 ? v->check_cpu / written->stats.cpu_total : 0,
+          written->stats.cpu_total, v->count);
+  fprintf(human, "configurations      %s\n", v->attempts);
+  if (!choice->request_met)
+    fprintf(stderr,
+            "flex3rpr_sim: %s: the accuracy request %g m is not met: measured %.3g m after %d "
+            "configurations (%s); the path written is the one measured closest%s\n",
+            o->scene_path, request, choice->measured_error, v->count, v->attempts,
+            written->scene.accuracy_escalations ? "" : " (accuracy.escalations is 0)");
+}
+
+/* A run for an accuracy request, measured (verify_runs): its CSV, summary and report. */
+static int simulate_verified(const cli_options* o, f3r_scene* scene, f3r_model** model,
+                             f3r_accuracy_choice* choice, run_report* report) {
+  static verification v; /* large: the paths and rows live on the heap, the runs here */
+  memset(&v, 0, sizeof v);
+  v.runs[0].scene = *scene;
+  v.runs[0].model = *model; /* handed back below, or destroyed with the others */
+  *model = NULL;
+  int rc = verify_runs(o, choice, &v);
+  const config_run* written = &v.runs[v.accepted];
+  if (rc != 1) {
+    if (o->out_path && write_rows(o, written)) rc = 1;
+    print_summary(o, &written->scene, written->model, &written->last, &written->stats);
+    report_measurement(o, choice, &v);
+    keep_report(&written->last, &written->stats, report);
+    report->check_cpu = v.check_cpu;
+    report->configurations = v.count;
+    *scene = written->scene;
+    *model = written->model;
+    v.runs[v.accepted].model = NULL;
+  } else {
+    *model = v.runs[0].model;
+    v.runs[0].model = NULL;
+  }
+  for (int k = 0; k < v.count; ++k) free_config_run(&v.runs[k]);
+  return rc;
+}
+
+/* The simulation with its CSV and summary (and what it leaves in *report); returns the exit
+ * code. With an accuracy request it is measured (simulate_verified) unless accuracy.verify is
+ * off. */
+static int simulate(const cli_options* o, f3r_scene* scene, f3r_model** model,
+                    f3r_accuracy_choice* choice, run_report* report) {
+  for (int h = 0; h < o->n_holds; ++h)
+    if (o->holds[h].index >= f3r_model_nq(*model)) {
+      cli_fail("usage", "--hold index %d is beyond nq = %d", o->holds[h].index,
+               f3r_model_nq(*model));
+      return 2;
+    }
+  if (scene->accuracy > 0 && scene->accuracy_verify)
+    return simulate_verified(o, scene, model, choice, report);
+  const f3r_solver_settings settings = cli_settings(o, scene);
+  f3r_error err = {0};
+  f3r_sim* sim = NULL;
+  if (f3r_sim_create(*model, &settings, &sim, &err) != F3R_OK) {
     cli_fail(f3r_status_name(err.code), "%s", err.message);
     return 1;
   }
@@ -367,14 +593,17 @@ static int simulate(const cli_options* o, const f3r_scene* scene, const f3r_mode
      * it costs a page-cache round trip of its own; without the memory the default stays */
     if ((csv_buffer = malloc(CSV_BUFFER_BYTES)) != NULL)
       setvbuf(csv, csv_buffer, _IOFBF, CSV_BUFFER_BYTES);
-    write_header(csv, model);
-    write_row(csv, model, f3r_sim_outputs(sim));
+    write_header(csv, *model);
+    write_row(csv, *model, f3r_sim_outputs(sim));
   }
   run_stats stats = {0};
-  const int rc = run_outputs(o, scene, model, sim, csv, &stats);
+  const int rc = run_outputs(o, scene, *model, sim, csv, NULL, &stats);
   if (csv) fclose(csv);
   free(csv_buffer);
-  print_summary(o, scene, model, f3r_sim_outputs(sim), &stats);
+  print_summary(o, scene, *model, f3r_sim_outputs(sim), &stats);
+  if (scene->accuracy > 0)
+    fprintf(human, "accuracy            estimated %.3g m, not measured (accuracy.verify is off)\n",
+            choice->estimated_error);
   keep_report(f3r_sim_outputs(sim), &stats, report);
   f3r_sim_destroy(sim);
   return rc;
@@ -430,7 +659,8 @@ int main(int argc, char** argv) {
     } else {
       report_choice(&o, &scene, &choice, parts.choose_cpu);
       rc = analyse(&o, model);
-      if (rc < 0) rc = simulate(&o, &scene, model, &report);
+      if (rc < 0) rc = simulate(&o, &scene, &model, &choice, &report);
+      parts.model = model;
     }
   }
   if (o.summary_json) rc = cli_write_summary(o.summary_json, &o, &parts, rc);

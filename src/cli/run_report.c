@@ -6,6 +6,7 @@
 
 #include <sundials/sundials_config.h>
 
+#include "flex3rpr/sim.h"
 #include "summary_json.h"
 
 const char* cli_integrator_text(const cli_options* o, const f3r_scene* scene) {
@@ -25,6 +26,10 @@ real_time_factors cli_real_time_factor(double t, const run_stats* r) {
 
 double cli_energy_relative(const run_stats* r) {
   return r->max_energy > 0 ? r->max_energy_error / r->max_energy : 0.0;
+}
+
+int cli_energy_guard(const run_stats* r) {
+  return f3r_energy_guard_tripped(r->max_energy_error, r->max_energy);
 }
 
 static void json_settings(f3r_json* j, const cli_options* o, const f3r_scene* scene,
@@ -79,6 +84,8 @@ static void json_run(f3r_json* j, const cli_options* o, const run_report* r) {
   f3r_json_number(j, "energy_balance_relative", cli_energy_relative(s));
   f3r_json_number(j, "max_deflection_m", s->max_deflection);
   f3r_json_number(j, "max_tip_deflection_m", s->max_tip);
+  f3r_json_bool(j, "energy_guard", cli_energy_guard(s));
+  f3r_json_number(j, "check_cpu_time_s", r->configurations ? r->check_cpu : NAN);
   f3r_json_number(j, "final_x_p_m", r->x);
   f3r_json_number(j, "final_y_p_m", r->y);
   f3r_json_number(j, "final_phi_p_rad", r->phi);
@@ -142,6 +149,9 @@ static void json_choice(f3r_json* j, const f3r_scene* scene, const f3r_accuracy_
     f3r_json_number(j, "pilot_ratio", c->pilot ? c->pilot_ratio : NAN);
   }
   f3r_json_number(j, "estimated_error_m", c->estimated_error);
+  f3r_json_number(j, "measured_error_m", c->verified ? c->measured_error : NAN);
+  f3r_json_string(j, "error_basis", !request ? NULL : c->verified ? "measured" : "estimated");
+  f3r_json_integer(j, "configurations", c->configurations);
   f3r_json_bool(j, "request_met", c->request_met);
   f3r_json_string(j, "summary", c->summary);
   f3r_json_string(j, "brief", c->brief);

@@ -23,6 +23,8 @@ typedef struct {
   double t, x, y, phi;
   long steps, residual_evals, jacobian_evals;
   run_stats stats;
+  double check_cpu;   /* s: the accuracy check's runs (every configuration but the written one) */
+  int configurations; /* configurations run for an accuracy request's measurement; 0: none */
 } run_report;
 
 /* The real-time factors the summaries print, each named by its clock: the process CPU clock over
@@ -47,6 +49,8 @@ const char* cli_integrator_text(const cli_options* o, const f3r_scene* scene);
 real_time_factors cli_real_time_factor(double t, const run_stats* r);
 /* The largest energy-balance error over the largest T + V (0 when T + V stayed 0). */
 double cli_energy_relative(const run_stats* r);
+/* 1 when the run's energy balance error passes F3R_ENERGY_GUARD of its largest T + V. */
+int cli_energy_guard(const run_stats* r);
 /* The whole summary into path ("-": stdout); returns rc, or 1 when the file cannot be written. */
 int cli_write_summary(const char* path, const cli_options* o, const summary_parts* p, int rc);
 

@@ -35,12 +35,14 @@ KEYS = {
             "integration_wall_time_s", "outputs_wall_time_s", "real_time_factor_cpu", "real_time_factor_wall_integration",
             "real_time_factor_wall",
             "max_constraint_residual_m", "energy_balance_error_J", "energy_balance_relative", "max_deflection_m",
-            "max_tip_deflection_m", "final_x_p_m", "final_y_p_m", "final_phi_p_rad", "csv"},
+            "max_tip_deflection_m", "final_x_p_m", "final_y_p_m", "final_phi_p_rad", "csv", "energy_guard",
+            "check_cpu_time_s"},
     "accuracy": {"request_m", "rigid", "modes", "static_correction", "static_shapes", "shape_mix", "model_error_m",
                  "extent_m",
                  "linear_evaluations", "choice_cpu_time_s", "exact_kinematics", "formulation", "integrator", "table",
                  "rtol", "atol", "kinematics_error_m", "kinematics_effect_m", "kinematics_linear_m", "solver_error_m",
-                 "pilot", "pilot_ratio", "estimated_error_m", "request_met", "summary", "brief"},
+                 "pilot", "pilot_ratio", "estimated_error_m", "measured_error_m", "error_basis", "configurations",
+                 "request_met", "summary", "brief"},
 }
 
 
@@ -160,7 +162,15 @@ class Summary(unittest.TestCase):
         m = re.search(r"^estimated error (\S+) m \(model (\S+), kinematics (\S+), solver (\S+)\)", human, re.M)
         self.assertEqual(m.groups(), tuple(g(k[f], ".3g") for f in ("estimated_error_m", "model_error_m",
                                                                        "kinematics_error_m", "solver_error_m")))
-        self.assertEqual("\nnot met: " not in human, k["request_met"])
+        m = re.search(r"^accuracy\s+measured (\S+) m against a richer run \(estimate (\S+) m\); request (\S+) m "
+                      r"(met|NOT met) \(measured\)$", human, re.M)
+        if k["error_basis"] == "measured":
+            self.assertEqual(m.groups(), (g(k["measured_error_m"], ".3g"), g(k["estimated_error_m"], ".3g"),
+                                          g(k["request_m"], "g"), "met" if k["request_met"] else "NOT met"))
+        else:
+            self.assertIsNone(m)
+            self.assertIsNone(k["measured_error_m"])
+            self.assertEqual("\nnot met: " not in human, k["request_met"])
         m = re.search(r"^pilot: .* scale the linear estimate by (\S+)$", human, re.M)
         if m:
             self.assertTrue(k["pilot"])
@@ -204,6 +214,76 @@ class Summary(unittest.TestCase):
                     k, s = summary["accuracy"], summary["settings"]
                     self.assertEqual((s["formulation"], s["integrator"], s["rtol"], s["atol"], s["exact_kinematics"]),
                                      (k["formulation"], k["integrator"], k["rtol"], k["atol"], k["exact_kinematics"]))
+
+    def test_f_the_request_is_measured(self):
+        """The knob's run is measured against a richer one: measured_error_m, error_basis and the
+        check's CPU time; --no-verify leaves the estimate alone, and says so."""
+        with tempfile.TemporaryDirectory() as tmp:
+            path = open_scene("paper_sim3_fixed_free", tmp)
+            summary, p = T.run_sim(ARGS.sim, path, "--accuracy", "1e-4")
+            self.assertEqual(p.returncode, 0, p.stderr)
+            k, r = summary["accuracy"], summary["run"]
+            self.assertEqual(k["error_basis"], "measured")
+            self.assertLessEqual(k["measured_error_m"], 1e-4)
+            self.assertGreater(k["measured_error_m"], 0.0)
+            self.assertTrue(k["request_met"])
+            self.assertEqual(k["configurations"], 2)
+            self.assertGreater(r["check_cpu_time_s"], 0.0)
+            self.check_choice_numbers(summary, p.stderr)
+            summary, p = T.run_sim(ARGS.sim, path, "--accuracy", "1e-4", "--no-verify")
+            self.assertEqual(p.returncode, 0, p.stderr)
+            k = summary["accuracy"]
+            self.assertEqual(k["error_basis"], "estimated")
+            self.assertIsNone(k["measured_error_m"])
+            self.assertIsNone(summary["run"]["check_cpu_time_s"])
+            self.assertIn("not measured (accuracy.verify is off)", p.stderr)
+            self.check_choice_numbers(summary, p.stderr)
+
+    def test_g_a_miss_escalates_or_says_so(self):
+        """resonance.yaml driven for 0.5 s at 1e-5 m: the knob's choice misses (the resonance builds
+        up late, where no estimate looks); the next configuration meets it. With no escalation
+        allowed the run exits 3, names the request and the measured error, and still writes the
+        path it measured."""
+        with tempfile.TemporaryDirectory() as tmp:
+            path, csv = open_scene("resonance", tmp), os.path.join(tmp, "run.csv")
+            base = [path, "--accuracy", "1e-5", "--duration", "0.5", "--out", csv]
+            summary, p = T.run_sim(ARGS.sim, *base)
+            self.assertEqual(p.returncode, 0, p.stderr)
+            k = summary["accuracy"]
+            self.assertTrue(k["request_met"], p.stderr)
+            self.assertGreaterEqual(k["configurations"], 3, p.stderr)
+            self.assertLessEqual(k["measured_error_m"], 1e-5)
+            summary, p = T.run_sim(ARGS.sim, *base, "--set", "accuracy.escalations=0")
+            self.assertEqual(p.returncode, 3, p.stderr)
+            self.assertEqual(summary["exit_code"], 3)
+            k = summary["accuracy"]
+            self.assertFalse(k["request_met"])
+            self.assertGreater(k["measured_error_m"], 1e-5)
+            self.assertIn(f"the accuracy request 1e-05 m is not met: measured {k['measured_error_m']:.3g} m", p.stderr)
+            with open(csv) as f:
+                self.assertEqual(sum(1 for _ in f), 1 + 1 + 5000, "the header, t = 0 and every output")
+
+    def test_h_the_energy_guard(self):
+        """Two configurations known to exit 0 with garbage trip the guard; a correct run does not."""
+        for args in (["--erk", "--table", "ARKODE_VERNER_8_5_6", "--rtol", "1e-4"],
+                     ["--ida", "--max-order", "3", "--rtol", "1e-3"]):
+            with self.subTest(args=args):
+                summary, p = T.run_sim(ARGS.sim, scene("paper_sim3_fixed_free"), *args)
+                self.assertTrue(summary["run"]["energy_guard"], p.stderr)
+                self.assertGreater(summary["run"]["energy_balance_relative"], 0.1)
+                self.assertIn("warning", p.stderr)
+                self.assertIn("the energy balance error reached", p.stderr)
+        summary, p = T.run_sim(ARGS.sim, scene("paper_sim3_fixed_free"))
+        self.assertFalse(summary["run"]["energy_guard"])
+        self.assertNotIn("energy balance error reached", p.stderr)
+
+    def test_i_no_shipped_scene_trips_the_energy_guard(self):
+        folder = os.path.join(ROOT, "config", "scenes")
+        for name in sorted(os.listdir(folder)):
+            with self.subTest(scene=name):
+                summary, p = T.run_sim(ARGS.sim, os.path.join(folder, name), "--output-step", "1e-3")
+                self.assertEqual(p.returncode, 0, p.stderr)
+                self.assertFalse(summary["run"]["energy_guard"], f"{name}: {summary['run']['energy_balance_relative']}")
 
     def check_failure(self, args, status, message, exit_code=1, ran=False):
         summary, p = T.run_sim(ARGS.sim, *args)

@@ -361,6 +361,7 @@ static f3r_status choose_solver(choice_run* run, f3r_accuracy_choice* c, f3r_err
 f3r_status f3r_accuracy_choose(const f3r_scene* scene, double request, int commanded,
                                f3r_accuracy_choice* c, f3r_error* err) {
   memset(c, 0, sizeof *c);
+  c->measured_error = NAN;
   if (!(request > 0.0) || !isfinite(request))
     return f3r_error_set(err, F3R_ERR_ARGUMENT,
                          "accuracy: the request must be a positive length (m)");
@@ -469,6 +470,7 @@ f3r_status f3r_accuracy_resolve(f3r_scene* scene, int commanded, f3r_accuracy_ch
   f3r_accuracy_choice local;
   f3r_accuracy_choice* c = choice ? choice : &local;
   memset(c, 0, sizeof *c);
+  c->measured_error = NAN;
   const f3r_status st = resolve_modes(scene, commanded, c, err);
   return st == F3R_OK ? resolve_shape_mix(scene, c, err) : st;
 }

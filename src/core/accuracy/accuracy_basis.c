@@ -44,7 +44,7 @@ f3r_status f3r_choice_resume_plain_search(choice_run* run, f3r_accuracy_choice* 
 /* Whether the search again can wait for the corrected one (compare_correction's conditions for
  * searching that basis at all). */
 int f3r_choice_plain_search_may_wait(const choice_run* run) {
-  return !run->ms.at_rest && !run->impacts && !run->long_run && correctable_links(run);
+  return !run->ms.at_rest && !run->impacts && correctable_links(run);
 }
 
 /* The correctable links' static correction as one mixed shape (beam_basis.h), its load ratio
@@ -320,13 +320,11 @@ static f3r_status settle_plain_search(choice_run* run, f3r_accuracy_choice* c, d
  * the motion amplifies a truncation, not the basis). The cheaper basis that fits the model's
  * share stays in run->ms and run->s (the paper's modes where neither is cheaper). */
 f3r_status f3r_choice_compare_bases(choice_run* run, f3r_accuracy_choice* c, f3r_error* err) {
-  /* Not on a run longer than the benchmark's scenes: there neither the pilot's ratio (measured
-   * on the paper's modes) nor the solver relations held for it. free_vibration_long over 2 s,
-   * for 1e-5 m: 2 modes + 3 shapes (the set then) were 8.3e-6 m from the converged path where
-   * the estimate said 2.8e-6, and ERK at rtol 1e-3 added 2.2e-5 m (3.0e-5 in all). */
+  /* At any run length: on runs longer than the benchmark's scenes the estimates fell short
+   * (free_vibration_long over 2 s at 1e-5 m: 8.3e-6 m where they said 2.8e-6), and refusing the
+   * correction there made paper simulation 3 over 1.5 s cost 270 times its 0.5 s run. The
+   * check (f3r_accuracy_check_scene) measures what the estimate cannot promise. */
   run->correctable = run->ms.at_rest || run->impacts ? 0u : correctable_links(run);
-  run->correction_too_long = run->correctable && run->long_run;
-  if (run->long_run) run->correctable = 0;
   if (!run->correctable) return f3r_choice_resume_plain_search(run, c, err);
   f3r_scene corrected = *run->s; /* a view of the same tables */
   for (int i = 0; i < 3; ++i)

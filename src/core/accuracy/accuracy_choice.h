@@ -62,7 +62,6 @@ typedef struct {
   double deferred_target;
   int plain_beyond;
   int corrected_first;     /* the corrected search ran while the paper's modes waited */
-  int correction_too_long; /* correctable links, but the run is longer than the benchmark's */
   int impacts;             /* end stops on a path that moves: the most faithful model */
   int long_run;            /* longer than the benchmark's scenes */
   int unmeasured_basis;    /* the static correction: the relations were measured on the paper's

@@ -66,11 +66,6 @@ static void counts(const int* modes, char* text, size_t size) {
 /* The summary's line on the basis, where the knob compared the static correction with the
  * paper's modes: each one's counts, estimate and relative cost, and which it kept. */
 static void summarise_basis(const choice_run* run, f3r_accuracy_choice* c) {
-  if (run->correction_too_long)
-    f3r_accuracy_append(c->summary, sizeof c->summary,
-                        "basis: the paper's modes: the run is longer than the benchmark's scenes "
-                        "(%g s), where the static correction's estimates were not validated\n",
-                        BENCHMARK_DURATION);
   if (!run->correctable) return;
   if (run->least_corrected_cost > 0.0) {
     char plain[32];

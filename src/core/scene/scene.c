@@ -37,6 +37,8 @@ f3r_scene f3r_default_scene(void) {
   s.rtol = 2e-7;
   s.max_order = 5;
   s.atol = 2e-9;
+  s.accuracy_verify = 1;
+  s.accuracy_escalations = 3;
   s.duration = 0.5;
   s.output_step = 1e-4;
   s.beam_points = 11;
@@ -514,6 +516,9 @@ static f3r_status validate_solver_and_run(const f3r_scene* s, f3r_error* err) {
   }
   CHECK_RANGE("solver.rtol", s->rtol, 1e-14, 1e-1);
   if (s->accuracy != 0.0) CHECK_RANGE("accuracy.end_effector", s->accuracy, 1e-9, 1.0);
+  if (s->accuracy_escalations < 0 || s->accuracy_escalations > F3R_ACCURACY_MAX_ESCALATIONS)
+    return f3r_scene_error(err, "accuracy.escalations", NULL, "%d is out of range 0..%d",
+                           s->accuracy_escalations, F3R_ACCURACY_MAX_ESCALATIONS);
   CHECK_RANGE("solver.atol", s->atol, 1e-16, 1e-1);
   CHECK_RANGE("solver.max_step", s->max_step, 0.0, 1e3);
   if (s->max_order < 1 || s->max_order > 5)

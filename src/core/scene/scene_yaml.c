@@ -405,8 +405,24 @@ static f3r_status read_cylinder(loader* L, const yaml_node_t* map) {
 }
 
 static f3r_status read_accuracy(loader* L, const yaml_node_t* map) {
-  const number_field f[] = {F3R_NUMBER("end_effector", &L->scene->accuracy)};
-  return f3r_yaml_numbers(L, map, "accuracy", f, 1);
+  f3r_scene* s = L->scene;
+  f3r_status st = f3r_yaml_mapping(L, map, "accuracy");
+  if (st != F3R_OK) return st;
+  FOR_EACH_PAIR(L, map, key, value) {
+    if (st != F3R_OK) break;
+    char name[96];
+    snprintf(name, sizeof name, "accuracy.%s", key);
+    if (!strcmp(key, "end_effector"))
+      st = f3r_yaml_number(L, value, name, &s->accuracy);
+    else if (!strcmp(key, "verify"))
+      st = f3r_yaml_bool(L, value, name, &s->accuracy_verify);
+    else if (!strcmp(key, "escalations"))
+      st = f3r_yaml_int(L, value, name, &s->accuracy_escalations);
+    else
+      st =
+          f3r_yaml_fail(L, value, name, "unknown key (allowed: end_effector, verify, escalations)");
+  }
+  return st;
 }
 
 /* The scene file's sections, in the order the documentation lists them. */

@@ -422,3 +422,7 @@ const f3r_outputs* f3r_sim_outputs(f3r_sim* s) {
   s->ops->stats(&s->stepper, &o->stats);
   return o;
 }
+
+int f3r_energy_guard_tripped(double energy_balance_error, double largest_energy) {
+  return largest_energy > 0.0 && energy_balance_error > F3R_ENERGY_GUARD * largest_energy;
+}
