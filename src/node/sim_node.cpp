@@ -80,6 +80,10 @@ bool SimNode::Init() {
         "flex3rpr_node: lockstep: each publish period waits for its command, the next message on "
         "~command, ~effort_group/command or ~platform_wrench");
   if (params_.accuracy.summary[0]) ROS_INFO("flex3rpr_node: %s", params_.accuracy.summary);
+  if (params_.accuracy.request > 0.0)
+    ROS_INFO(
+        "flex3rpr_node: the accuracy is estimated, not measured: the node runs what the knob "
+        "chose and cannot run a richer check ahead of itself (flex3rpr_sim measures it)");
   if (params_.accuracy.request > 0.0 && !params_.accuracy.request_met)
     ROS_WARN("flex3rpr_node: the accuracy request %g m is not met: estimated %.3g m (%s)",
              params_.accuracy.request, params_.accuracy.estimated_error, params_.accuracy.brief);

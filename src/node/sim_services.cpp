@@ -86,6 +86,7 @@ void SimNode::SetStateCall(const SetState::Request& req, SetState::Response* res
   const f3r_outputs& out = *f3r_sim_outputs(sim_.get());
   phi_p_ = out.q[F3R_Q_PHI];
   info_.last_error.clear();
+  outputs_->RestartEnergy();
   CheckStroke(out);
   // The same time with a new state: /tf waits for the next period (a repeated stamp is
   // TF_REPEATED_DATA to every listener); the rest goes out now.

@@ -225,6 +225,9 @@ void StateOutputs::Publish(const f3r_outputs& out, const RunInfo& info) {
   PublishState(out, stamp);
   tf_pub_.publish(tf_);
   ++published_states_;
+  largest_energy_ = std::max(largest_energy_, out.kinetic_energy + out.potential_energy);
+  energy_guard_ =
+      energy_guard_ || f3r_energy_guard_tripped(out.energy_balance_error, largest_energy_);
   PublishStatus(out, info);
 }
 
@@ -253,6 +256,14 @@ void StateOutputs::PublishDiagnostics(const f3r_outputs& out, const RunInfo& inf
     char text[160];
     std::snprintf(text, sizeof text, "lockstep: no command for the period at t = %.6g s for %.1f s",
                   out.t, info.waiting_for_command);
+    d.message = text;
+  } else if (energy_guard_) {
+    d.level = diagnostic_msgs::DiagnosticStatus::WARN;
+    char text[200];
+    std::snprintf(text, sizeof text,
+                  "energy balance error past %g of the largest T + V (now %.3g J of %.3g J): the "
+                  "integrator has likely gone unstable; the path is suspect",
+                  F3R_ENERGY_GUARD, out.energy_balance_error, largest_energy_);
     d.message = text;
   } else if (info.behind || !outside.empty()) {
     d.level = diagnostic_msgs::DiagnosticStatus::WARN;
@@ -283,6 +294,10 @@ void StateOutputs::PublishDiagnostics(const f3r_outputs& out, const RunInfo& inf
   if (!choice.value.empty()) {
     d.values.push_back(choice);
     d.values.push_back(value("estimated_error", params_.accuracy.estimated_error));
+    diagnostic_msgs::KeyValue basis;
+    basis.key = "error_basis";
+    basis.value = params_.accuracy.request > 0.0 ? "estimated" : "";
+    d.values.push_back(basis);
   }
   diagnostics_.header.stamp = Stamp(out.t);
   diagnostics_pub_.publish(diagnostics_);
@@ -310,6 +325,9 @@ bool StateOutputs::SubscribersConnected(int n) const {
 void StateOutputs::PublishStatus(const f3r_outputs& out, const RunInfo& info) {
   status_.accuracy_choice = params_.accuracy.brief;
   status_.estimated_error = params_.accuracy.estimated_error;
+  // the node runs what the knob chose and cannot run a richer check ahead of itself
+  status_.error_basis = params_.accuracy.request > 0.0 ? "estimated" : "";
+  status_.energy_guard = energy_guard_;
   status_.header.stamp = Stamp(out.t);
   status_.sim_time = out.t;
   status_.wall_time = info.wall_time;

@@ -52,8 +52,17 @@ class StateOutputs {
   // /diagnostics: one status for the simulation (OK, WARN when behind or outside the stroke,
   // ERROR when the integration stopped).
   void PublishDiagnostics(const f3r_outputs& out, const RunInfo& info);
-  // Restarts ~status.published_states (a reset starts the count again at its initial state).
-  void RestartCount() { published_states_ = 0; }
+  // Restarts ~status.published_states (a reset starts the count again at its initial state) and
+  // the energy guard's largest T + V (the energy balance starts anew there too).
+  void RestartCount() {
+    published_states_ = 0;
+    RestartEnergy();
+  }
+  // A new energy balance (~set_state): the guard starts again.
+  void RestartEnergy() {
+    largest_energy_ = 0.0;
+    energy_guard_ = false;
+  }
   // The last joint_states message filled (for ~step_with_command's answer).
   const sensor_msgs::JointState& joint_state() const { return joints_; }
   // True when every output topic (joint_states, /tf, ~odom, ~status, ~beam_state, ~beams, and /clock
@@ -81,6 +90,9 @@ class StateOutputs {
   const NodeParams& params_;
   const FrameNames& frames_;
   uint64_t published_states_ = 0;  // ~status.published_states
+  double largest_energy_ = 0.0;    // J: the largest T + V published, for the energy guard
+  bool energy_guard_ = false;      // tripped once since the balance began: it stays (a blow-up's
+                                   // own T + V can bring the ratio back under the guard)
   bool have_transforms_ = false;   // tf_ holds a published state
   bool paused_ = false;            // the last state was published paused
   ros::Publisher joints_pub_, status_pub_, beam_pub_, markers_pub_, clock_pub_, tf_pub_, odom_pub_,

@@ -97,6 +97,44 @@ class NodeStartup(unittest.TestCase):
         self.assertLessEqual(last.estimated_error, 1e-4)
         self.assertIn("accuracy 0.0001 m on the end-effector path", out)
         self.assertIn("estimated error", out)
+        # the node runs what the knob chose: its error is an estimate, and it says so
+        self.assertEqual(last.error_basis, "estimated")
+        self.assertIn("the accuracy is estimated, not measured", out)
+        self.assertFalse(last.energy_guard)
+
+    def test_g_the_energy_guard_warns(self):
+        """Verner 8(5)6 on fixed-free paper simulation 3 goes unstable and would run on to the end
+        with garbage: past 0.1 of the largest T + V (at 0.37 s through the node's 10 ms periods), ~status says energy_guard and
+        /diagnostics warns (every wall second: at a real-time factor of 0.05, several times before the
+        run could end), while the node keeps running."""
+        from diagnostic_msgs.msg import DiagnosticArray
+        from flex3rpr.msg import SimStatus
+        seen, warnings = [], []
+        sub = rospy.Subscriber("/guard/status", SimStatus, seen.append, queue_size=1000)
+        diag = rospy.Subscriber("/diagnostics", DiagnosticArray,
+                                lambda m: warnings.extend(s.message for s in m.status
+                                                          if s.level == s.WARN and "guard" in s.name),
+                                queue_size=100)
+        proc = subprocess.Popen(["rosrun", "flex3rpr", "flex3rpr_node", "__name:=guard",
+                                 "_scene:=" + PKG + "/config/scenes/paper_sim3_fixed_free.yaml",
+                                 "_integrator:=erk", "_table:=ARKODE_VERNER_8_5_6", "_rtol:=1e-4",
+                                 "_realtime_factor:=0.05", "_publish_rate:=100.0"],
+                                stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
+        try:
+            end = time.time() + 600
+            while time.time() < end and proc.poll() is None and not (
+                    any(m.sim_time >= 0.45 for m in seen) and any("energy balance" in w for w in warnings)):
+                time.sleep(0.1)
+        finally:
+            sub.unregister()
+            diag.unregister()
+            proc.terminate()
+            out, _ = proc.communicate(timeout=120)
+        late = [m for m in seen if m.sim_time >= 0.45]
+        self.assertTrue(late, out[-3000:])
+        self.assertTrue(all(m.energy_guard for m in late))
+        self.assertFalse(any(m.energy_guard for m in seen if m.sim_time <= 0.1))
+        self.assertTrue(any("energy balance" in w for w in warnings), warnings[-5:])
 
     def test_mismatching_urdf_exits_with_the_joint_named(self):
         tree = ET.parse(PKG + "/urdf/flex3rpr.urdf")
