@@ -361,6 +361,7 @@ f3r_status f3r_sim_advance(f3r_sim* s, double t_out, f3r_error* err) {
 }
 
 double f3r_sim_time(const f3r_sim* s) { return s->t; }
+const f3r_stepper* f3r_sim_stepper(const f3r_sim* s) { return &s->stepper; }
 const f3r_model* f3r_sim_model(const f3r_sim* s) { return s->model; }
 f3r_formulation f3r_sim_formulation(const f3r_sim* s) { return s->settings.formulation; }
 const double* f3r_sim_state(const f3r_sim* s) { return N_VGetArrayPointer(s->y); }

@@ -31,6 +31,7 @@ ARKodeButcherTable f3r_stepper_load_table(int implicit, const char* name) {
 
 int f3r_stepper_explicit_rhs(realtype t, N_Vector y, N_Vector ydot, void* user) {
   f3r_stepper* st = user;
+  st->residual_calls++;
   const f3r_status s =
       f3r_explicit_rhs(st->model, f3r_stepper_force_time(st, t), N_VGetArrayPointer(y), st->held,
                        N_VGetArrayPointer(ydot), st->ws);
@@ -98,13 +99,20 @@ f3r_status f3r_arkode_configure(f3r_stepper* st, const f3r_arkode_calls* calls, 
   return F3R_OK;
 }
 
+/* ARKODE's Reset keeps its counters (SUNDIALS 6.4.1): ERKStepReset and ARKStepReset call
+ * arkInit with RESET_INIT, which zeroes nst and netf only for FIRST_INIT, and the steppers' init
+ * returns at once on a reset, so the linear and nonlinear solvers' counts (nje, nls_fails) stay
+ * too; nfe and nfi are zeroed only by Create and ReInit. So base takes only what was counted since
+ * the last restart, and the counters are read again after the reset: before the first step a
+ * reset is a FIRST_INIT, which zeroes some. */
 f3r_status f3r_arkode_restart(f3r_stepper* st, N_Vector y, N_Vector yp, double t, f3r_error* err) {
   (void)yp;
   const f3r_arkode_calls* calls = st->arkode;
-  calls->stats(st, &st->base);
-  st->jacobian_rhs_evals = 0; /* now in base */
+  f3r_arkode_stats(st, &st->base);
+  calls->counters(st, &st->counted); /* in base now, also if the reset fails */
   st->base.restarts++;
   CHECK(calls->reset(st->mem, t, y));
+  calls->counters(st, &st->counted);
   st->t_segment = t;
   return F3R_OK;
 }
@@ -134,17 +142,31 @@ f3r_status f3r_arkode_advance(f3r_stepper* st, double tout, double tstop, N_Vect
 #undef CHECK
 }
 
-void f3r_arkode_stats(const f3r_stepper* st, const f3r_arkode_calls* calls, long evaluations,
-                      f3r_sim_stats* out) {
+void f3r_arkode_counters(const f3r_stepper* st, f3r_sim_stats* raw) {
+  const f3r_arkode_calls* calls = st->arkode;
   long steps = 0, fails = 0;
   realtype last = 0.0;
   if (calls->get_num_steps(st->mem, &steps) < 0) steps = 0;
   if (calls->get_num_err_test_fails(st->mem, &fails) < 0) fails = 0;
   if (calls->get_last_step(st->mem, &last) < 0) last = 0.0;
+  *raw = (f3r_sim_stats){0};
+  raw->steps = steps;
+  raw->error_test_failures = fails;
+  raw->last_step = last;
+}
+
+/* base plus the counts since the last restart (f3r_arkode_restart) */
+void f3r_arkode_stats(const f3r_stepper* st, f3r_sim_stats* out) {
+  f3r_sim_stats now;
+  st->arkode->counters(st, &now);
+  const f3r_sim_stats* then = &st->counted;
   *out = st->base;
-  out->steps += steps;
-  out->residual_evals += evaluations;
-  out->error_test_failures += fails;
+  out->steps += now.steps - then->steps;
+  out->residual_evals += now.residual_evals - then->residual_evals;
+  out->jacobian_evals += now.jacobian_evals - then->jacobian_evals;
+  out->error_test_failures += now.error_test_failures - then->error_test_failures;
+  out->nonlinear_failures += now.nonlinear_failures - then->nonlinear_failures;
   out->recoverable_errors = st->recoverable;
-  out->last_step = last;
+  out->last_step = now.last_step;
+  out->last_order = now.last_order;
 }

@@ -19,6 +19,10 @@
 
 #include "events.h"
 
+#ifdef __cplusplus
+extern "C" {
+#endif
+
 typedef struct {
   const f3r_model* model;
   f3r_solver_settings settings;
@@ -31,10 +35,19 @@ typedef struct {
   SUNMatrix J;                           /* IDA, DIRK */
   SUNLinearSolver ls;                    /* IDA, DIRK */
   f3r_sim_stats base;                    /* statistics accumulated before the last restart */
+  f3r_sim_stats counted;     /* ERK, DIRK: the solver's own counters at the last restart, which
+                              * base holds already: ARKODE's Reset keeps counting (stepper.c) */
   int root_info[F3R_NROOTS]; /* -1 where a root was found: 2i, 2i+1 end stops of leg i (min, max);
                             * F3R_COLLAPSE_ROOT + i: leg i reached the collapse guard */
   long recoverable;          /* right-hand side calls that asked for a smaller step */
-  long jacobian_rhs_evals;   /* DIRK: right-hand sides of its difference-quotient Jacobian */
+  long residual_calls;       /* calls of the residual (IDA) or the right-hand side (ERK, DIRK, the
+                              * DIRK Jacobian's included) since creation: the tests' own count,
+                              * beside the solvers' counters that the statistics read */
+  long jacobian_rhs_evals;   /* DIRK: right-hand sides of its difference-quotient Jacobian, since
+                              * creation */
+  int ida_counters_folded;   /* IDA: 1 from a restart to the next IDASolve, whose set-up zeroes
+                              * the linear solver's counters (IDAReInit only IDA's), which base
+                              * holds already */
   double jacobian_cj;        /* IDA: cj of the last Jacobian, for the Schur solver's setup */
   double t_segment;          /* the last (re)start. An explicit stage at exactly this time takes
                            * the forces' right limit (f3r_stepper_force_time), as the consistent
@@ -66,6 +79,9 @@ extern const f3r_stepper_ops f3r_ida_stepper;
 
 extern const f3r_stepper_ops f3r_erk_stepper;
 extern const f3r_stepper_ops f3r_dirk_stepper;
+
+/* The simulation's stepper (sim.c), for the tests. */
+const f3r_stepper* f3r_sim_stepper(const f3r_sim* sim);
 
 /* Both back ends (stepper.c): the SUNDIALS error handler, which stores the message in the
  * stepper (its user data) since the core never prints, and the root functions (events.c) at y. */
@@ -122,30 +138,36 @@ struct f3r_arkode_calls {
   int (*get_num_steps)(void* mem, long* steps);
   int (*get_num_err_test_fails)(void* mem, long* fails);
   int (*get_last_step)(void* mem, realtype* h);
-  void (*stats)(const f3r_stepper* st, f3r_sim_stats* out); /* the back end's ops->stats */
+  /* The back end's counters as the solver holds them, since its creation (all of
+   * f3r_sim_stats but restarts and recoverable_errors); f3r_arkode_counters fills the shared
+   * ones. */
+  void (*counters)(const f3r_stepper* st, f3r_sim_stats* raw);
 };
 /* The calls of one back end by its prefix (ERKStep, ARKStep), whose functions are named alike. */
-#define F3R_ARKODE_CALLS(prefix, stats)                                                          \
+#define F3R_ARKODE_CALLS(prefix, counters)                                                       \
   {                                                                                              \
 #prefix "Evolve", prefix##GetReturnFlagName, prefix##SetErrHandlerFn, prefix##SStolerances,  \
         prefix##SetUserData, prefix##SetMaxNumSteps, prefix##SetInterpolantDegree,               \
         prefix##SetMaxStep, prefix##RootInit, prefix##SetRootDirection, prefix##SetStopTime,     \
         prefix##Evolve, prefix##GetRootInfo, prefix##GetDky, prefix##Reset, prefix##GetNumSteps, \
-        prefix##GetNumErrTestFails, prefix##GetLastStep, stats                                   \
+        prefix##GetNumErrTestFails, prefix##GetLastStep, counters                                \
   }
 /* The options both ARKODE back ends set once their memory and table exist: the error handler,
  * tolerances, user data, step limits, quartic Hermite output and the roots. */
 f3r_status f3r_arkode_configure(f3r_stepper* st, const f3r_arkode_calls* calls, f3r_error* err);
-/* ops->restart and ops->advance of both ARKODE back ends, through st->arkode. */
+/* ops->restart, ops->advance and ops->stats of both ARKODE back ends, through st->arkode. */
 f3r_status f3r_arkode_restart(f3r_stepper* st, N_Vector y, N_Vector yp, double t, f3r_error* err);
 f3r_status f3r_arkode_advance(f3r_stepper* st, double tout, double tstop, N_Vector y, N_Vector yp,
                               double* t_reached, int* event, f3r_error* err);
-/* out = the stepper's base statistics plus the counters every back end has (steps, error test
- * failures, last step; a failed getter counts 0), with the given evaluations added. */
-void f3r_arkode_stats(const f3r_stepper* st, const f3r_arkode_calls* calls, long evaluations,
-                      f3r_sim_stats* out);
+void f3r_arkode_stats(const f3r_stepper* st, f3r_sim_stats* out);
+/* raw = the counters every ARKODE back end has (steps, error test failures, last step; a failed
+ * getter counts 0), the others 0: the start of a back end's counters. */
+void f3r_arkode_counters(const f3r_stepper* st, f3r_sim_stats* raw);
 /* A Butcher table by name (ARKODE's, e.g. ARKODE_FEHLBERG_13_7_8, or erk_tables.c's), explicit
  * or diagonally implicit; NULL when there is none by that name. The caller frees it. */
 ARKodeButcherTable f3r_stepper_load_table(int implicit, const char* name);
 
+#ifdef __cplusplus
+}
+#endif
 #endif

@@ -15,9 +15,9 @@
 
 #define F3R_DIRK_DEFAULT_TABLE "ARKODE_KVAERNO_7_4_5"
 
-static void dirk_stats(const f3r_stepper* st, f3r_sim_stats* out);
+static void dirk_counters(const f3r_stepper* st, f3r_sim_stats* raw);
 
-static const f3r_arkode_calls dirk_calls = F3R_ARKODE_CALLS(ARKStep, dirk_stats);
+static const f3r_arkode_calls dirk_calls = F3R_ARKODE_CALLS(ARKStep, dirk_counters);
 
 /* df/dy by forward differences, column j into J's column j: ny right-hand sides. */
 static int jacobian_fn(realtype t, N_Vector y, N_Vector fy, SUNMatrix J, void* user, N_Vector t1,
@@ -37,6 +37,7 @@ static int jacobian_fn(realtype t, N_Vector y, N_Vector fy, SUNMatrix J, void* u
     const f3r_status s =
         f3r_explicit_rhs(st->model, f3r_stepper_force_time(st, t), yy, st->held, col, st->ws);
     st->jacobian_rhs_evals++;
+    st->residual_calls++;
     if (s != F3R_OK) {
       st->recoverable++;
       return 1;
@@ -76,17 +77,18 @@ static f3r_status dirk_setup(f3r_stepper* st, N_Vector y, N_Vector yp, double t0
   return F3R_OK;
 }
 
-static void dirk_stats(const f3r_stepper* st, f3r_sim_stats* out) {
+static void dirk_counters(const f3r_stepper* st, f3r_sim_stats* raw) {
   long nfe = 0, nfi = 0, nje = 0, nfi_ls = 0, nncf = 0;
   /* a failed getter leaves its counter at 0 rather than garbage */
   if (ARKStepGetNumRhsEvals(st->mem, &nfe, &nfi) < 0) nfe = nfi = 0;
   if (ARKStepGetNumJacEvals(st->mem, &nje) < 0) nje = 0;
   if (ARKStepGetNumLinRhsEvals(st->mem, &nfi_ls) < 0) nfi_ls = 0;
   if (ARKStepGetNumNonlinSolvConvFails(st->mem, &nncf) < 0) nncf = 0;
-  f3r_arkode_stats(st, &dirk_calls, nfe + nfi + nfi_ls + st->jacobian_rhs_evals, out);
-  out->jacobian_evals += nje;
-  out->nonlinear_failures += nncf;
-  out->last_order = 0;
+  f3r_arkode_counters(st, raw);
+  raw->residual_evals = nfe + nfi + nfi_ls + st->jacobian_rhs_evals;
+  raw->jacobian_evals = nje;
+  raw->nonlinear_failures = nncf;
+  raw->last_order = 0;
 }
 
 static void dirk_release(f3r_stepper* st) {
@@ -98,4 +100,4 @@ static void dirk_release(f3r_stepper* st) {
 }
 
 const f3r_stepper_ops f3r_dirk_stepper = {dirk_setup, f3r_arkode_restart, f3r_arkode_advance,
-                                          dirk_stats, dirk_release};
+                                          f3r_arkode_stats, dirk_release};

@@ -10,9 +10,9 @@
 
 #define F3R_ERK_DEFAULT_TABLE "ARKODE_FEHLBERG_13_7_8"
 
-static void erk_stats(const f3r_stepper* st, f3r_sim_stats* out);
+static void erk_counters(const f3r_stepper* st, f3r_sim_stats* raw);
 
-static const f3r_arkode_calls erk_calls = F3R_ARKODE_CALLS(ERKStep, erk_stats);
+static const f3r_arkode_calls erk_calls = F3R_ARKODE_CALLS(ERKStep, erk_counters);
 
 static f3r_status erk_setup(f3r_stepper* st, N_Vector y, N_Vector yp, double t0, f3r_error* err) {
   (void)yp;
@@ -30,11 +30,12 @@ static f3r_status erk_setup(f3r_stepper* st, N_Vector y, N_Vector yp, double t0,
   return f3r_arkode_configure(st, &erk_calls, err);
 }
 
-static void erk_stats(const f3r_stepper* st, f3r_sim_stats* out) {
+static void erk_counters(const f3r_stepper* st, f3r_sim_stats* raw) {
   long nfe = 0;
   if (ERKStepGetNumRhsEvals(st->mem, &nfe) < 0) nfe = 0; /* a failed getter counts 0 */
-  f3r_arkode_stats(st, &erk_calls, nfe, out);
-  out->last_order = 8;
+  f3r_arkode_counters(st, raw);
+  raw->residual_evals = nfe;
+  raw->last_order = 8;
 }
 
 static void erk_release(f3r_stepper* st) {
@@ -42,4 +43,4 @@ static void erk_release(f3r_stepper* st) {
 }
 
 const f3r_stepper_ops f3r_erk_stepper = {erk_setup, f3r_arkode_restart, f3r_arkode_advance,
-                                         erk_stats, erk_release};
+                                         f3r_arkode_stats, erk_release};

@@ -31,6 +31,7 @@ static int uses_schur(const f3r_solver_settings* s) {
 
 static int residual_fn(realtype t, N_Vector y, N_Vector yp, N_Vector res, void* user) {
   f3r_stepper* st = user;
+  st->residual_calls++;
   const f3r_status s =
       f3r_residual(st->model, st->settings.formulation, t, N_VGetArrayPointer(y),
                    N_VGetArrayPointer(yp), st->held, N_VGetArrayPointer(res), st->ws);
@@ -103,6 +104,11 @@ static f3r_status ida_setup(f3r_stepper* st, N_Vector y, N_Vector yp, double t0,
 }
 
 static void ida_stats(const f3r_stepper* st, f3r_sim_stats* out) {
+  if (st->ida_counters_folded) { /* nothing counted since the restart; nje, nreDQ are base's */
+    *out = st->base;
+    out->recoverable_errors = st->recoverable;
+    return;
+  }
   long nst = 0, nre = 0, nje = 0, netf = 0, nncf = 0, nre_ls = 0;
   realtype hlast = 0.0;
   int kord = 0;
@@ -127,8 +133,11 @@ static void ida_stats(const f3r_stepper* st, f3r_sim_stats* out) {
   out->last_order = kord;
 }
 
+/* IDAReInit zeroes IDA's counters; the linear solver's (nje, nreDQ) are zeroed by the next
+ * IDASolve's set-up (idaLsInitialize), and until then ida_stats leaves them out. */
 static f3r_status ida_restart(f3r_stepper* st, N_Vector y, N_Vector yp, double t, f3r_error* err) {
   ida_stats(st, &st->base);
+  st->ida_counters_folded = 1;
   st->base.restarts++;
   CHECK(IDAReInit(st->mem, t, y, yp));
   CHECK(IDASetInitStep(st->mem, F3R_INITIAL_STEP));
@@ -142,6 +151,7 @@ static f3r_status ida_advance(f3r_stepper* st, double tout, double tstop, N_Vect
   const int exact = tstop <= tout;
   CHECK(IDASetStopTime(st->mem, tstop));
   realtype t = *t_reached;
+  st->ida_counters_folded = 0;
   const int flag = IDASolve(st->mem, tout, &t, y, yp, IDA_NORMAL);
   *t_reached = t;
   *event = flag == IDA_ROOT_RETURN;
