@@ -35,6 +35,7 @@ static struct {
 } failure;
 
 const char* cli_failure_status(void) { return failure.status; }
+void cli_clear_failure(void) { failure.status = NULL; }
 const char* cli_failure_message(void) { return failure.message; }
 
 void cli_fail(const char* status, const char* format, ...) {

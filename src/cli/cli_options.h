@@ -48,6 +48,8 @@ int cli_parse_args(int argc, char** argv, cli_options* o);
  * (f3r_status_name, or "usage" and "io" for the CLI's own) and message. */
 void cli_fail(const char* status, const char* format, ...);
 const char* cli_failure_status(void); /* NULL: nothing failed */
+/* Forgets the failure kept (a run that a richer configuration replaced; its message was printed). */
+void cli_clear_failure(void);
 const char* cli_failure_message(void);
 
 #endif

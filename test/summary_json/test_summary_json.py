@@ -163,7 +163,7 @@ class Summary(unittest.TestCase):
         self.assertEqual(m.groups(), tuple(g(k[f], ".3g") for f in ("estimated_error_m", "model_error_m",
                                                                        "kinematics_error_m", "solver_error_m")))
         m = re.search(r"^accuracy\s+measured (\S+) m against a richer run \(estimate (\S+) m\); request (\S+) m "
-                      r"(met|NOT met) \(measured\)$", human, re.M)
+                      r"(met|NOT met) \(measured, within 0.7 of it\)$", human, re.M)
         if k["error_basis"] == "measured":
             self.assertEqual(m.groups(), (g(k["measured_error_m"], ".3g"), g(k["estimated_error_m"], ".3g"),
                                           g(k["request_m"], "g"), "met" if k["request_met"] else "NOT met"))
@@ -224,7 +224,7 @@ class Summary(unittest.TestCase):
             self.assertEqual(p.returncode, 0, p.stderr)
             k, r = summary["accuracy"], summary["run"]
             self.assertEqual(k["error_basis"], "measured")
-            self.assertLessEqual(k["measured_error_m"], 1e-4)
+            self.assertLessEqual(k["measured_error_m"], 0.7 * 1e-4, "within the check's margin")
             self.assertGreater(k["measured_error_m"], 0.0)
             self.assertTrue(k["request_met"])
             self.assertEqual(k["configurations"], 2)
@@ -252,13 +252,13 @@ class Summary(unittest.TestCase):
             k = summary["accuracy"]
             self.assertTrue(k["request_met"], p.stderr)
             self.assertGreaterEqual(k["configurations"], 3, p.stderr)
-            self.assertLessEqual(k["measured_error_m"], 1e-5)
+            self.assertLessEqual(k["measured_error_m"], 0.7 * 1e-5)
             summary, p = T.run_sim(ARGS.sim, *base, "--set", "accuracy.escalations=0")
             self.assertEqual(p.returncode, 3, p.stderr)
             self.assertEqual(summary["exit_code"], 3)
             k = summary["accuracy"]
             self.assertFalse(k["request_met"])
-            self.assertGreater(k["measured_error_m"], 1e-5)
+            self.assertGreater(k["measured_error_m"], 0.7 * 1e-5)
             self.assertIn(f"the accuracy request 1e-05 m is not met: measured {k['measured_error_m']:.3g} m", p.stderr)
             with open(csv) as f:
                 self.assertEqual(sum(1 for _ in f), 1 + 1 + 5000, "the header, t = 0 and every output")

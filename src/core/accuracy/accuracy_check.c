@@ -31,7 +31,8 @@ static int richer_link(const f3r_link_scene* run, int open_modes, int open_corre
                        f3r_link_scene* out) {
   *out = *run;
   const int fixed_free = run->model == F3R_LINK_FIXED_FREE;
-  if (open_correction && fixed_free && !run->static_correction) {
+  /* the pair only where it fits beside the run's modes (20 functions at most) */
+  if (open_correction && fixed_free && !run->static_correction && run->modes + 2 <= F3R_MAX_MODES) {
     out->static_correction = 1;
     out->shape_mix_kind = F3R_SHAPE_PAIR;
   } else if (open_correction && run->static_correction) {
