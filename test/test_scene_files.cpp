@@ -170,7 +170,8 @@ TEST(Cli, SaysWhenTheAccuracyRequestIsNotMet) {
   EXPECT_NE(measured.err.find("the accuracy request 1e-06 m is not met: measured "),
             std::string::npos)
       << measured.err;
-  EXPECT_NE(measured.err.find("after 2 runs (1/1/1 exact, ida rtol 0.001: measured "), std::string::npos)
+  EXPECT_NE(measured.err.find("after 2 runs (1/1/1 exact, ida rtol 0.001: measured "),
+            std::string::npos)
       << measured.err;
   const CliRun estimated = RunCli(base + "1e-6 --no-verify");
   EXPECT_EQ(estimated.exit_code, 0) << estimated.err;

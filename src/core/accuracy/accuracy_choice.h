@@ -61,14 +61,14 @@ typedef struct {
    * that many on some link and cost at least plain_cost (with their solver) */
   double deferred_target;
   int plain_beyond;
-  int corrected_first;     /* the corrected search ran while the paper's modes waited */
-  int impacts;             /* end stops on a path that moves: the most faithful model */
-  int long_run;            /* longer than the benchmark's scenes */
-  int unmeasured_basis;    /* the static correction: the relations were measured on the paper's
+  int corrected_first;    /* the corrected search ran while the paper's modes waited */
+  int impacts;            /* end stops on a path that moves: the most faithful model */
+  int long_run;           /* longer than the benchmark's scenes */
+  int unmeasured_basis;   /* the static correction: the relations were measured on the paper's
                            * modes, so the solver keeps SOLVER_CHECK_SHARE of its budget */
-  double linear_error;     /* m: the search's last linear estimate */
-  int pair, pair_skipped;  /* the pilot's pair ran, or was skipped as needless */
-  int kinematics;          /* a pilot measures exact kinematics' effect */
+  double linear_error;    /* m: the search's last linear estimate */
+  int pair, pair_skipped; /* the pilot's pair ran, or was skipped as needless */
+  int kinematics;         /* a pilot measures exact kinematics' effect */
   int kinematics_linear_only;
   f3r_pilot pilot;
   int pilot_started;
