@@ -319,7 +319,9 @@ class LockstepLoop:
 
     def spin(self):
         rospy = self.rospy
-        # the node hears a command only once its subscriber is connected to this publisher
+        # the node hears a command only once its subscriber is connected to this publisher; a
+        # recorder's subscription can satisfy this wait first, and then the node sends the waiting
+        # state again once it connects (docs/ros.md, Lockstep), which is answered like a reset
         while not rospy.is_shutdown() and self.pub.get_num_connections() == 0:
             time.sleep(0.01)  # wall time: /clock may not run yet
         rospy.loginfo("%s: connected to %s", self.name, self.pub.resolved_name)

@@ -22,14 +22,14 @@ CommandInputs::CommandInputs(ros::NodeHandle& pnh, const f3r_model& model, const
       "command", kCommandQueue,
       [this](const EffortCommand::ConstPtr& m) {
         Accept(kCommand, DecodeEffortCommand(*m, model_, params_.limits, &scratch_), scratch_,
-               "~command");
+               "~command", m->header.stamp);
       },
       ros::VoidConstPtr(), hints);
   group_sub_ = pnh.subscribe<std_msgs::Float64MultiArray>(
       "effort_group/command", kCommandQueue,
       [this](const std_msgs::Float64MultiArray::ConstPtr& m) {
         Accept(kEffortGroup, DecodeEffortGroup(*m, model_, params_.limits, &scratch_), scratch_,
-               "~effort_group/command");
+               "~effort_group/command", ros::Time());
       },
       ros::VoidConstPtr(), hints);
   wrench_sub_ = pnh.subscribe<geometry_msgs::WrenchStamped>(
@@ -38,7 +38,7 @@ CommandInputs::CommandInputs(ros::NodeHandle& pnh, const f3r_model& model, const
         Rotation to_base;
         std::string why = ResolveFrame(m->header.frame_id, &to_base);
         if (why.empty()) why = DecodeWrench(*m, to_base, params_.limits, model_, &scratch_);
-        Accept(kWrench, why, scratch_, "~platform_wrench");
+        Accept(kWrench, why, scratch_, "~platform_wrench", m->header.stamp);
       },
       ros::VoidConstPtr(), hints);
 }
@@ -78,7 +78,7 @@ std::string CommandInputs::ResolveFrame(const std::string& frame, Rotation* to_b
 }
 
 void CommandInputs::Accept(Source source, const std::string& why, const std::vector<double>& forces,
-                           const char* topic) {
+                           const char* topic, const ros::Time& stamp) {
   if (!why.empty()) {
     ++rejected_;
     ROS_WARN_THROTTLE(
@@ -87,11 +87,11 @@ void CommandInputs::Accept(Source source, const std::string& why, const std::vec
         "unchanged%s",
         topic, why.c_str(),
         params_.lockstep ? " (in lockstep it takes its period with the commands held)" : "");
-    if (params_.lockstep) queue_.push_back({source, false, {}});
+    if (params_.lockstep) queue_.push_back({source, false, {}, stamp});
     return;
   }
   if (params_.lockstep) {
-    queue_.push_back({source, true, forces});
+    queue_.push_back({source, true, forces, stamp});
     return;
   }
   Hold(source, forces);
@@ -103,12 +103,28 @@ void CommandInputs::Hold(Source source, const std::vector<double>& forces) {
   active_[source] = true;
 }
 
-bool CommandInputs::TakeOne() {
-  if (queue_.empty()) return false;
-  Queued& next = queue_.front();
-  if (next.valid) Hold(next.source, next.forces);
-  queue_.pop_front();
-  return true;
+bool CommandInputs::TakeOne(const ros::Time& state_stamp) {
+  while (!queue_.empty()) {
+    Queued next = std::move(queue_.front());
+    queue_.pop_front();
+    if (!next.stamp.isZero() && next.stamp < state_stamp) {
+      ++discarded_;
+      ROS_WARN_THROTTLE(1.0,
+                        "flex3rpr_node: lockstep: discarded a command stamped %.9f, which answers "
+                        "an earlier state than the one at %.9f (stale, or a duplicate answer)",
+                        next.stamp.toSec(), state_stamp.toSec());
+      continue;
+    }
+    if (next.valid) Hold(next.source, next.forces);
+    last_taken_stamped_ = !next.stamp.isZero();
+    return true;
+  }
+  return false;
+}
+
+int CommandInputs::publishers() const {
+  return static_cast<int>(command_sub_.getNumPublishers() + group_sub_.getNumPublishers() +
+                          wrench_sub_.getNumPublishers());
 }
 
 std::string CommandInputs::HoldCommand(const EffortCommand& command) {
@@ -138,6 +154,7 @@ const std::vector<double>& CommandInputs::Total(double t) {
 
 void CommandInputs::Clear() {
   queue_.clear();
+  last_taken_stamped_ = false;
   for (auto& h : held_) std::fill(h.begin(), h.end(), 0.0);
   fresh_.fill(false);
   active_.fill(false);

@@ -190,12 +190,31 @@ void SimNode::PublishPeriod(const f3r_outputs& out) {
 }
 
 void SimNode::AwaitCommand(double wall_now) {
-  if (waiting_since_ < 0.0) waiting_since_ = wall_now;
+  if (waiting_since_ < 0.0) waiting_since_ = last_republish_ = wall_now;
+  // An answer sent before the controller's publisher connected to this node is lost, and both
+  // sides would wait for ever (a controller answering the latched first state at once): when a
+  // command publisher connects while a period waits, and no command has come kConnectGraceSeconds
+  // later (an answer sent just after the connection is on its way), the state goes out again.
+  // So it does every kRepublishSeconds before the first command, or while the controller stamps
+  // its answers (a duplicate answer is then discarded; unstamped, it would take the next period).
+  const int publishers = inputs_->publishers();
+  if (publishers > command_publishers_) republish_at_ = wall_now + kConnectGraceSeconds;
+  command_publishers_ = publishers;
+  const bool after_connection = republish_at_ > 0.0 && wall_now >= republish_at_;
+  const bool retry = wall_now - last_republish_ >= kRepublishSeconds &&
+                     (!commands_taken_ || inputs_->last_taken_stamped());
+  if (after_connection || retry) {
+    outputs_->Republish(*f3r_sim_outputs(sim_.get()), info_);
+    last_republish_ = wall_now;
+    republish_at_ = -1.0;
+  }
   const double waited = wall_now - waiting_since_;
   if (waited < params_.lockstep_warn_after) return;
   info_.waiting_for_command = waited;
-  ROS_WARN_THROTTLE(
-      5.0,
+  // throttled on the wall clock: simulated time stands still while the period waits
+  if (wall_now - last_wait_warning_ < kWaitWarningSeconds) return;
+  last_wait_warning_ = wall_now;
+  ROS_WARN(
       "flex3rpr_node: lockstep: no command for the period at t = %.6g s for %.1f s; waiting (a "
       "controller answers every joint_states message with one message on ~command, "
       "~effort_group/command or ~platform_wrench)",
@@ -235,6 +254,7 @@ void SimNode::Restart(RunLoop* loop) {
   info_.last_error.clear();
   info_.outside_stroke = {};
   outputs_->RestartCount();
+  commands_taken_ = false;
   last_published_t_ = -1.0;  // time starts over
   PublishAt(*f3r_sim_outputs(sim_.get()));
 }
@@ -266,6 +286,8 @@ void SimNode::IdlePaused(double now, RunLoop* loop) {
 // duration is reached, or (exit code 2) a scripted run's integration stopped.
 bool SimNode::RunPeriod(double period, double now, RunLoop* loop, int* exit_code) {
   waiting_since_ = -1.0;
+  republish_at_ = -1.0;  // a command came: what connected meanwhile has been heard
+  command_publishers_ = inputs_->publishers();
   info_.waiting_for_command = 0.0;
   if (control_.pending_steps > 0) --control_.pending_steps;
   if (!loop->was_running) pacer_->Start(now, f3r_sim_time(sim_.get()));
@@ -344,12 +366,13 @@ int SimNode::Run() {
       IdlePaused(now, &loop);
       continue;
     }
-    if (params_.lockstep && !inputs_->TakeOne()) {  // the period's command has not come yet
+    if (params_.lockstep && !inputs_->TakeOne(outputs_->state_stamp())) {  // not come yet
       AwaitCommand(now);
       // Wakes as soon as a message arrives, rather than at the next poll.
       ros::getGlobalCallbackQueue()->callAvailable(ros::WallDuration(0.001));
       continue;
     }
+    commands_taken_ = commands_taken_ || params_.lockstep;
     if (!RunPeriod(period, now, &loop, &exit_code)) break;
   }
   if (grace) SpinFor(params_.subscriber_grace);  // the subscribers take the last messages

@@ -32,6 +32,11 @@ class SimNode {
  private:
   static constexpr double kPausedPublishSeconds = 0.5;  // wall s between outputs while paused
   static constexpr double kDiagnosticsSeconds = 1.0;    // wall s between /diagnostics
+  static constexpr double kRepublishSeconds = 2.0;      // lockstep: wall s before a waiting state
+                                                        // is sent again (see AwaitCommand)
+  static constexpr double kConnectGraceSeconds = 1.0;   // lockstep: wall s after a command
+                                                        // publisher connects before that
+  static constexpr double kWaitWarningSeconds = 5.0;    // wall s between the wait's warnings
 
   // What Run keeps from one pass of its loop to the next.
   struct RunLoop {
@@ -85,9 +90,15 @@ class SimNode {
   std::unique_ptr<Pacer> pacer_;
   double phi_p_ = 0.0;
   long periods_ = 0;
-  double last_published_t_ = -1.0;  // simulated time of the last full Publish (with /tf)
-  double waiting_since_ = -1.0;     // lockstep: wall s when the present period began to wait
-  bool stopped_ = false;            // the last AdvancePeriod failed
+  double last_published_t_ = -1.0;   // simulated time of the last full Publish (with /tf)
+  double waiting_since_ = -1.0;      // lockstep: wall s when the present period began to wait
+  double last_republish_ = -1.0;     // lockstep: wall s the waiting state was last sent
+  double last_wait_warning_ = -1e9;  // wall s of the last "waiting for command" warning
+  int command_publishers_ = 0;       // lockstep: publishers on the command topics at the last look
+  double republish_at_ = -1.0;       // lockstep: wall s to send the waiting state again (a
+                                     // publisher connected meanwhile), or < 0
+  bool commands_taken_ = false;      // lockstep: a command has taken a period since the start
+  bool stopped_ = false;             // the last AdvancePeriod failed
 };
 
 }  // namespace flex3rpr

@@ -52,6 +52,7 @@ void StateOutputs::Advertise(ros::NodeHandle& nh, ros::NodeHandle& pnh) {
   odom_pub_ = pnh.advertise<nav_msgs::Odometry>("odom", q, latch);
   status_pub_ = pnh.advertise<SimStatus>("status", q, latch);
   beam_pub_ = pnh.advertise<BeamState>("beam_state", q, latch);
+  state_pub_ = pnh.advertise<FullState>("state", q, latch);
   markers_pub_ = pnh.advertise<visualization_msgs::MarkerArray>("beams", q);
   diagnostics_pub_ = nh.advertise<diagnostic_msgs::DiagnosticArray>("/diagnostics", 10);
   // A listener that connects while paused (rviz started later) gets the present frames at once.
@@ -83,6 +84,8 @@ void StateOutputs::PrepareMessages() {
   }
   beam_.modal.assign(static_cast<size_t>(nmodal), 0.0);
   beam_.modal_rate.assign(static_cast<size_t>(nmodal), 0.0);
+  state_.modal.assign(static_cast<size_t>(nmodal), 0.0);
+  state_.modal_rate.assign(static_cast<size_t>(nmodal), 0.0);
 
   for (int i = 0; i < 3; ++i) {
     visualization_msgs::Marker m;
@@ -216,11 +219,27 @@ void StateOutputs::PublishState(const f3r_outputs& out, const ros::Time& stamp) 
     beam_.tip_deflection_rate[i] = out.tip_deflection_rate[i];
   }
   beam_pub_.publish(beam_);
+
+  // ~state: the same numbers, one message
+  state_.header.stamp = stamp;
+  state_.sim_time = out.t;
+  state_.joint_state = joints_;
+  for (size_t k = 0; k < 3; ++k) {
+    state_.platform_pose[k] = out.q[F3R_Q_X + k];
+    state_.platform_twist[k] = out.v[F3R_Q_X + k];
+    state_.tip_deflection[k] = out.tip_deflection[k];
+    state_.tip_deflection_rate[k] = out.tip_deflection_rate[k];
+  }
+  state_.modal = beam_.modal;
+  state_.modal_rate = beam_.modal_rate;
+  for (size_t c = 0; c < 6; ++c) state_.loop_force[c] = out.lambda[c];
+  state_pub_.publish(state_);
 }
 
 void StateOutputs::Publish(const f3r_outputs& out, const RunInfo& info) {
   paused_ = info.paused;
   const ros::Time stamp = Stamp(out.t);
+  state_stamp_ = stamp;
   FillTransforms(out, stamp);
   PublishState(out, stamp);
   tf_pub_.publish(tf_);
@@ -235,6 +254,16 @@ void StateOutputs::PublishPaused(const f3r_outputs& out, const RunInfo& info) {
   paused_ = true;
   const ros::Time stamp = Stamp(out.t);
   if (!params_.sim_stamps) {
+    FillTransforms(out, stamp);
+    tf_pub_.publish(tf_);
+  }
+  PublishState(out, stamp);
+  PublishStatus(out, info);
+}
+
+void StateOutputs::Republish(const f3r_outputs& out, const RunInfo& info) {
+  const ros::Time stamp = Stamp(out.t);
+  if (!params_.sim_stamps) {  // a simulated stamp repeated on /tf is TF_REPEATED_DATA
     FillTransforms(out, stamp);
     tf_pub_.publish(tf_);
   }

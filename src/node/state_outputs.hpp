@@ -15,6 +15,7 @@
 #include <vector>
 
 #include "flex3rpr/BeamState.h"
+#include "flex3rpr/FullState.h"
 #include "flex3rpr/SimStatus.h"
 #include "flex3rpr/sim.h"
 #include "params.hpp"
@@ -49,6 +50,12 @@ class StateOutputs {
   // ~status alone (lockstep: while a period waits for its command, joint_states must not repeat,
   // since a controller answers each one).
   void PublishStatusOnly(const f3r_outputs& out, const RunInfo& info) { PublishStatus(out, info); }
+  // Lockstep: the state a period waits for, again (joint_states, ~odom, ~beam_state, ~status; /tf
+  // only with wall stamps), when its first answer may have been lost: a command publisher that
+  // connected after the state went out could not have delivered it.
+  void Republish(const f3r_outputs& out, const RunInfo& info);
+  // The stamp of the last state Publish sent (its first publication).
+  const ros::Time& state_stamp() const { return state_stamp_; }
   // /diagnostics: one status for the simulation (OK, WARN when behind or outside the stroke,
   // ERROR when the integration stopped).
   void PublishDiagnostics(const f3r_outputs& out, const RunInfo& info);
@@ -90,16 +97,18 @@ class StateOutputs {
   const NodeParams& params_;
   const FrameNames& frames_;
   uint64_t published_states_ = 0;  // ~status.published_states
+  ros::Time state_stamp_;          // the last Publish's stamp
   double largest_energy_ = 0.0;    // J: the largest T + V published, for the energy guard
   bool energy_guard_ = false;      // tripped once since the balance began: it stays (a blow-up's
                                    // own T + V can bring the ratio back under the guard)
   bool have_transforms_ = false;   // tf_ holds a published state
   bool paused_ = false;            // the last state was published paused
-  ros::Publisher joints_pub_, status_pub_, beam_pub_, markers_pub_, clock_pub_, tf_pub_, odom_pub_,
-      diagnostics_pub_;
+  ros::Publisher joints_pub_, status_pub_, beam_pub_, state_pub_, markers_pub_, clock_pub_, tf_pub_,
+      odom_pub_, diagnostics_pub_;
   tf2_ros::StaticTransformBroadcaster static_tf_;
   sensor_msgs::JointState joints_;
   SimStatus status_;
+  FullState state_;
   BeamState beam_;
   visualization_msgs::MarkerArray markers_;
   rosgraph_msgs::Clock clock_;

@@ -17,7 +17,7 @@ from diagnostic_msgs.msg import DiagnosticArray
 from sensor_msgs.msg import JointState
 from std_srvs.srv import Empty, Trigger
 
-from flex3rpr.msg import EffortCommand, SimStatus
+from flex3rpr.msg import EffortCommand, FullState, SimStatus
 from flex3rpr.srv import Linearise, SetState, StepWithCommand
 from wall_wait import wait_for
 
@@ -42,12 +42,14 @@ class Lockstep(unittest.TestCase):
         rospy.init_node("lockstep_services", anonymous=True)
         cls.lock = threading.Lock()
         cls.states = {}       # stamp -> joint state tuple, while this test answers as controller
+        cls.full = {}         # stamp -> ~state, the same periods
         cls.answering = True
         cls.answers = 0
         cls.status = None
         cls.diagnostics = []
         cls.pub = rospy.Publisher(NODE + "/command", EffortCommand, queue_size=100)
         rospy.Subscriber(NODE + "/status", SimStatus, cls._status, queue_size=None)
+        rospy.Subscriber(NODE + "/state", FullState, cls._full, queue_size=None)
         rospy.Subscriber("/diagnostics", DiagnosticArray, cls._diagnostics, queue_size=None)
         wait_for(lambda: cls.pub.get_num_connections() > 0, 60, "the node's command subscription")
         # Subscribed only once the publisher is connected: the latched state at t = 0 then
@@ -71,6 +73,12 @@ class Lockstep(unittest.TestCase):
             if cls.answers < PERIODS:
                 cls.pub.publish(command(cls.answers))
                 cls.answers += 1
+
+    @classmethod
+    def _full(cls, m):
+        with cls.lock:
+            if cls.answering:
+                cls.full[int(round(m.header.stamp.to_sec() * 1000.0))] = m
 
     @classmethod
     def _status(cls, m):
@@ -101,14 +109,21 @@ class Lockstep(unittest.TestCase):
         wait_for(lambda: any(d.level == d.WARN and "lockstep" in d.message for d in self.diagnostics),
                  120, "a WARN on /diagnostics")
         self.assertAlmostEqual(self.sim_time(), PERIODS * 0.001, delta=1e-12)
+        wait_for(lambda: len(self.full) > PERIODS, 60, "~state of every period")
         with self.lock:
-            topics = dict(self.states)
+            topics, full = dict(self.states), dict(self.full)
         self.restart()
         for k in range(PERIODS):
             res = self.step(command=command(k), periods=1)
             self.assertTrue(res.success, res.message)
             self.assertAlmostEqual(res.sim_time, (k + 1) * 0.001, delta=1e-12)
             self.assertEqual(state(res.joint_state), topics[k + 1], "period %d" % (k + 1))
+            # ~state holds the step's answer, and joint_states' numbers, in one message
+            f = full[k + 1]
+            self.assertEqual(state(f.joint_state), topics[k + 1], "~state, period %d" % (k + 1))
+            self.assertEqual(f.sim_time, res.sim_time)
+            for field in ("platform_pose", "platform_twist", "modal", "modal_rate"):
+                self.assertEqual(tuple(getattr(f, field)), tuple(getattr(res, field)), field)
         res = self.step(command=EffortCommand(leg_force=[float("nan"), 0, 0]), periods=1)
         self.assertFalse(res.success)
         self.assertIn("leg_force", res.message)
