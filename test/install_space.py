@@ -137,7 +137,8 @@ def case_catkin_build():
 # pragma in CMakeLists.txt silences catkin_lint on exactly these.
 CHECKOUT_TOOLS = {"install_deps", "build", "build_sundials", "count_results.py", "fuzz", "demo", "bench",
                   "bench_accuracy", "solver_table.py", "scene_table.py", "paper_timings", "node_speed",
-                  "compare_cores", "lint", "basis_convergence", "bench_quasi_static_shapes"}
+                  "compare_cores", "lint", "basis_convergence", "bench_quasi_static_shapes",
+                  "validate_accuracy"}
 
 
 def case_catkin_lint():
