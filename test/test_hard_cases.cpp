@@ -687,3 +687,22 @@ TEST(RecoverableErrors, ImpossibleConfigurationsAndNaNGiveAStatusNotNaN) {
 }
 
 }  // namespace
+
+// ERK after a restart from a quiet state: at a held step in the force, ARKODE's fresh estimate of
+// the first step took 0.13 s at once, into a pose the legs cannot reach, and ERKStep (SUNDIALS
+// 6.4.1) turns the right-hand side's request for a smaller step into ARK_UNREC_RHSFUNC_ERR: the
+// run stopped at t = 0.143 s. A restart now starts from the step the run had reached.
+TEST(CommandHold, ErkRestartsFromAQuietStateWithTheStepItHad) {
+  const f3r_scene scene = SceneFromText(
+      "links: {model: fixed_free, modes: 1}\n"
+      "inputs:\n"
+      "  rho_2: {step: {time: 0.01, before: 0, after: 3}}\n"
+      "run: {duration: 0.35}\n");
+  f3r_solver_settings erk = f3r_solver_settings_from_scene(&scene);
+  erk.integrator = F3R_INTEGRATOR_ERK;
+  snprintf(erk.rk_table, sizeof erk.rk_table, "%s", "ARKODE_DORMAND_PRINCE_7_4_5");
+  const Outcome r = Simulate(scene, 1e-3, &erk);
+  ASSERT_EQ(r.status, F3R_OK) << r.error;
+  EXPECT_NEAR(r.samples.back().t, 0.35, 1e-12);
+  EXPECT_TRUE(AllFinite(r.samples.back(), f3r_model_nq(r.model.get())));
+}

@@ -138,6 +138,7 @@ struct f3r_arkode_calls {
   int (*get_num_steps)(void* mem, long* steps);
   int (*get_num_err_test_fails)(void* mem, long* fails);
   int (*get_last_step)(void* mem, realtype* h);
+  int (*set_init_step)(void* mem, realtype h);
   /* The back end's counters as the solver holds them, since its creation (all of
    * f3r_sim_stats but restarts and recoverable_errors); f3r_arkode_counters fills the shared
    * ones. */
@@ -150,7 +151,7 @@ struct f3r_arkode_calls {
         prefix##SetUserData, prefix##SetMaxNumSteps, prefix##SetInterpolantDegree,               \
         prefix##SetMaxStep, prefix##RootInit, prefix##SetRootDirection, prefix##SetStopTime,     \
         prefix##Evolve, prefix##GetRootInfo, prefix##GetDky, prefix##Reset, prefix##GetNumSteps, \
-        prefix##GetNumErrTestFails, prefix##GetLastStep, counters                                \
+        prefix##GetNumErrTestFails, prefix##GetLastStep, prefix##SetInitStep, counters           \
   }
 /* The options both ARKODE back ends set once their memory and table exist: the error handler,
  * tolerances, user data, step limits, quartic Hermite output and the roots. */
