@@ -581,7 +581,7 @@ TEST(DiscontinuousCommands, HeldStepsEveryMillisecondEqualAScriptedProfile) {
 }
 
 // --- 8. impacts ---------------------------------------------------------------------------------
-TEST(Impacts, RepeatedImpactsAreLocatedAndLoseRestitutionSquared) {
+TEST(Impacts, RepeatedImpactsAreLocatedLoseRestitutionSquaredAndComeToRest) {
   f3r_scene scene = SceneFromText(
       "links: {model: fixed_free, modes: 2}\n"
       "inputs: {rho_1: {offset: 200.0}}\n"
@@ -596,10 +596,10 @@ TEST(Impacts, RepeatedImpactsAreLocatedAndLoseRestitutionSquared) {
   long seen = 0;
   double worst_location = 0.0, worst_law = 0.0, worst_energy = 0.0, deepest = 0.0;
   for (int k = 1; k <= 2000; ++k) {
-    const f3r_status st = f3r_sim_advance(raw, k * 1e-4, &err);
+    ASSERT_EQ(f3r_sim_advance(raw, k * 1e-4, &err), F3R_OK) << err.message;
     const f3r_outputs* o = f3r_sim_outputs(raw);
     deepest = std::max(deepest, o->q[0] - 0.15);
-    if (o->impacts > seen) {
+    if (o->impacts > seen && o->last_impact.rate_after != 0.0) { /* a rebound, not the rest */
       const f3r_impact_record& rec = o->last_impact;
       // The event time is off by the stroke error over the rate: 1e-10 s is ~1e-10 m here.
       worst_location =
@@ -613,13 +613,13 @@ TEST(Impacts, RepeatedImpactsAreLocatedAndLoseRestitutionSquared) {
                                           std::fabs(rec.rate_before));
       seen = o->impacts;
     }
-    if (st != F3R_OK) {
-      // Resting contact is not modelled: the run must say so rather than chatter.
-      EXPECT_NE(std::string(err.message).find("rests against its end stop"), std::string::npos)
-          << err.message;
-      break;
-    }
   }
+  // The rebounds shrink below the resting speed: the leg then rests on its stop, held by it
+  // (the undamped beams' vibration may lift it off again: test_end_stops holds it for 10 s).
+  const f3r_outputs* o = f3r_sim_outputs(raw);
+  std::printf("measured: at 0.2 s leg 1 %s, stop force %.6g N\n",
+              o->stop_locked[0] ? "rests on its stop" : "is free", o->stop_force[0]);
+  EXPECT_LE(o->q[0], 0.15 + 1e-9);
   std::printf(
       "measured: %ld impacts; located within %.1e s; restitution law within %.1e, normal "
       "energy ratio e^2 within %.1e; deepest penetration %.1e m\n",

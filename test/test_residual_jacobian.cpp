@@ -12,6 +12,7 @@ struct Case {
   f3r_formulation form;
   bool exact;
   double tolerance;  // relative to the largest entry of the column
+  int locks[3];      // legs held at their end stops (stages.h f3r_stop_locks)
 };
 
 class ResidualJacobianTest : public ::testing::TestWithParam<Case> {};
@@ -42,6 +43,7 @@ TEST_P(ResidualJacobianTest, MatchesFiniteDifferencesOfTheResidual) {
   ASSERT_EQ(f3r_model_close_loops(m.get(), q.data()), F3R_OK);
   f3r_model_close_loop_rates(m.get(), q.data(), v.data());
   WorkspacePtr ws(f3r_workspace_create(m.get()));
+  f3r_workspace_set_locks(ws.get(), c.locks);
   const double lag[3] = {1.5, -2.0, 0.7};
   ASSERT_EQ(f3r_consistent_state(m.get(), c.form, 0.013, q.data(), v.data(), nullptr, lag, 0.0,
                                  y.data(), yp.data(), nullptr, ws.get()),
@@ -91,21 +93,27 @@ TEST_P(ResidualJacobianTest, MatchesFiniteDifferencesOfTheResidual) {
 
 INSTANTIATE_TEST_SUITE_P(
     Formulations, ResidualJacobianTest,
-    ::testing::Values(Case{"paper_sim3_fixed_free.yaml", F3R_FORMULATION_DAE, false, 1e-6},
-                      Case{"paper_sim3_fixed_free.yaml", F3R_FORMULATION_DAE, true, 1e-6},
-                      Case{"paper_sim3_fixed_pinned.yaml", F3R_FORMULATION_DAE, false, 1e-6},
-                      Case{"paper_sim1.yaml", F3R_FORMULATION_DAE, false, 1e-6},
-                      Case{"paper_sim3_fixed_free.yaml", F3R_FORMULATION_MINIMAL, false, 1e-6},
-                      Case{"paper_sim3_fixed_pinned.yaml", F3R_FORMULATION_MINIMAL, true, 1e-6},
-                      Case{"test/scenes/all_effects.yaml", F3R_FORMULATION_DAE, true, 1e-6},
-                      Case{"test/scenes/all_effects.yaml", F3R_FORMULATION_MINIMAL, false, 1e-6},
-                      Case{"paper_sim3_fixed_free.yaml", F3R_FORMULATION_MINIMAL, true, 1e-6},
-                      Case{"test/scenes/all_effects.yaml", F3R_FORMULATION_MINIMAL, true, 1e-6},
-                      Case{"paper_sim3_fixed_free.yaml", F3R_FORMULATION_INDEX3, false, 1e-6},
-                      Case{"test/scenes/all_effects.yaml", F3R_FORMULATION_INDEX3, true, 1e-6},
-                      Case{"test/scenes/sim3_corrected.yaml", F3R_FORMULATION_DAE, false, 1e-6},
-                      Case{"test/scenes/sim3_corrected.yaml", F3R_FORMULATION_MINIMAL, true, 1e-6},
-                      Case{"test/scenes/sim3_corrected.yaml", F3R_FORMULATION_INDEX3, true, 1e-6}));
+    ::testing::Values(
+        Case{"paper_sim3_fixed_free.yaml", F3R_FORMULATION_DAE, false, 1e-6},
+        Case{"paper_sim3_fixed_free.yaml", F3R_FORMULATION_DAE, true, 1e-6},
+        Case{"paper_sim3_fixed_pinned.yaml", F3R_FORMULATION_DAE, false, 1e-6},
+        Case{"paper_sim1.yaml", F3R_FORMULATION_DAE, false, 1e-6},
+        Case{"paper_sim3_fixed_free.yaml", F3R_FORMULATION_MINIMAL, false, 1e-6},
+        Case{"paper_sim3_fixed_pinned.yaml", F3R_FORMULATION_MINIMAL, true, 1e-6},
+        Case{"test/scenes/all_effects.yaml", F3R_FORMULATION_DAE, true, 1e-6},
+        Case{"test/scenes/all_effects.yaml", F3R_FORMULATION_MINIMAL, false, 1e-6},
+        Case{"paper_sim3_fixed_free.yaml", F3R_FORMULATION_MINIMAL, true, 1e-6},
+        Case{"test/scenes/all_effects.yaml", F3R_FORMULATION_MINIMAL, true, 1e-6},
+        Case{"paper_sim3_fixed_free.yaml", F3R_FORMULATION_INDEX3, false, 1e-6},
+        Case{"test/scenes/all_effects.yaml", F3R_FORMULATION_INDEX3, true, 1e-6},
+        Case{"test/scenes/sim3_corrected.yaml", F3R_FORMULATION_DAE, false, 1e-6},
+        Case{"test/scenes/sim3_corrected.yaml", F3R_FORMULATION_MINIMAL, true, 1e-6},
+        Case{"test/scenes/sim3_corrected.yaml", F3R_FORMULATION_INDEX3, true, 1e-6},
+        // legs at their stops: the stops' forces' derivative is a central
+        // difference quotient (residual.c)
+        Case{"test/scenes/all_effects.yaml", F3R_FORMULATION_DAE, true, 1e-6, {1, 0, -1}},
+        Case{"test/scenes/all_effects.yaml", F3R_FORMULATION_MINIMAL, true, 1e-6, {1, 1, -1}},
+        Case{"paper_sim3_fixed_free.yaml", F3R_FORMULATION_MINIMAL, false, 1e-6, {0, -1, 0}}));
 
 // The peers' index-3 form: a state made consistent by the constrained solve (LU of
 // [M -G^T; G 0]) zeroes every row, and the variables are counted by index as MEBDFI wants them.

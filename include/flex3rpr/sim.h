@@ -71,6 +71,10 @@ typedef struct {
   long impacts;                  /* end-stop impacts so far */
   double impact_loss;            /* J of kinetic energy the impacts took */
   f3r_impact_record last_impact;
+  int stop_locked[3];         /* leg i held at its stop: -1 at stroke_min, +1 at stroke_max, 0 */
+  double stop_force[3];       /* the stop's force on leg i along rho_i (N; + pushes outwards):
+                               * the contact's Lagrange multiplier, zero on a free leg; in neither
+                               * forces nor passive */
   double constraint_residual; /* max |g_k(q)|, m */
   double velocity_residual;   /* max |(G v)_k|, m/s */
   double actuation_condition; /* condition number of the map from the three leg forces to the

@@ -50,7 +50,10 @@ static void write_header(FILE* f, const f3r_model* m) {
     for (int i = 0; i < 3; ++i) fprintf(f, ",w_tip_%d%s", i + 1, suffix);
   }
   fprintf(f, ",lambda_1x,lambda_1y,lambda_2x,lambda_2y,lambda_3x,lambda_3y");
-  fprintf(f, ",kinetic_energy,potential_energy,external_work,constraint_residual\n");
+  fprintf(f, ",kinetic_energy,potential_energy,external_work,constraint_residual");
+  /* with end stops: each stop's force on its leg (N, the contact's multiplier; 0 when free) */
+  if (f3r_model_scene(m)->end_stops) fprintf(f, ",stop_force_1,stop_force_2,stop_force_3");
+  fprintf(f, "\n");
 }
 
 /* ",x" at end with x as "%.*g" writes it (csv_number.h: the same text, 6 times faster); returns
@@ -63,7 +66,7 @@ static char* put_number(char* end, double x, int precision) {
 /* One row, formed in a buffer and written at once (a call to stdio a number took a fifth of the
  * writing). */
 static void write_row(FILE* f, const f3r_model* m, const f3r_outputs* o) {
-  char row[(2 * (F3R_MAX_Q + 3) + F3R_NCON + 5) * (F3R_FORMAT_G_SIZE + 1)];
+  char row[(2 * (F3R_MAX_Q + 3) + F3R_NCON + 8) * (F3R_FORMAT_G_SIZE + 1)];
   char* end = row + f3r_format_g(row, o->t, 10);
   for (int pass = 0; pass < 2; ++pass) {
     const double* x = pass ? o->v : o->q;
@@ -76,6 +79,8 @@ static void write_row(FILE* f, const f3r_model* m, const f3r_outputs* o) {
   end = put_number(end, o->potential_energy, 15);
   end = put_number(end, o->external_work, 15);
   end = put_number(end, o->constraint_residual, 3);
+  if (f3r_model_scene(m)->end_stops)
+    for (int i = 0; i < 3; ++i) end = put_number(end, o->stop_force[i], 10);
   *end++ = '\n';
   fwrite(row, 1, (size_t)(end - row), f);
 }
@@ -223,6 +228,12 @@ static void track_maxima(run_stats* r, const f3r_model* model, int beam_points,
   r->max_constraint = fmax(r->max_constraint, out->constraint_residual);
   r->max_energy_error = fmax(r->max_energy_error, out->energy_balance_error);
   r->max_energy = fmax(r->max_energy, out->kinetic_energy + out->potential_energy);
+  r->end_stops = f3r_model_scene(model)->end_stops;
+  r->impacts = out->impacts;
+  for (int i = 0; i < 3; ++i) {
+    r->max_stop_force[i] = fmax(r->max_stop_force[i], fabs(out->stop_force[i]));
+    r->final_stop_force[i] = out->stop_force[i];
+  }
   for (int i = 0; i < 3; ++i) {
     const f3r_link_params* lp = f3r_model_link(model, i);
     if (!lp->modes) continue;
@@ -346,6 +357,12 @@ static void print_summary(const cli_options* o, const f3r_scene* scene, const f3
           r->max_deflection, scene->beam_points, r->max_tip);
   fprintf(human, "final pose          x_p %.9f y_p %.9f phi_p %.9f\n", out->q[F3R_Q_X],
           out->q[F3R_Q_Y], out->q[F3R_Q_PHI]);
+  if (r->end_stops)
+    fprintf(human,
+            "end stops           %ld impacts; stop forces at the end %.6g %.6g %.6g N (largest "
+            "%.6g %.6g %.6g N)\n",
+            r->impacts, r->final_stop_force[0], r->final_stop_force[1], r->final_stop_force[2],
+            r->max_stop_force[0], r->max_stop_force[1], r->max_stop_force[2]);
   if (o->out_path) fprintf(human, "csv                 %s\n", o->out_path);
 }
 

@@ -85,6 +85,15 @@ static void json_run(f3r_json* j, const cli_options* o, const run_report* r) {
   f3r_json_number(j, "max_deflection_m", s->max_deflection);
   f3r_json_number(j, "max_tip_deflection_m", s->max_tip);
   f3r_json_bool(j, "energy_guard", cli_energy_guard(s));
+  if (s->end_stops) {
+    f3r_json_integer(j, "impacts", s->impacts);
+    f3r_json_array(j, "final_stop_force_N");
+    for (int i = 0; i < 3; ++i) f3r_json_number(j, NULL, s->final_stop_force[i]);
+    f3r_json_close(j);
+    f3r_json_array(j, "max_stop_force_N");
+    for (int i = 0; i < 3; ++i) f3r_json_number(j, NULL, s->max_stop_force[i]);
+    f3r_json_close(j);
+  }
   f3r_json_number(j, "check_cpu_time_s", r->configurations ? r->check_cpu : NAN);
   f3r_json_number(j, "final_x_p_m", r->x);
   f3r_json_number(j, "final_y_p_m", r->y);

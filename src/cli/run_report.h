@@ -15,6 +15,10 @@ typedef struct {
   double cpu_total;                      /* process CPU time over the run */
   double wall_total;                     /* monotonic (wall) time over the run */
   double wall_integrating, wall_outputs; /* its split, also wall time (flex3rpr_sim.c) */
+  int end_stops;                         /* the scene's end stops are on */
+  long impacts;                          /* end-stop impacts (lockings included) */
+  double max_stop_force[3];              /* largest |stop force| on each leg (N) */
+  double final_stop_force[3];            /* the stop forces at the end (N; + pushes outwards) */
 } run_stats;
 
 /* What a simulation leaves for the JSON summary. */

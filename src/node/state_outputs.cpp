@@ -233,6 +233,7 @@ void StateOutputs::PublishState(const f3r_outputs& out, const ros::Time& stamp) 
   state_.modal = beam_.modal;
   state_.modal_rate = beam_.modal_rate;
   for (size_t c = 0; c < 6; ++c) state_.loop_force[c] = out.lambda[c];
+  for (size_t i = 0; i < 3; ++i) state_.stop_force[i] = out.stop_force[i];
   state_pub_.publish(state_);
 }
 
@@ -380,6 +381,11 @@ void StateOutputs::PublishStatus(const f3r_outputs& out, const RunInfo& info) {
   status_.external_work = out.external_work;
   status_.energy_balance_error = out.energy_balance_error;
   status_.rejected_commands = info.rejected_commands;
+  for (size_t i = 0; i < 3; ++i) {
+    status_.stop_locked[i] = static_cast<int8_t>(out.stop_locked[i]);
+    status_.stop_force[i] = out.stop_force[i];
+  }
+  status_.impacts = static_cast<uint64_t>(out.impacts);
   status_.waiting_for_command = info.waiting_for_command;
   for (int i = 0; i < 3; ++i) {  // joint_states' order: revolute, prismatic per leg
     status_.joint_passive_effort[static_cast<size_t>(2 * i)] = out.passive[3 + i];

@@ -184,8 +184,7 @@ class Lockstep(unittest.TestCase):
             if j.get("name").endswith("_prismatic"):
                 limits[j.get("name")] = (float(j.find("limit").get("lower")), float(j.find("limit").get("upper")))
         self.restart()
-        # 500 N outward on leg 1 for 30 ms, then coasting: a free leg would leave its stroke. (A
-        # force held into a stop ends the run: resting contact is not modelled.)
+        # 500 N outward on leg 1 for 30 ms, then coasting: a free leg would leave its stroke.
         nearest = float("inf")
         for k in range(40):
             push = 500.0 if k < 6 else 0.0
@@ -198,6 +197,21 @@ class Lockstep(unittest.TestCase):
                 self.assertLessEqual(rho, upper + 1e-6, name)
                 nearest = min(nearest, rho - lower, upper - rho)
         self.assertLess(nearest, 1e-3, "the push must carry a leg to a stop")
+        # 50 N held outwards on leg 1 for 10 s: the stop holds the leg and reports its force,
+        # which pushes back (this scene has no friction, so the platform never settles:
+        # test_end_stops checks the force against the statics in a damped scene).
+        res = self.step(command=EffortCommand(leg_force=[50.0, 0.0, 0.0]), periods=10000)
+        self.assertTrue(res.success, res.message)
+        wait_for(lambda: self.sim_time() == res.sim_time, 60, "~status after the held push")
+        with self.lock:
+            status = self.status
+        self.assertEqual(status.stop_locked[0], 1)
+        self.assertLess(status.stop_force[0], 0.0)
+        js = res.joint_state
+        names = list(js.name)
+        leg1 = max(limits, key=lambda n: js.position[names.index(n)])
+        self.assertAlmostEqual(js.position[names.index(leg1)], limits[leg1][1], delta=1e-9)
+        self.assertEqual(js.effort[names.index(leg1)], 50.0)  # the actuator's, not the reaction
 
 
 if __name__ == "__main__":

@@ -6,14 +6,16 @@
 #include "workspace.h"
 
 /* The forward pass at the state y: position, velocity and force stages. */
-static void forward(const f3r_model* m, f3r_formulation form, double t, const double* y,
-                    const double* held, f3r_data* d) {
+static f3r_status forward(const f3r_model* m, f3r_formulation form, double t, const double* y,
+                          const double* held, f3r_workspace* ws) {
+  f3r_data* d = &ws->data;
   d->t = t;
   d->q = y;
   d->v = y + m->nq;
   d->held = held;
   d->lag = m->n_lag ? y + f3r_lag_index(m, form) : 0;
   f3r_forward(m, d, F3R_FWD_POSITION | F3R_FWD_VELOCITY | F3R_FWD_FORCES);
+  return f3r_workspace_add_stop_forces(m, ws, 0);
 }
 
 f3r_status f3r_dae_residual(const f3r_model* m, f3r_formulation form, double t, const double* y,
@@ -24,7 +26,8 @@ f3r_status f3r_dae_residual(const f3r_model* m, f3r_formulation form, double t, 
   const int lag_at = f3r_lag_index(m, form), w_at = lag_at + m->n_lag;
   f3r_data* d = &ws->data;
   double* tmp = ws->tmp;
-  forward(m, form, t, y, held, d);
+  const f3r_status st = forward(m, form, t, y, held, ws);
+  if (st != F3R_OK) return st;
 
   /* kinematic rows: q' - v (+ G^T mu) */
   for (int n = 0; n < nq; ++n) res[n] = qd[n] - v[n];
@@ -61,7 +64,8 @@ f3r_status f3r_dae_jacobian(const f3r_model* m, f3r_formulation form, double t, 
   const double *q = y, *v = y + nq, *lambda = y + 2 * nq, *mu = lambda + F3R_NCON;
   const double* vd = yp + nq;
   f3r_data* d = &ws->data;
-  forward(m, form, t, y, held, d);
+  const f3r_status st = forward(m, form, t, y, held, ws);
+  if (st != F3R_OK) return st;
 #define BLOCK(row, col) (J + (size_t)(col) * (size_t)ld + (row))
 
   /* q' - v (+ G^T mu) */

@@ -15,13 +15,16 @@
 /* The forward pass at the minimal state y: the closed stages fill rho, rho', theta' (not theta:
  * nothing in the residual needs the angle itself). */
 static f3r_status forward(const f3r_model* m, double t, const double* y, const double* held,
-                          f3r_data* d) {
+                          f3r_workspace* ws) {
+  f3r_data* d = &ws->data;
   d->t = t;
   d->z = y;
   d->u = y + m->n_independent;
   d->held = held;
   d->lag = m->n_lag ? y + f3r_lag_index(m, F3R_FORMULATION_MINIMAL) : 0;
-  return f3r_forward(m, d, F3R_FWD_POSITION_CLOSED | F3R_FWD_VELOCITY_CLOSED | F3R_FWD_FORCES);
+  const f3r_status st =
+      f3r_forward(m, d, F3R_FWD_POSITION_CLOSED | F3R_FWD_VELOCITY_CLOSED | F3R_FWD_FORCES);
+  return st != F3R_OK ? st : f3r_workspace_add_stop_forces(m, ws, 1);
 }
 
 /* Link i's dependent accelerations a_d = G_d^{-1} (-G_z a_z - gamma), with a_z in d->a; G_z a_z
@@ -109,7 +112,7 @@ f3r_status f3r_minimal_residual(const f3r_model* m, double t, const double* y, c
                                 const double* held, double* res, f3r_workspace* ws) {
   const int nz = m->n_independent;
   f3r_data* d = &ws->data;
-  const f3r_status st = forward(m, t, y, held, d);
+  const f3r_status st = forward(m, t, y, held, ws);
   if (st != F3R_OK) return st;
   const int lag_at = f3r_lag_index(m, F3R_FORMULATION_MINIMAL), w_at = lag_at + m->n_lag;
   reduced_equations(m, d, yp + nz, res + nz);
@@ -331,7 +334,7 @@ static f3r_status minimal_rhs(const f3r_model* m, double t, const double* y, con
   static const double no_rate[F3R_MAX_Q]; /* u' = 0: the residual rows F_u(0) */
   const int nz = m->n_independent, ny = f3r_state_size(m, F3R_FORMULATION_MINIMAL);
   f3r_data* d = &ws->data;
-  f3r_status st = forward(m, t, y, held, d);
+  f3r_status st = forward(m, t, y, held, ws);
   if (st != F3R_OK) return st;
   double* rate = ydot + nz;
   reduced_equations(m, d, no_rate, rate);

@@ -3,6 +3,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "dense.h"
 #include "workspace.h"
 
 f3r_workspace* f3r_workspace_create(const f3r_model* m) {
@@ -16,9 +17,11 @@ f3r_workspace* f3r_workspace_create(const f3r_model* m) {
   ws->y_perturbed = calloc((size_t)ny_dae, sizeof(double));
   ws->res_base = calloc((size_t)ny_dae, sizeof(double));
   ws->dQ = calloc(2 * (size_t)m->nq * (size_t)m->nq, sizeof(double));
+  ws->stop_work = calloc(f3r_stop_forces_work_size(m), sizeof(double));
   const size_t nq = (size_t)m->nq, nz = (size_t)ws->nz;
   ws->jac_work = calloc(2 * nq * nq + 18 * nq + 3 * nq * nz + 6 * nz, sizeof(double));
-  if (!ws->solve_work || !ws->y_perturbed || !ws->res_base || !ws->dQ || !ws->jac_work) {
+  if (!ws->solve_work || !ws->y_perturbed || !ws->res_base || !ws->dQ || !ws->jac_work ||
+      !ws->stop_work) {
     f3r_workspace_destroy(ws);
     return NULL;
   }
@@ -32,6 +35,7 @@ void f3r_workspace_destroy(f3r_workspace* ws) {
   free(ws->y_perturbed);
   free(ws->res_base);
   free(ws->dQ);
+  free(ws->stop_work);
   free(ws);
 }
 
@@ -88,6 +92,67 @@ f3r_status f3r_residual(const f3r_model* m, f3r_formulation form, double t, cons
   return check_finite(res, f3r_state_size(m, form));
 }
 
+f3r_status f3r_stop_forces_at(const f3r_model* m, f3r_formulation form, double t, const double* y,
+                              const double* held, double* f, f3r_workspace* ws) {
+  double q[F3R_MAX_Q], v[F3R_MAX_Q], lag[3];
+  f3r_status st = f3r_state_to_full(m, form, y, q, v);
+  if (st != F3R_OK) return st;
+  for (int i = 0; i < m->n_lag; ++i) lag[i] = y[f3r_lag_index(m, form) + i];
+  f3r_data d = {.t = t, .q = q, .v = v, .held = held, .lag = m->n_lag ? lag : NULL};
+  if ((st = f3r_forward(m, &d, F3R_FWD_POSITION | F3R_FWD_VELOCITY | F3R_FWD_FORCES)) != F3R_OK)
+    return st;
+  return f3r_stop_forces(m, &ws->locks, q, v, d.Q, f, ws->stop_work);
+}
+
+/* The residual's derivative through the stops' forces f(y), which the formulations take as
+ * given forces: J += dF/df df/dy. dF/df is exact: F's dynamic rows hold -Q, so -e_i (dae) or
+ * -B_i^T (minimal, B_i = d rho_i / dz), and the work row -v_i. df/dy is a central difference
+ * quotient on the columns f depends on (q, v or z, u, and the lag states): 2 ny stop-force solves
+ * per Jacobian, only while a leg is locked. */
+static f3r_status add_stop_force_derivatives(const f3r_model* m, f3r_formulation form, double t,
+                                             const double* y, const double* held, double* J, int ld,
+                                             f3r_workspace* ws) {
+  const int ny = f3r_state_size(m, form), minimal = form == F3R_FORMULATION_MINIMAL;
+  const int n_pos = minimal ? m->n_independent : m->nq, lag_at = f3r_lag_index(m, form);
+  double q[F3R_MAX_Q], v[F3R_MAX_Q], f0[3], f1[3];
+  double dF_df[3][2 * F3R_MAX_Q + 16] = {{0.0}};
+  f3r_status st = f3r_state_to_full(m, form, y, q, v);
+  if (st != F3R_OK) return st;
+  for (int i = 0; i < 3; ++i) {
+    if (!ws->locks.side[i]) continue;
+    dF_df[i][ny - 1] = -v[i];
+    if (!minimal) {
+      dF_df[i][m->nq + i] = -1.0;
+      continue;
+    }
+    for (int j = 0; j < n_pos; ++j) { /* B_ij: the closure's rate of rho_i for u = e_j */
+      double unit[F3R_MAX_Q] = {0.0};
+      unit[F3R_Q_INDEPENDENT + j] = 1.0;
+      f3r_model_close_loop_rates(m, q, unit);
+      dF_df[i][n_pos + j] = -unit[i];
+    }
+  }
+  double* yh = ws->y_perturbed;
+  memcpy(yh, y, (size_t)ny * sizeof(double));
+  for (int col = 0; col < ny; ++col) {
+    const int is_lag = m->n_lag && col >= lag_at && col < lag_at + m->n_lag;
+    if (col >= 2 * n_pos && !is_lag) continue; /* multipliers and W: f does not depend on them */
+    const double h = 1e-6 * fmax(1e-2, fabs(y[col])); /* central: f is smooth */
+    yh[col] = y[col] + h;
+    st = f3r_stop_forces_at(m, form, t, yh, held, f1, ws);
+    yh[col] = y[col] - h;
+    if (st == F3R_OK) st = f3r_stop_forces_at(m, form, t, yh, held, f0, ws);
+    yh[col] = y[col];
+    if (st != F3R_OK) return st;
+    for (int i = 0; i < 3; ++i) {
+      if (!ws->locks.side[i]) continue;
+      const double slope = (f1[i] - f0[i]) / (2.0 * h);
+      for (int r = 0; r < ny; ++r) F3R_AT(J, ld, r, col) += dF_df[i][r] * slope;
+    }
+  }
+  return F3R_OK;
+}
+
 f3r_status f3r_residual_jacobian(const f3r_model* m, f3r_formulation form, double t, double cj,
                                  const double* y, const double* yp, const double* held, double* J,
                                  int ld, f3r_workspace* ws) {
@@ -96,8 +161,11 @@ f3r_status f3r_residual_jacobian(const f3r_model* m, f3r_formulation form, doubl
     memset(J, 0, (size_t)ny * (size_t)ny * sizeof(double));
   else
     for (int j = 0; j < ny; ++j) memset(J + (size_t)j * (size_t)ld, 0, (size_t)ny * sizeof(double));
-  return form == F3R_FORMULATION_MINIMAL ? f3r_minimal_jacobian(m, t, cj, y, yp, held, J, ld, ws)
-                                         : f3r_dae_jacobian(m, form, t, cj, y, yp, held, J, ld, ws);
+  const f3r_status st = form == F3R_FORMULATION_MINIMAL
+                            ? f3r_minimal_jacobian(m, t, cj, y, yp, held, J, ld, ws)
+                            : f3r_dae_jacobian(m, form, t, cj, y, yp, held, J, ld, ws);
+  if (st != F3R_OK || !f3r_stop_locks_any(&ws->locks)) return st;
+  return add_stop_force_derivatives(m, form, t, y, held, J, ld, ws);
 }
 
 f3r_status f3r_explicit_rhs(const f3r_model* m, double t, const double* y, const double* held,
@@ -142,7 +210,8 @@ f3r_status f3r_consistent_state(const f3r_model* m, f3r_formulation form, double
   d->held = held;
   d->lag = lag;
   f3r_forward(m, d, F3R_FWD_POSITION | F3R_FWD_VELOCITY | F3R_FWD_FORCES);
-  const f3r_status st = f3r_solve_accelerations(m, q, v, d->Q, d->a, d->lambda, ws->solve_work);
+  f3r_status st = f3r_workspace_add_stop_forces(m, ws, 0);
+  if (st == F3R_OK) st = f3r_solve_accelerations(m, q, v, d->Q, d->a, d->lambda, ws->solve_work);
   if (st != F3R_OK) return st;
   if (lambda_out) memcpy(lambda_out, d->lambda, sizeof d->lambda);
   if (form != F3R_FORMULATION_MINIMAL) { /* mu = 0 (dae) */
@@ -167,4 +236,8 @@ f3r_status f3r_consistent_state(const f3r_model* m, f3r_formulation form, double
   y[ny - 1] = work;
   yp[ny - 1] = d->power;
   return check_finite(y, f3r_state_size(m, form));
+}
+
+void f3r_workspace_set_locks(f3r_workspace* ws, const int side[3]) {
+  for (int i = 0; i < 3; ++i) ws->locks.side[i] = side[i];
 }

@@ -68,6 +68,13 @@ typedef f3r_status f3r_jacobian_fn(const f3r_model* model, f3r_formulation form,
 typedef f3r_status f3r_rhs_fn(const f3r_model* model, double t, const double* y, const double* held,
                               double* ydot, f3r_workspace* ws);
 
+/* End stops held as contact: the legs locked at their stops for the workspace's next evaluations
+ * (side[i]: -1 at stroke_min, +1 at stroke_max, 0 free; stages.h), and the stops' forces (3, N
+ * along rho_i, zero on free legs) at state y of the formulation under held forces. */
+void f3r_workspace_set_locks(f3r_workspace* ws, const int side[3]);
+f3r_status f3r_stop_forces_at(const f3r_model* model, f3r_formulation form, double t,
+                              const double* y, const double* held, double* f, f3r_workspace* ws);
+
 /* held: the caller's generalized forces (nq), or NULL. Returns F3R_OK, F3R_ERR_SINGULAR for a
  * configuration the loop closure cannot reach, or F3R_ERR_NONFINITE. */
 f3r_residual_fn f3r_residual;

@@ -82,6 +82,23 @@ f3r_status f3r_impact(const f3r_model* m, const double* q, const double* v, cons
                       int count, double restitution, double* v_out, double* impulse, double* work);
 size_t f3r_impact_work_size(const f3r_model* m);
 
+/* --- end stops held as contact (stops.c) ---------------------------------------------------------- */
+/* A leg at rest against a stop is locked there: its stroke obeys the acceleration constraint
+ * rho_i'' = -2 a rho_i' - a^2 (rho_i - stop) (a = F3R_STOP_BAUMGARTE_RATE, which pulls the
+ * integrator's drift back onto the stop), and the stop's force f_i on rho_i is that constraint's
+ * Lagrange multiplier. side[i]: -1 locked at stroke_min, +1 at stroke_max, 0 free. */
+typedef struct {
+  int side[3];
+} f3r_stop_locks;
+#define F3R_STOP_BAUMGARTE_RATE 200.0
+int f3r_stop_locks_any(const f3r_stop_locks* locks);
+/* The stops' forces f (3, zero on free legs; N along rho_i) at (q, v) under the generalized forces
+ * Q without them: [M -G^T -E; G 0 0; E^T 0 0] [a; lambda; f] = [Q - h - k; -gamma; -baumgarte],
+ * E the unit columns of the locked legs. work holds f3r_stop_forces_work_size doubles. */
+f3r_status f3r_stop_forces(const f3r_model* m, const f3r_stop_locks* locks, const double* q,
+                           const double* v, const double* Q, double* f, double* work);
+size_t f3r_stop_forces_work_size(const f3r_model* m);
+
 /* --- accelerations ------------------------------------------------------------------------------ */
 /* Solves [M -G^T; G 0] [a; lambda] = [Q - h - k; -gamma] for the accelerations a (nq) and the
  * multipliers lambda (6) at (q, v). work holds (nq+6)^2 + 2(nq+6) doubles.

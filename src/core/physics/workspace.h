@@ -4,6 +4,7 @@
 
 #include "data.h"
 #include "residual.h"
+#include "stages.h"
 
 struct f3r_workspace {
   int nq, nz, ny;
@@ -16,9 +17,17 @@ struct f3r_workspace {
   double mass_pp[9];                                /* platform, 3 x 3 */
   double mass_pe[3][3 * F3R_MAX_MODES];             /* link i's modes with the platform, 3 x r_i */
   double mass_ee[3][F3R_MAX_MODES * F3R_MAX_MODES]; /* link i's modes, r_i x r_i */
-  double* jac_work; /* the minimal Jacobian's products: 2 nq^2 + 18 nq + 3 nq nz + 6 nz */
-  double* dQ;       /* 2 nq x nq: dQ/dq and dQ/dv of the effects */
+  double* jac_work;     /* the minimal Jacobian's products: 2 nq^2 + 18 nq + 3 nq nz + 6 nz */
+  double* dQ;           /* 2 nq x nq: dQ/dq and dQ/dv of the effects */
+  f3r_stop_locks locks; /* the legs held at their stops (f3r_workspace_set_locks) */
+  double stop_force[3]; /* the last forward pass's stop forces (N), with locks */
+  double* stop_work;    /* f3r_stop_forces_work_size */
 };
+
+/* With legs locked: the stops' forces at the forward pass in d (q, v, Q; closed: the minimal
+ * formulation's closed stages, whose q lacks theta) into ws->stop_force, added to d->Q and to
+ * the power d->power. Nothing when no leg is locked. */
+f3r_status f3r_workspace_add_stop_forces(const f3r_model* m, f3r_workspace* ws, int closed);
 
 /* form: F3R_FORMULATION_DAE or F3R_FORMULATION_INDEX3 (form_dae.c serves both) */
 f3r_residual_fn f3r_dae_residual;

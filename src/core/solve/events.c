@@ -8,7 +8,8 @@
 #include "stages.h"
 #include "data.h"
 
-int f3r_event_roots(const f3r_model* m, f3r_formulation form, const double* y, double* g) {
+int f3r_event_roots(const f3r_model* m, f3r_formulation form, const double* y, const int* locked,
+                    const double* stop_force, double* g) {
   double rho[3]; /* the roots need the leg strokes alone */
   if (form == F3R_FORMULATION_MINIMAL) {
     double q[F3R_MAX_Q];
@@ -18,8 +19,13 @@ int f3r_event_roots(const f3r_model* m, f3r_formulation form, const double* y, d
     memcpy(rho, y, sizeof rho);
   }
   for (int i = 0; i < 3; ++i) {
-    g[2 * i] = m->end_stops ? rho[i] - m->stroke_min : 1.0;
-    g[2 * i + 1] = m->end_stops ? m->stroke_max - rho[i] : 1.0;
+    if (locked[i]) { /* its stop's force, which falls through zero where it would have to pull */
+      g[2 * i] = locked[i] < 0 ? stop_force[i] : 1.0;
+      g[2 * i + 1] = locked[i] > 0 ? -stop_force[i] : 1.0;
+    } else {
+      g[2 * i] = m->end_stops ? rho[i] - m->stroke_min : 1.0;
+      g[2 * i + 1] = m->end_stops ? m->stroke_max - rho[i] : 1.0;
+    }
     g[F3R_COLLAPSE_ROOT + i] = rho[i] + (1.0 - F3R_COLLAPSE_LEG_FRACTION) * m->link_length;
   }
   return 0;
@@ -64,35 +70,34 @@ f3r_status f3r_event_collapse_error(const f3r_model* m, f3r_formulation form, co
 
 f3r_status f3r_event_impact(const f3r_model* m, double t, const int* root_info, const double* q,
                             const double* v, f3r_impact_window* window, double* v_after,
-                            f3r_impact_record* record, int* legs_hit, double* work,
+                            f3r_impact_record* record, int* legs_hit, int* lock, double* work,
                             f3r_error* err) {
   int legs[3], at_max[3], count = 0;
   double impulse[3];
   *legs_hit = 0;
-  for (int i = 0; i < 3; ++i)
+  for (int i = 0; i < 3; ++i) {
+    lock[i] = 0;
     if (root_info[2 * i] || root_info[2 * i + 1]) {
       at_max[count] = root_info[2 * i + 1] != 0;
       legs[count++] = i;
     }
+  }
   if (!count) return F3R_OK;
   if (t - window->window_start > 1e-3) {
     window->window_start = t;
     window->count = 0;
   }
-  if (++window->count > F3R_MAX_IMPACTS_PER_MS)
-    return f3r_error_set(err, F3R_ERR_SOLVER,
-                         "leg %d rests against its end stop at t = %.9g (more than %d impacts in "
-                         "1 ms): resting contact is not modelled; reduce the force into the stop",
-                         legs[0] + 1, t, F3R_MAX_IMPACTS_PER_MS);
-  const f3r_status st = f3r_impact(m, q, v, legs, count, m->restitution, v_after, impulse, work);
+  /* chatter, or a rebound too slow to leave the stop: the legs stop dead and lock (contact) */
+  int resting = ++window->count > F3R_MAX_IMPACTS_PER_MS;
+  f3r_status st =
+      f3r_impact(m, q, v, legs, count, resting ? 0.0 : m->restitution, v_after, impulse, work);
+  for (int c = 0; c < count && st == F3R_OK && !resting; ++c)
+    if (fabs(v_after[legs[c]]) < F3R_RESTING_SPEED) {
+      resting = 1;
+      st = f3r_impact(m, q, v, legs, count, 0.0, v_after, impulse, work);
+    }
   if (st != F3R_OK) return f3r_error_set(err, st, "end stop at t = %.9g: singular impact", t);
-  for (int c = 0; c < count; ++c)
-    if (fabs(v_after[legs[c]]) < F3R_RESTING_SPEED)
-      return f3r_error_set(
-          err, F3R_ERR_SOLVER,
-          "leg %d rests against its end stop at t = %.9g (rebound %.3g m/s, below "
-          "%g m/s): resting contact is not modelled; reduce the force into the stop",
-          legs[c] + 1, t, fabs(v_after[legs[c]]), F3R_RESTING_SPEED);
+  for (int c = 0; c < count && resting; ++c) lock[legs[c]] = at_max[c] ? 1 : -1;
   record->t = t;
   record->leg = legs[0];
   record->at_max = at_max[0];

@@ -15,17 +15,20 @@
 #define F3R_NROOTS 9
 #define F3R_COLLAPSE_ROOT 6
 #define F3R_COLLAPSE_LEG_FRACTION 0.1
-/* Impacts would repeat without end when a force holds a piston against its stop: resting contact
- * is not modelled, so a run stops with an error past this many impacts within 1 ms. */
+/* Impacts repeat without end when a force holds a piston against its stop: past this many
+ * impacts within 1 ms the legs stop dead (a plastic impact) and lock at the stop, as contact. */
 #define F3R_MAX_IMPACTS_PER_MS 200
-/* Below this rebound speed (m/s) a leg is taken to come to rest on its stop: the rebounds that
- * follow shrink geometrically (a Zeno sequence) and grow shorter than one integrator step, so
- * root finding would miss one and let the piston pass the stop. */
+/* Below this rebound speed (m/s) a leg comes to rest on its stop (locks) instead of rebounding:
+ * the rebounds that would follow shrink geometrically (a Zeno sequence) and grow shorter than one
+ * integrator step, so root finding would miss one and let the piston pass the stop. */
 #define F3R_RESTING_SPEED 0.01
 
-/* g (F3R_NROOTS) at state y of the formulation. Returns 0, or 1 when y does not close (the
- * integrators take that as a recoverable failure). */
-int f3r_event_roots(const f3r_model* m, f3r_formulation form, const double* y, double* g);
+/* g (F3R_NROOTS) at state y of the formulation. A leg locked at a stop (locked[i] -1 at min, +1
+ * at max) watches its stop's force stop_force[i] instead: rows 2i (min) or 2i + 1 (max) cross
+ * zero where the stop would have to pull, and the leg is released. Returns 0, or 1 when y does
+ * not close (the integrators take that as a recoverable failure). */
+int f3r_event_roots(const f3r_model* m, f3r_formulation form, const double* y, const int* locked,
+                    const double* stop_force, double* g);
 
 /* The first breakpoint of the scripted inputs in (t, t_out]: 1 with *t_stop set, else 0. */
 int f3r_event_next_breakpoint(const f3r_model* m, double t, double t_out, double* t_stop);
@@ -43,12 +46,15 @@ typedef struct {
   long count;
 } f3r_impact_window;
 
-/* At an end-stop event at t (root_info from the integrator) in the full state q, v: the legs in
- * contact, the chatter and resting checks, and Newton's impact law (f3r_impact) with the
- * model's restitution. Fills v_after, the record of the first leg, and *legs_hit (0 when no
- * end-stop root fired). work holds f3r_impact_work_size doubles. */
+/* At an end-stop event at t (root_info from the integrator, the locked legs' rows cleared) in the
+ * full state q, v: the legs that hit a stop, Newton's impact law (f3r_impact) with the model's
+ * restitution, or with none for legs that come to rest (a rebound below F3R_RESTING_SPEED, or
+ * chatter past F3R_MAX_IMPACTS_PER_MS): those get lock[i] = -1 (stroke_min) or +1 (stroke_max),
+ * the rest 0. Fills v_after, the record of the first leg, and *legs_hit (0 when no end-stop root
+ * fired). work holds f3r_impact_work_size doubles. */
 f3r_status f3r_event_impact(const f3r_model* m, double t, const int* root_info, const double* q,
                             const double* v, f3r_impact_window* window, double* v_after,
-                            f3r_impact_record* record, int* legs_hit, double* work, f3r_error* err);
+                            f3r_impact_record* record, int* legs_hit, int* lock, double* work,
+                            f3r_error* err);
 
 #endif

@@ -30,8 +30,16 @@ struct f3r_sim {
   double impact_loss;
   f3r_impact_record last_impact;
   f3r_impact_window impact_window; /* impacts in the last ms (events.h) */
+  int locked[3];                   /* the legs held at their stops (stages.h f3r_stop_locks) */
   f3r_outputs out;
 };
+
+/* The legs held at their stops, for the residual's and the outputs' workspaces and the roots. */
+static void set_locks(f3r_sim* s, const int* locked) {
+  for (int i = 0; i < 3; ++i) s->locked[i] = s->stepper.locked[i] = locked[i];
+  f3r_workspace_set_locks(s->stepper.ws, locked);
+  f3r_workspace_set_locks(s->out_ws, locked);
+}
 
 f3r_solver_settings f3r_solver_settings_from_scene(const f3r_scene* scene) {
   f3r_solver_settings st;
@@ -58,8 +66,8 @@ static const double* lag_states(const f3r_sim* s, double* lag) {
 
 /* y, y' at s->t from full coordinates and work W, consistent by construction. The forces are
  * their right limit at s->t: a scripted jump at a breakpoint t_b belongs to (t_b, ...). */
-static f3r_status consistent(f3r_sim* s, const double* q, const double* v, const double* lag,
-                             double work, f3r_error* err) {
+static f3r_status consistent_once(f3r_sim* s, const double* q, const double* v, const double* lag,
+                                  double work, f3r_error* err) {
   const double t_forces = nextafter(s->t, INFINITY);
   const f3r_status st = f3r_consistent_state(s->model, s->settings.formulation, t_forces, q, v,
                                              s->held, lag, work, N_VGetArrayPointer(s->y),
@@ -70,6 +78,29 @@ static f3r_status consistent(f3r_sim* s, const double* q, const double* v, const
         err, st, "no consistent state at t = %.9g: %s", s->t,
         st == F3R_ERR_SINGULAR ? "the constrained mass matrix is singular" : "non-finite values");
   return F3R_OK;
+}
+
+/* y, y' at s->t from full coordinates and work W, consistent by construction, for the legs
+ * locked at their stops: a locked leg whose stop would have to pull to hold it (after an impact
+ * locked it, or a force changed) is released first, from rest. */
+static f3r_status consistent(f3r_sim* s, const double* q, const double* v, const double* lag,
+                             double work, f3r_error* err) {
+  for (int pass = 0; pass < 4; ++pass) {
+    f3r_status st = consistent_once(s, q, v, lag, work, err);
+    if (st != F3R_OK) return st;
+    double force[3];
+    st = f3r_stop_forces_at(s->model, s->settings.formulation, nextafter(s->t, INFINITY),
+                            N_VGetArrayPointer(s->y), s->held, force, s->out_ws);
+    if (st != F3R_OK) return f3r_error_set(err, st, "end stop at t = %.9g: singular contact", s->t);
+    int locked[3], released = 0;
+    for (int i = 0; i < 3; ++i) {
+      locked[i] = s->locked[i];
+      if (locked[i] && -locked[i] * force[i] <= 0.0) locked[i] = 0, released = 1;
+    }
+    if (!released) return F3R_OK;
+    set_locks(s, locked);
+  }
+  return consistent_once(s, q, v, lag, work, err);
 }
 
 f3r_status f3r_sim_create(const f3r_model* model, const f3r_solver_settings* settings,
@@ -161,6 +192,7 @@ f3r_status f3r_sim_reset(f3r_sim* s, f3r_error* err) {
   s->impact_loss = 0.0;
   memset(&s->impact_window, 0, sizeof s->impact_window);
   memset(&s->last_impact, 0, sizeof s->last_impact);
+  set_locks(s, (const int[3]){0, 0, 0});
   if ((st = consistent(s, q, v, NULL, 0.0, err)) != F3R_OK) return st;
   st = s->ops->restart(&s->stepper, s->y, s->yp, 0.0, err);
   memset(&s->stepper.base, 0, sizeof s->stepper.base); /* a reset starts the count anew */
@@ -183,9 +215,14 @@ f3r_status f3r_sim_set_forces(f3r_sim* s, const double* held, f3r_error* err) {
   if (st != F3R_OK) return f3r_error_set(err, st, "the current state cannot be closed");
   memcpy(keep, s->held, sizeof keep);
   memcpy(s->held, held, (size_t)nq * sizeof(double));
+  int keep_locks[3]; /* a new force may release a leg from its stop */
+  memcpy(keep_locks, s->locked, sizeof keep_locks);
   st = consistent(s, q, v, lag_states(s, lag), y[s->ny - 1], err);
   if (st == F3R_OK) st = s->ops->restart(&s->stepper, s->y, s->yp, s->t, err);
-  if (st != F3R_OK) memcpy(s->held, keep, sizeof keep);
+  if (st != F3R_OK) {
+    memcpy(s->held, keep, sizeof keep);
+    set_locks(s, keep_locks);
+  }
   return st;
 }
 
@@ -260,12 +297,17 @@ f3r_status f3r_sim_set_state(f3r_sim* s, const double pose[3], const double twis
   /* The consistent state goes to scratch first (the outputs' workspace, which the integrator
    * never reads), so that a failure leaves the simulation as it was. */
   double y[F3R_MAX_STATE], yp[F3R_MAX_STATE];
+  int keep_locks[3]; /* the new state starts free of the stops */
+  memcpy(keep_locks, s->locked, sizeof keep_locks);
+  set_locks(s, (const int[3]){0, 0, 0});
   st = f3r_consistent_state(m, s->settings.formulation, nextafter(s->t, INFINITY), q, v, s->held,
                             lag_states(s, lag), 0.0, y, yp, NULL, s->out_ws);
-  if (st != F3R_OK)
+  if (st != F3R_OK) {
+    set_locks(s, keep_locks);
     return f3r_error_set(
         err, st, "no consistent state at pose (%g, %g, %g): %s", pose[0], pose[1], pose[2],
         st == F3R_ERR_SINGULAR ? "the constrained mass matrix is singular" : "non-finite values");
+  }
   double* sy = N_VGetArrayPointer(s->y);
   double* syp = N_VGetArrayPointer(s->yp);
   double keep_y[F3R_MAX_STATE], keep_yp[F3R_MAX_STATE];
@@ -279,6 +321,7 @@ f3r_status f3r_sim_set_state(f3r_sim* s, const double pose[3], const double twis
     memcpy(sy, keep_y, (size_t)s->ny * sizeof(double));
     memcpy(syp, keep_yp, (size_t)s->ny * sizeof(double));
     s->stepper.yp_stale = keep_stale;
+    set_locks(s, keep_locks);
     s->ops->restart(&s->stepper, s->y, s->yp, s->t, NULL);
     return st;
   }
@@ -289,20 +332,31 @@ f3r_status f3r_sim_set_state(f3r_sim* s, const double pose[3], const double twis
   return F3R_OK;
 }
 
-/* At an end-stop event: the impact law on the legs in contact (events.c), then a restart. */
-static f3r_status handle_impact(f3r_sim* s, f3r_error* err) {
+/* At an end-stop event: locked legs whose stop would pull are released; free legs that hit a
+ * stop follow the impact law (events.c) and lock when they come to rest; then a restart. */
+static f3r_status handle_stop_event(f3r_sim* s, f3r_error* err) {
   const f3r_model* m = s->model;
   const double* y = N_VGetArrayPointer(s->y);
   double q[F3R_MAX_Q], v[F3R_MAX_Q], v_after[F3R_MAX_Q], lag[3];
   f3r_status st = f3r_state_to_full(m, s->settings.formulation, y, q, v);
   if (st != F3R_OK)
     return f3r_error_set(err, st, "end stop at t = %.9g: the loops do not close", s->t);
-  int legs_hit = 0;
-  st = f3r_event_impact(m, s->t, s->stepper.root_info, q, v, &s->impact_window, v_after,
-                        &s->last_impact, &legs_hit, s->impact_work, err);
-  if (st != F3R_OK || !legs_hit) return st;
+  int roots[F3R_NROOTS], locked[3], lock[3], legs_hit = 0;
+  memcpy(roots, s->stepper.root_info, sizeof roots);
+  for (int i = 0; i < 3; ++i) {
+    locked[i] = s->locked[i];
+    if (locked[i] && (roots[2 * i] || roots[2 * i + 1])) locked[i] = 0; /* released */
+    if (s->locked[i]) roots[2 * i] = roots[2 * i + 1] = 0;
+  }
+  st = f3r_event_impact(m, s->t, roots, q, v, &s->impact_window, v_after, &s->last_impact,
+                        &legs_hit, lock, s->impact_work, err);
+  if (st != F3R_OK) return st;
+  if (!legs_hit) memcpy(v_after, v, sizeof v_after);
   s->impacts += legs_hit;
-  s->impact_loss += s->last_impact.kinetic_before - s->last_impact.kinetic_after;
+  if (legs_hit) s->impact_loss += s->last_impact.kinetic_before - s->last_impact.kinetic_after;
+  for (int i = 0; i < 3; ++i)
+    if (lock[i]) locked[i] = lock[i];
+  set_locks(s, locked);
   st = consistent(s, q, v_after, lag_states(s, lag), y[s->ny - 1], err);
   if (st == F3R_OK) st = s->ops->restart(&s->stepper, s->y, s->yp, s->t, err);
   return st;
@@ -340,7 +394,7 @@ f3r_status f3r_sim_advance(f3r_sim* s, double t_out, f3r_error* err) {
       if (collapsed >= 0)
         return f3r_event_collapse_error(m, s->settings.formulation, N_VGetArrayPointer(s->y),
                                         collapsed, s->t, err);
-      if ((st = handle_impact(s, err)) != F3R_OK) return st;
+      if ((st = handle_stop_event(s, err)) != F3R_OK) return st;
       continue;
     }
     const double* y = N_VGetArrayPointer(s->y);
@@ -394,6 +448,13 @@ const f3r_outputs* f3r_sim_outputs(f3r_sim* s) {
     o->actuator[cylinder] = s->held[cylinder] + f3r_input_value(&m->scene.inputs[cylinder], s->t);
   }
   for (int j = 0; j < F3R_Q_LEG_JOINTS; ++j) o->passive[j] = d->Q[j] - o->actuator[j];
+  /* the stops' reactions: reported apart, in neither forces nor passive, but in the balance of
+   * forces that the multipliers follow from */
+  if (f3r_workspace_add_stop_forces(m, s->out_ws, 0) != F3R_OK) return o;
+  for (int i = 0; i < 3; ++i) {
+    o->stop_locked[i] = s->locked[i];
+    o->stop_force[i] = s->out_ws->stop_force[i];
+  }
   if (s->settings.formulation == F3R_FORMULATION_DAE) {
     memcpy(o->lambda, y + 2 * nq, sizeof o->lambda);
   } else {

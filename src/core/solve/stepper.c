@@ -15,8 +15,13 @@ void f3r_stepper_error_handler(int code, const char* module, const char* functio
   snprintf(st->message, sizeof st->message, "%s %s: %s", module, function, msg);
 }
 
-int f3r_stepper_roots(const f3r_stepper* st, const double* y, double* g) {
-  return f3r_event_roots(st->model, st->settings.formulation, y, g);
+int f3r_stepper_roots(const f3r_stepper* st, double t, const double* y, double* g) {
+  double force[3] = {0.0, 0.0, 0.0};
+  if ((st->locked[0] || st->locked[1] || st->locked[2]) &&
+      f3r_stop_forces_at(st->model, st->settings.formulation, f3r_stepper_force_time(st, t), y,
+                         st->held, force, st->ws) != F3R_OK)
+    return 1;
+  return f3r_event_roots(st->model, st->settings.formulation, y, st->locked, force, g);
 }
 
 ARKodeButcherTable f3r_stepper_load_table(int implicit, const char* name) {
@@ -41,8 +46,7 @@ int f3r_stepper_explicit_rhs(realtype t, N_Vector y, N_Vector ydot, void* user) 
 }
 
 int f3r_stepper_explicit_roots(realtype t, N_Vector y, realtype* g, void* user) {
-  (void)t;
-  return f3r_stepper_roots(user, N_VGetArrayPointer(y), g);
+  return f3r_stepper_roots(user, t, N_VGetArrayPointer(y), g);
 }
 
 f3r_status f3r_stepper_failed(const f3r_stepper* st, f3r_error* err, const char* call,

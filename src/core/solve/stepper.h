@@ -55,6 +55,8 @@ typedef struct {
                            * the segment after it */
   int yp_stale;              /* 1: advance left y' unset (an explicit method needs no y'); the
                            * simulation evaluates it only when outputs ask for it */
+  int locked[3];             /* the legs held at their stops (stages.h f3r_stop_locks), as the
+                              * simulation set them in ws too: the roots watch their forces */
   char message[256];         /* the solver's last error message: the core never prints */
 } f3r_stepper;
 
@@ -87,7 +89,7 @@ const f3r_stepper* f3r_sim_stepper(const f3r_sim* sim);
  * stepper (its user data) since the core never prints, and the root functions (events.c) at y. */
 void f3r_stepper_error_handler(int code, const char* module, const char* function, char* msg,
                                void* user);
-int f3r_stepper_roots(const f3r_stepper* st, const double* y, double* g);
+int f3r_stepper_roots(const f3r_stepper* st, double t, const double* y, double* g);
 /* The ARKODE back ends' (ERKStep, ARKStep) right-hand side and root functions: the minimal
  * formulation's explicit ODE, forces at their right limit at a restart; user is the stepper. */
 int f3r_stepper_explicit_rhs(realtype t, N_Vector y, N_Vector ydot, void* user);

@@ -54,8 +54,8 @@ static int jacobian_fn(realtype t, realtype cj, N_Vector y, N_Vector yp, N_Vecto
 }
 
 static int root_fn(realtype t, N_Vector y, N_Vector yp, realtype* g, void* user) {
-  (void)t, (void)yp;
-  return f3r_stepper_roots(user, N_VGetArrayPointer(y), g);
+  (void)yp;
+  return f3r_stepper_roots(user, t, N_VGetArrayPointer(y), g);
 }
 
 #define CHECK(call) F3R_STEPPER_CHECK(call, IDAGetReturnFlagName)
