@@ -25,6 +25,7 @@
 #include "cli_options.h"
 #include "csv_number.h"
 #include "model_reports.h"
+#include "flex3rpr/output_columns.h"
 #include "run_report.h"
 
 /* Where the human summary goes: stdout, or stderr when the JSON takes stdout. */
@@ -37,50 +38,46 @@ static FILE* human;
  * the closest measured): 1 is a failure, 2 a usage error. */
 #define F3R_EXIT_ACCURACY_NOT_MET 3
 
-static void write_header(FILE* f, const f3r_model* m) {
-  static const char* rigid[9] = {"rho_1",   "rho_2", "rho_3", "theta_1", "theta_2",
-                                 "theta_3", "x_p",   "y_p",   "phi_p"};
-  fprintf(f, "t");
-  for (int pass = 0; pass < 2; ++pass) {
-    const char* suffix = pass ? "_dot" : "";
-    for (int n = 0; n < F3R_Q_MODAL; ++n) fprintf(f, ",%s%s", rigid[n], suffix);
-    for (int i = 0; i < 3; ++i)
-      for (int j = 0; j < f3r_model_link(m, i)->modes; ++j)
-        fprintf(f, ",eta_%d_%d%s", i + 1, j + 1, suffix);
-    for (int i = 0; i < 3; ++i) fprintf(f, ",w_tip_%d%s", i + 1, suffix);
+/* The columns (output_columns.h) and the significant digits each is written with, per model. */
+typedef struct {
+  const f3r_model* model;
+  int count;
+  int digits[F3R_OUTPUT_MAX_COLUMNS];
+} column_digits;
+
+static const column_digits* digits_of(const f3r_model* m) {
+  static column_digits cached;
+  if (cached.model != m) {
+    char name[F3R_OUTPUT_NAME];
+    cached.model = m;
+    cached.count = f3r_output_columns(m);
+    for (int k = 0; k < cached.count; ++k) cached.digits[k] = f3r_output_column_name(m, k, name);
   }
-  fprintf(f, ",lambda_1x,lambda_1y,lambda_2x,lambda_2y,lambda_3x,lambda_3y");
-  fprintf(f, ",kinetic_energy,potential_energy,external_work,constraint_residual");
-  /* with end stops: each stop's force on its leg (N, the contact's multiplier; 0 when free) */
-  if (f3r_model_scene(m)->end_stops) fprintf(f, ",stop_force_1,stop_force_2,stop_force_3");
+  return &cached;
+}
+
+static void write_header(FILE* f, const f3r_model* m) {
+  char name[F3R_OUTPUT_NAME];
+  const int count = f3r_output_columns(m);
+  for (int k = 0; k < count; ++k) {
+    f3r_output_column_name(m, k, name);
+    fprintf(f, "%s%s", k ? "," : "", name);
+  }
   fprintf(f, "\n");
 }
 
-/* ",x" at end with x as "%.*g" writes it (csv_number.h: the same text, 6 times faster); returns
- * the new end. */
-static char* put_number(char* end, double x, int precision) {
-  *end++ = ',';
-  return end + f3r_format_g(end, x, precision);
-}
-
 /* One row, formed in a buffer and written at once (a call to stdio a number took a fifth of the
- * writing). */
+ * writing); ",x" with x as "%.*g" (csv_number.h: the same text, 6 times faster). */
 static void write_row(FILE* f, const f3r_model* m, const f3r_outputs* o) {
-  char row[(2 * (F3R_MAX_Q + 3) + F3R_NCON + 8) * (F3R_FORMAT_G_SIZE + 1)];
-  char* end = row + f3r_format_g(row, o->t, 10);
-  for (int pass = 0; pass < 2; ++pass) {
-    const double* x = pass ? o->v : o->q;
-    for (int n = 0; n < f3r_model_nq(m); ++n) end = put_number(end, x[n], 15);
-    const double* w = pass ? o->tip_deflection_rate : o->tip_deflection;
-    for (int i = 0; i < 3; ++i) end = put_number(end, w[i], 15);
+  char row[F3R_OUTPUT_MAX_COLUMNS * (F3R_FORMAT_G_SIZE + 1)];
+  double values[F3R_OUTPUT_MAX_COLUMNS];
+  const column_digits* digits = digits_of(m);
+  f3r_output_row(m, o, values);
+  char* end = row;
+  for (int k = 0; k < digits->count; ++k) {
+    if (k) *end++ = ',';
+    end += f3r_format_g(end, values[k], digits->digits[k]);
   }
-  for (int c = 0; c < F3R_NCON; ++c) end = put_number(end, o->lambda[c], 10);
-  end = put_number(end, o->kinetic_energy, 15);
-  end = put_number(end, o->potential_energy, 15);
-  end = put_number(end, o->external_work, 15);
-  end = put_number(end, o->constraint_residual, 3);
-  if (f3r_model_scene(m)->end_stops)
-    for (int i = 0; i < 3; ++i) end = put_number(end, o->stop_force[i], 10);
   *end++ = '\n';
   fwrite(row, 1, (size_t)(end - row), f);
 }

@@ -1,0 +1,292 @@
+"""Sim: one simulation of a scene, stepped by a controller in Python, as the node's
+~step_with_command steps it, or run open loop as the CLI runs it."""
+import ctypes
+import json
+import os
+import tempfile
+
+import numpy as np
+
+from . import _core
+from ._core import Error, lib
+
+_DOUBLE_P = ctypes.POINTER(ctypes.c_double)
+
+
+def _ptr(array):
+    return array.ctypes.data_as(_DOUBLE_P)
+
+
+def _scene_file(scene):
+    """(path, label, temporary): a scene given as a path, a YAML string or a dict."""
+    if isinstance(scene, dict):
+        text, label = json.dumps(scene), "<dict>"  # JSON is YAML
+    elif isinstance(scene, (str, os.PathLike)) and os.path.isfile(scene):
+        return os.fspath(scene), None, False
+    elif isinstance(scene, str) and ("\n" in scene or ":" in scene):
+        text, label = scene, "<string>"
+    else:
+        raise FileNotFoundError("flex3rpr: scene %r: no such file (give a path, a YAML string or "
+                                "a dict)" % (scene,))
+    handle, path = tempfile.mkstemp(prefix="flex3rpr_scene_", suffix=".yaml")
+    with os.fdopen(handle, "w") as f:
+        f.write(text)
+    return path, label, True
+
+
+def _override_text(field, value):
+    if isinstance(value, bool):
+        value = "true" if value else "false"
+    elif isinstance(value, (list, tuple, dict)):
+        value = json.dumps(value)
+    elif isinstance(value, float):
+        value = repr(value)
+    return "%s=%s" % (field, value)
+
+
+class State:
+    """The outputs at one time, in the CLI's CSV columns: `vector` (a numpy array, one value a
+    column, the CSV's order; `names` says which) and each column by name (s.x_p, s["eta_1_2"]),
+    plus the grouped fields t, q, v, pose, twist, modal, modal_rate, tip_deflection."""
+    __slots__ = ("vector", "_sim")
+
+    def __init__(self, vector, sim):
+        self.vector = vector
+        self._sim = sim
+
+    @property
+    def names(self):
+        return self._sim.columns
+
+    def __getitem__(self, name):
+        return self.vector[self._sim.column_index[name]]
+
+    def __getattr__(self, name):
+        try:
+            return self.vector[self._sim.column_index[name]]
+        except KeyError:
+            raise AttributeError(name) from None
+
+    @property
+    def q(self):
+        return self.vector[1:1 + self._sim.nq]
+
+    @property
+    def v(self):
+        n = self._sim.nq
+        return self.vector[4 + n:4 + 2 * n]
+
+    pose = property(lambda s: s.q[6:9])
+    twist = property(lambda s: s.v[6:9])
+    modal = property(lambda s: s.q[9:])
+    modal_rate = property(lambda s: s.v[9:])
+    tip_deflection = property(lambda s: s.vector[1 + s._sim.nq:4 + s._sim.nq])
+
+    def as_dict(self):
+        return dict(zip(self._sim.columns, self.vector.tolist()))
+
+    def __repr__(self):
+        return "State(t=%.6g, pose=%s)" % (self.vector[0], np.array2string(self.pose))
+
+
+class Sim:
+    """A simulation of `scene` (a path, a YAML string or a dict), with `overrides` as the CLI's
+    --set gives them ({"links[0].modes": 4}; keyword arguments name a field with "__" for ".":
+    Sim("rest.yaml", run__duration=2.0)), an optional accuracy request (m) for the knob, and
+    `period` (s), the commanded period of step().
+
+    Errors are exceptions carrying the core's message (SceneError for a bad scene: the message
+    names the file, the field and the allowed range). A refused call changes nothing."""
+
+    def __init__(self, scene, overrides=None, accuracy=0.0, period=1e-3, **fields):
+        sets = [_override_text(k, v) for k, v in (overrides or {}).items()]
+        sets += [_override_text(k.replace("__", "."), v) for k, v in fields.items()]
+        path, label, temporary = _scene_file(scene)
+        encoded = [s.encode() for s in sets]
+        array = (ctypes.c_char_p * max(1, len(encoded)))(*encoded)
+        handle = ctypes.c_void_p()
+        try:
+            status = lib.f3r_py_create(path.encode(), float(accuracy), array, len(encoded), 1,
+                                       ctypes.byref(handle))
+        finally:
+            if temporary:
+                os.unlink(path)
+        self._h = handle
+        if status != 0:
+            message = lib.f3r_py_message(handle).decode() if handle else "out of memory"
+            lib.f3r_py_destroy(handle)
+            self._h = None
+            if not message.startswith(path):  # an override's error names the field alone
+                message = "%s: %s" % (path, message)
+            if label:
+                message = message.replace(path, label)
+            kind = _core.STATUS_NAMES.get(status, "error")
+            raise (_core.SceneError if kind == "scene" else Error)(message, kind)
+        self.scene = label or path
+        self.period = float(period)
+        self.nq = lib.f3r_py_nq(handle)
+        self.modes = [lib.f3r_py_modes(handle, i) for i in range(3)]
+        name = ctypes.create_string_buffer(_core.OUTPUT_NAME)
+        self.columns = []
+        for k in range(lib.f3r_py_columns(handle)):
+            lib.f3r_py_column_name(handle, k, name)
+            self.columns.append(name.value.decode())
+        self.column_index = {n: k for k, n in enumerate(self.columns)}
+        self._row = np.zeros(len(self.columns))
+        self._held = np.zeros(self.nq)
+        self._extras = np.zeros(21)
+        lib.f3r_py_row(handle, _ptr(self._row))
+
+    def __del__(self):
+        if getattr(self, "_h", None):
+            lib.f3r_py_destroy(self._h)
+            self._h = None
+
+    # --- commands -----------------------------------------------------------------------------
+    def forces(self, command):
+        """The generalized forces (nq) of a command: 6 values (leg forces on rho_1..3 in N, then
+        cylinder torques on theta_1..3 in N m, ros_control's order), nq values, or a dict with
+        the node's EffortCommand fields (leg_force, cylinder_torque, platform, modal)."""
+        held = np.zeros(self.nq)
+        if isinstance(command, dict):
+            sizes = {"leg_force": 3, "cylinder_torque": 3, "platform": 3,
+                     "modal": self.nq - 9}
+            starts = {"leg_force": 0, "cylinder_torque": 3, "platform": 6, "modal": 9}
+            for key, value in command.items():
+                if key not in sizes:
+                    raise ValueError("command: unknown field %r (leg_force, cylinder_torque, "
+                                     "platform, modal); nothing changed" % key)
+                value = np.asarray(value, dtype=float).ravel()
+                if value.size != sizes[key]:
+                    raise ValueError("command: %s has %d values, expected %d; nothing changed"
+                                     % (key, value.size, sizes[key]))
+                held[starts[key]:starts[key] + value.size] = value
+        else:
+            value = np.asarray(command, dtype=float).ravel()
+            if value.size == 6:
+                held[:6] = value
+            elif value.size == self.nq:
+                held[:] = value
+            else:
+                raise ValueError("command: %d values, expected 6 (leg forces, cylinder torques) "
+                                 "or %d (every generalized force); nothing changed"
+                                 % (value.size, self.nq))
+        bad = np.flatnonzero(~np.isfinite(held))
+        if bad.size:
+            raise ValueError("command: force[%d] is %g, not finite; nothing changed"
+                             % (bad[0], held[bad[0]]))
+        return held
+
+    def step(self, command=None, periods=1):
+        """Holds `command` (see forces(); None: zero) for `periods` periods of `period` s, as
+        the node's ~step_with_command, and returns the State at the end. Its vector is the
+        simulation's own buffer, overwritten by the next step: copy it to keep it."""
+        held = self._held if command is None else self.forces(command)
+        if command is None:
+            held[:] = 0.0
+        status = lib.f3r_py_step(self._h, _ptr(held), int(periods), self.period, _ptr(self._row))
+        _core.check(status, self._h)
+        return State(self._row, self)
+
+    def step_forces(self, held, periods=1):
+        """step() with the generalized forces (a float64 array of nq values) as they are: the
+        fast path of a controller loop, no checks beyond the core's (a NaN is refused there)."""
+        status = lib.f3r_py_step(self._h, _ptr(held), periods, self.period, _ptr(self._row))
+        _core.check(status, self._h)
+        return self._row
+
+    # --- state --------------------------------------------------------------------------------
+    @property
+    def t(self):
+        return lib.f3r_py_time(self._h)
+
+    @property
+    def state(self):
+        """The present State (a copy)."""
+        row = np.empty_like(self._row)
+        lib.f3r_py_row(self._h, _ptr(row))
+        return State(row, self)
+
+    @property
+    def extras(self):
+        """What the columns leave out: actuator (6) and passive (6) efforts, stop_locked (3),
+        stop_force (3), energy_balance_error, actuation_condition, impacts."""
+        lib.f3r_py_extras(self._h, _ptr(self._extras))
+        e = self._extras
+        return {"actuator": e[0:6].copy(), "passive": e[6:12].copy(),
+                "stop_locked": e[12:15].astype(int), "stop_force": e[15:18].copy(),
+                "energy_balance_error": float(e[18]), "actuation_condition": float(e[19]),
+                "impacts": int(e[20])}
+
+    def set_state(self, pose, twist=(0.0, 0.0, 0.0), modal=None, modal_rate=None):
+        """The platform pose (x, y, phi) and twist in the base frame and, optionally, the modal
+        coordinates and rates; the legs follow through the loop closure. Time and held commands
+        stay. An unreachable pose or a bad value raises, and nothing changes."""
+        n_modal = self.nq - 9
+        arrays = []
+        for name, value, size in (("pose", pose, 3), ("twist", twist, 3),
+                                  ("modal", modal, n_modal), ("modal_rate", modal_rate, n_modal)):
+            if value is None:
+                arrays.append(None)
+                continue
+            a = np.ascontiguousarray(value, dtype=float).ravel()
+            if a.size != size:
+                raise ValueError("%s: %d values, expected %d; nothing changed"
+                                 % (name, a.size, size))
+            arrays.append(a)
+        pointers = [None if a is None else _ptr(a) for a in arrays]
+        _core.check(lib.f3r_py_set_state(self._h, *pointers), self._h)
+        lib.f3r_py_row(self._h, _ptr(self._row))
+
+    def reset(self):
+        """Back to the scene's initial state at t = 0, commands zero."""
+        _core.check(lib.f3r_py_reset(self._h), self._h)
+        lib.f3r_py_row(self._h, _ptr(self._row))
+
+    # --- whole runs and analyses --------------------------------------------------------------
+    def run(self, duration=None):
+        """The scene from t = 0 as flex3rpr_sim runs it (its scripted inputs, outputs every
+        run.output_step), in its own simulation: a dict of numpy arrays, one per CSV column,
+        the same values as the CLI's CSV. This Sim's own state is untouched."""
+        duration = lib.f3r_py_duration(self._h) if duration is None else float(duration)
+        count = int(round(duration / lib.f3r_py_output_step(self._h)))
+        rows = np.zeros((count + 1, len(self.columns)))
+        written = ctypes.c_long(0)
+        status = lib.f3r_py_run(self._h, duration, _ptr(rows), ctypes.byref(written))
+        _core.check(status, self._h)
+        return {name: rows[:written.value, k] for k, name in enumerate(self.columns)}
+
+    def linearise(self):
+        """The linearisation about the scene's initial pose, x' = A x + B u, y - y0 = C x + D u
+        (flex3rpr/linear.h): a dict with A, B, C, D, x0, y0 and state_names, input_names,
+        output_names."""
+        ss = ctypes.c_void_p()
+        _core.check(lib.f3r_py_linearise(self._h, ctypes.byref(ss)), self._h)
+        try:
+            s = ctypes.cast(ss, ctypes.POINTER(_core.StateSpace)).contents
+
+            def matrix(pointer, rows, cols):  # column-major in C
+                return np.ctypeslib.as_array(pointer, shape=(cols * rows,)).reshape(
+                    (cols, rows)).T.copy()
+            out = {"A": matrix(s.A, s.nx, s.nx), "B": matrix(s.B, s.nx, s.nu),
+                   "C": matrix(s.C, s.ny, s.nx), "D": matrix(s.D, s.ny, s.nu),
+                   "x0": np.ctypeslib.as_array(s.x0, shape=(s.nx,)).copy(),
+                   "y0": np.array(s.y0[:]),
+                   "state_names": [s.state_names[k].value.decode() for k in range(s.nx)],
+                   "input_names": [s.input_names[k].value.decode() for k in range(s.nu)],
+                   "output_names": [s.output_names[k].value.decode() for k in range(s.ny)]}
+        finally:
+            lib.f3r_py_linear_destroy(ss)
+        return out
+
+    def modal(self):
+        """The natural frequencies (Hz) of the linearised model, ascending."""
+        hz = np.zeros(2 * self.nq + 8)
+        count = ctypes.c_int(0)
+        _core.check(lib.f3r_py_modal(self._h, _ptr(hz), ctypes.byref(count)), self._h)
+        return hz[:count.value].copy()
+
+    @property
+    def accuracy(self):
+        """The accuracy knob's choice and estimate, as a dict (request 0: none was made)."""
+        return json.loads(lib.f3r_py_choice(self._h).decode())
