@@ -24,6 +24,7 @@
 #include "flex3rpr/sim.h"
 #include "cli_options.h"
 #include "csv_number.h"
+#include "sensor_columns.h"
 #include "model_reports.h"
 #include "run_report.h"
 
@@ -37,7 +38,7 @@ static FILE* human;
  * the closest measured): 1 is a failure, 2 a usage error. */
 #define F3R_EXIT_ACCURACY_NOT_MET 3
 
-static void write_header(FILE* f, const f3r_model* m) {
+static void write_header(FILE* f, const f3r_model* m, const f3r_sensors* sensors) {
   static const char* rigid[9] = {"rho_1",   "rho_2", "rho_3", "theta_1", "theta_2",
                                  "theta_3", "x_p",   "y_p",   "phi_p"};
   fprintf(f, "t");
@@ -50,7 +51,9 @@ static void write_header(FILE* f, const f3r_model* m) {
     for (int i = 0; i < 3; ++i) fprintf(f, ",w_tip_%d%s", i + 1, suffix);
   }
   fprintf(f, ",lambda_1x,lambda_1y,lambda_2x,lambda_2y,lambda_3x,lambda_3y");
-  fprintf(f, ",kinetic_energy,potential_energy,external_work,constraint_residual\n");
+  fprintf(f, ",kinetic_energy,potential_energy,external_work,constraint_residual");
+  f3r_cli_sensor_header(f, sensors);
+  fprintf(f, "\n");
 }
 
 /* ",x" at end with x as "%.*g" writes it (csv_number.h: the same text, 6 times faster); returns
@@ -62,8 +65,9 @@ static char* put_number(char* end, double x, int precision) {
 
 /* One row, formed in a buffer and written at once (a call to stdio a number took a fifth of the
  * writing). */
-static void write_row(FILE* f, const f3r_model* m, const f3r_outputs* o) {
-  char row[(2 * (F3R_MAX_Q + 3) + F3R_NCON + 5) * (F3R_FORMAT_G_SIZE + 1)];
+static void write_row(FILE* f, const f3r_model* m, const f3r_outputs* o,
+                      const f3r_sensors* sensors) {
+  char row[(2 * (F3R_MAX_Q + 3) + F3R_NCON + 5) * (F3R_FORMAT_G_SIZE + 1) + F3R_SENSOR_ROW_SIZE];
   char* end = row + f3r_format_g(row, o->t, 10);
   for (int pass = 0; pass < 2; ++pass) {
     const double* x = pass ? o->v : o->q;
@@ -76,6 +80,7 @@ static void write_row(FILE* f, const f3r_model* m, const f3r_outputs* o) {
   end = put_number(end, o->potential_energy, 15);
   end = put_number(end, o->external_work, 15);
   end = put_number(end, o->constraint_residual, 3);
+  end = f3r_cli_sensor_row(end, sensors);
   *end++ = '\n';
   fwrite(row, 1, (size_t)(end - row), f);
 }
@@ -258,7 +263,7 @@ static f3r_status apply_holds(const cli_options* o, double output_step, f3r_sim*
  * NULL) and the end-effector's (x, y) at every output to path (when not NULL; t = 0 first);
  * returns 1 when the simulation failed (reported), 0 otherwise. */
 static int run_outputs(const cli_options* o, const f3r_scene* scene, const f3r_model* model,
-                       f3r_sim* sim, FILE* csv, double* path, run_stats* r) {
+                       f3r_sim* sim, FILE* csv, double* path, run_stats* r, f3r_sensors* sensors) {
   static double shapes[3][101][F3R_MAX_MODES]; /* mode shapes at the stations */
   eval_mode_shapes(model, scene->beam_points, shapes);
   const long steps = output_count(scene);
@@ -283,7 +288,12 @@ static int run_outputs(const cli_options* o, const f3r_scene* scene, const f3r_m
     const f3r_outputs* out = f3r_sim_outputs(sim);
     r->wall_outputs += monotonic_seconds() - advanced;
     r->wall_integrating += advanced - before;
-    if (csv) write_row(csv, model, out);
+    if (st == F3R_OK && sensors && f3r_sensors_update(sensors, out, &err) != F3R_OK) {
+      cli_fail(f3r_status_name(err.code), "%s", err.message);
+      rc = 1;
+      break;
+    }
+    if (csv) write_row(csv, model, out, sensors);
     if (st != F3R_OK) {
       cli_fail(f3r_status_name(st), "%s", err.message);
       rc = 1;
@@ -413,12 +423,19 @@ static int run_config(const cli_options* o, int with_csv, config_run* c) {
     cli_fail(f3r_status_name(err.code), "%s", err.message);
     return 1;
   }
+  f3r_sensors* sensors = NULL;
+  if (with_csv && f3r_cli_sensors_start(c->model, sim, &sensors, &err) != F3R_OK) {
+    cli_fail(f3r_status_name(err.code), "%s", err.message);
+    f3r_sim_destroy(sim);
+    return 1;
+  }
   FILE* csv = with_csv ? open_memstream(&c->rows, &c->rows_size) : NULL;
   if (csv) {
-    write_header(csv, c->model);
-    write_row(csv, c->model, f3r_sim_outputs(sim));
+    write_header(csv, c->model, sensors);
+    write_row(csv, c->model, f3r_sim_outputs(sim), sensors);
   }
-  c->rc = run_outputs(o, &c->scene, c->model, sim, csv, c->path, &c->stats);
+  c->rc = run_outputs(o, &c->scene, c->model, sim, csv, c->path, &c->stats, sensors);
+  f3r_sensors_destroy(sensors);
   if (csv) fclose(csv);
   c->last = *f3r_sim_outputs(sim);
   f3r_sim_destroy(sim);
@@ -617,11 +634,22 @@ static int simulate(const cli_options* o, f3r_scene* scene, f3r_model** model,
      * it costs a page-cache round trip of its own; without the memory the default stays */
     if ((csv_buffer = malloc(CSV_BUFFER_BYTES)) != NULL)
       setvbuf(csv, csv_buffer, _IOFBF, CSV_BUFFER_BYTES);
-    write_header(csv, *model);
-    write_row(csv, *model, f3r_sim_outputs(sim));
+  }
+  f3r_sensors* sensors = NULL;
+  if (csv && f3r_cli_sensors_start(*model, sim, &sensors, &err) != F3R_OK) {
+    cli_fail(f3r_status_name(err.code), "%s", err.message);
+    fclose(csv);
+    free(csv_buffer);
+    f3r_sim_destroy(sim);
+    return 1;
+  }
+  if (csv) {
+    write_header(csv, *model, sensors);
+    write_row(csv, *model, f3r_sim_outputs(sim), sensors);
   }
   run_stats stats = {0};
-  const int rc = run_outputs(o, scene, *model, sim, csv, NULL, &stats);
+  const int rc = run_outputs(o, scene, *model, sim, csv, NULL, &stats, sensors);
+  f3r_sensors_destroy(sensors);
   if (csv) fclose(csv);
   free(csv_buffer);
   print_summary(o, scene, *model, f3r_sim_outputs(sim), &stats);
