@@ -81,6 +81,13 @@ bool ReadSensor(const ros::NodeHandle& pnh, int k, f3r_sensor_scene* s, std::str
 }  // namespace
 
 bool LoadSensorParams(const ros::NodeHandle& pnh, f3r_sensors_scene* sensors, std::string* error) {
+  // rosrun's _sensors:="{...}" arrives as a string: roscpp parses no YAML mappings
+  XmlRpc::XmlRpcValue all;
+  if (pnh.getParam("sensors", all) && all.getType() != XmlRpc::XmlRpcValue::TypeStruct) {
+    *error =
+        "parameter ~sensors: not a mapping (set it with rosparam or a launch file's <rosparam>)";
+    return false;
+  }
   for (int k = 0; k < F3R_SENSOR_KINDS; ++k)
     if (!ReadSensor(pnh, k, SensorOf(sensors, k), error)) return false;
   f3r_error err{};
