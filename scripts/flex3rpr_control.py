@@ -200,6 +200,68 @@ def lqr_design(plant, dt, pose_scale=(0.01, 0.01, 0.03), rate_scale=(0.3, 0.3, 1
     return K, Ad, Bd
 
 
+def clamped_roots(end, count):
+    """alpha_j, j = 1..count, of a fixed-free (cos a cosh a + 1 = 0) or fixed-pinned
+    (tan a = tanh a) beam, bracketed near (j - 1/2) pi and (j + 1/4) pi."""
+    from scipy.optimize import brentq
+    if end == "fixed_free":
+        f, centre = (lambda a: math.cos(a) * math.cosh(a) + 1.0), (lambda j: (j - 0.5) * math.pi)
+    else:
+        f, centre = (lambda a: math.tan(a) - math.tanh(a)), (lambda j: (j + 0.25) * math.pi)
+    return [brentq(f, centre(j) - 0.4, centre(j) + 0.4, xtol=1e-15) for j in range(1, count + 1)]
+
+
+def gauge_rows(plant, scene):
+    """The root strain gauges' rows over the plant's state (docs/scenes.md, sensors):
+    eps_i = (d/2) w_i''(0) = (d/2) / l^2 sum_j psi_j''(0) eta_ij, with psi_j''(0) = -2 alpha_j^2
+    for the paper's modes. The plant's modal states must all be modes (no static correction:
+    their curvatures are not closed-form; the core has them, f3r_sensors_strain_row)."""
+    import yaml
+    with open(scene) as fh:
+        s = yaml.safe_load(fh) or {}
+    link = s.get("link") or {}
+    d, l = float(link.get("diameter", 0.010)), float(link.get("length", 0.2))
+    links = s.get("links") or {}
+    links = links if isinstance(links, list) else [links] * 3
+    rows = np.zeros((3, plant["A"].shape[0]))
+    for k, name in enumerate(plant["state_names"]):
+        if name.startswith("eta_") and not name.endswith("_rate"):
+            i, j = (int(v) for v in name[4:].split("_"))
+            spec = links[i - 1] or {}
+            if spec.get("static_correction"):
+                raise ValueError("gauge_rows: link %d has static shapes; the observer needs plain modes" % i)
+            alpha = clamped_roots(spec.get("model", "fixed_free"), j)[-1]
+            rows[i - 1, k] = 0.5 * d / l ** 2 * (-2.0 * alpha ** 2)
+    return rows
+
+
+def kalman_predictor(Ad, Bd, groups, process, noise):
+    """A steady-state Kalman filter for measurements y_g,k = C_g x_{k - d_g} + v (groups: a list
+    of (C_g, d_g), d_g the sensor's delay in periods): the state is augmented with the delay's
+    past states, xi = (x_k, x_{k-1}, ..., x_{k-max d}). process: the covariance of the plant's
+    disturbance per period (nx x nx); noise: the measurements' (ny x ny), in the groups' order.
+    Returns (Aa, Ba, Ca, L): predict xi- = Aa xi + Ba u, correct xi = xi- + L (y - Ca xi-)."""
+    import scipy.linalg
+    nx, nu = Bd.shape
+    delay = max(d for _, d in groups)
+    n = nx * (delay + 1)
+    ny = sum(C.shape[0] for C, _ in groups)
+    Aa, Ba, Ca = np.zeros((n, n)), np.zeros((n, nu)), np.zeros((ny, n))
+    Aa[:nx, :nx], Ba[:nx] = Ad, Bd
+    for k in range(delay):
+        Aa[(k + 1) * nx:(k + 2) * nx, k * nx:(k + 1) * nx] = np.eye(nx)
+    row = 0
+    for C, d in groups:
+        Ca[row:row + C.shape[0], d * nx:(d + 1) * nx] = C
+        row += C.shape[0]
+    Qa = np.zeros((n, n))
+    Qa[:nx, :nx] = process
+    Qa += 1e-30 * np.eye(n)  # the copies carry no noise of their own; keep the Riccati regular
+    P = scipy.linalg.solve_discrete_are(Aa.T, Ca.T, Qa, noise)
+    L = P @ Ca.T @ np.linalg.inv(Ca @ P @ Ca.T + noise)
+    return Aa, Ba, Ca, L
+
+
 def feedforward(plant, x_target):
     """u_ff holding the target state: the least-squares solution of A x + B u = 0 (zero where the
     target is an equilibrium without force, as a pose of the unloaded rest scene is)."""
@@ -219,7 +281,7 @@ def input_order(plant):
 class State:
     """One period's state, from joint_states, ~odom and ~beam_state of one stamp."""
     __slots__ = ("stamp", "rho", "rho_dot", "theta", "theta_dot", "pose", "pose_rate", "modal",
-                 "modal_rate", "tip", "tip_rate")
+                 "modal_rate", "tip", "tip_rate", "sensors")
 
     @staticmethod
     def from_messages(js, odom, beam):
@@ -273,7 +335,8 @@ class LockstepLoop:
     control(state) -> (leg_force[3], cylinder_torque[3]) is called every `decimation`-th state;
     the states between get the held command again."""
 
-    def __init__(self, control, node="flex3rpr_node", decimation=1, log_path="", name="controller"):
+    def __init__(self, control, node="flex3rpr_node", decimation=1, log_path="", name="controller",
+                 sensors=False):
         import rospy
         from nav_msgs.msg import Odometry
         from sensor_msgs.msg import JointState
@@ -300,6 +363,12 @@ class LockstepLoop:
         rospy.Subscriber("joint_states", JointState, self._got, "joint_states", **opts)
         rospy.Subscriber(base + "/odom", Odometry, self._got, "odom", **opts)
         rospy.Subscriber(base + "/beam_state", BeamState, self._got, "beam", **opts)
+        self.topics = 3
+        if sensors:  # the encoders and strain gauges of the node's scene, one reading a period
+            from flex3rpr.msg import SensorReading
+            rospy.Subscriber(base + "/sensors/encoders", JointState, self._got, "encoders", **opts)
+            rospy.Subscriber(base + "/sensors/strain", SensorReading, self._got, "strain", **opts)
+            self.topics = 5
 
     def _got(self, msg, topic):
         t = msg.header.stamp.to_nsec()
@@ -310,7 +379,7 @@ class LockstepLoop:
                 self.last_stamp = None  # the node started over (~reset)
             entry = self.pending.setdefault(t, {})
             entry[topic] = msg
-            if len(entry) == 3:
+            if len(entry) == self.topics:
                 del self.pending[t]
                 # anything older can no longer complete
                 for old in [k for k in self.pending if k < t]:
@@ -338,6 +407,7 @@ class LockstepLoop:
                         self.answered = 0
                     self.last_stamp = t
                 state = State.from_messages(entry["joint_states"], entry["odom"], entry["beam"])
+                state.sensors = entry
                 if self.answered % self.decimation == 0:
                     self.held = self.control(state)
                 self.answered += 1

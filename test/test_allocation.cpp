@@ -5,6 +5,7 @@
 
 #include <atomic>
 
+#include "flex3rpr/sensors.h"
 #include "test_support.h"
 
 extern "C" {
@@ -74,6 +75,38 @@ TEST(Allocation, NoHeapAllocationWhileStepping) {
         << c.scene << " formulation " << c.form << " integrator " << c.integrator;
     EXPECT_GT(steps, 100) << "the counted window must contain real steps";
   }
+}
+
+// The sensors (sensors.h) sample, add noise, quantise and delay without allocating.
+TEST(Allocation, NoHeapAllocationWhileSensing) {
+  f3r_scene s;
+  f3r_error err{};
+  ASSERT_EQ(f3r_scene_load(ScenePath("paper_sim3_fixed_free.yaml").c_str(), &s, &err), F3R_OK);
+  auto m = MakeModel(s);
+  f3r_sensors_scene c{};
+  for (f3r_sensor_scene* k : {&c.encoders, &c.strain_gauges, &c.accelerometer}) {
+    f3r_sensor_scene_defaults(k);
+    k->delay = 3;
+    k->noise[0] = k->noise[1] = 1e-3;
+    k->resolution[0] = 1e-6;
+  }
+  f3r_sim* raw = nullptr;
+  ASSERT_EQ(f3r_sim_create(m.get(), nullptr, &raw, &err), F3R_OK) << err.message;
+  SimPtr sim(raw);
+  f3r_sensors* sensors = nullptr;
+  ASSERT_EQ(f3r_sensors_create(m.get(), &c, &sensors, &err), F3R_OK) << err.message;
+  allocations = 0;
+  counting = true;
+  long taken = 0;
+  for (int k = 1; k <= 20; ++k) {
+    f3r_sim_advance(sim.get(), k * 1e-3, &err);
+    f3r_sensors_update(sensors, f3r_sim_outputs(sim.get()), &err);
+    taken += f3r_sensors_reading(sensors, F3R_SENSOR_ACCELEROMETER)->fresh;
+  }
+  counting = false;
+  f3r_sensors_destroy(sensors);
+  EXPECT_EQ(allocations, 0);
+  EXPECT_EQ(taken, 20);
 }
 
 TEST(Allocation, TheCounterSeesAllocations) {

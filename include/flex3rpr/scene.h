@@ -129,6 +129,33 @@ typedef struct {
   double shape_mix;             /* q l / F of that one shape's loads (F3R_SHAPE_MIXED) */
 } f3r_link_scene;
 
+/* A simulated sensor (docs/scenes.md, sensors): off unless enabled. Sample k is taken at the first
+ * update at or after t = k / rate; the reading reports sample k - delay. noise is the standard
+ * deviation of additive Gaussian noise, resolution the quantum the reading is rounded to (0:
+ * none); [0] and [1] are a sensor's two kinds of channel (encoders: stroke m, angle rad;
+ * accelerometer: specific force m/s^2, angular rate rad/s; strain gauges: [0] only). */
+#define F3R_SENSOR_MAX_DELAY 64 /* periods */
+#define F3R_SENSOR_MAX_RATE 1e6 /* Hz */
+typedef struct {
+  int enabled;
+  double rate;          /* Hz, default 1000 */
+  int delay;            /* periods, 0..F3R_SENSOR_MAX_DELAY, default 0 */
+  double noise[2];      /* standard deviations, default 0 */
+  double resolution[2]; /* quanta, default 0 */
+  int seed;             /* 0..2147483647, default 1 */
+} f3r_sensor_scene;
+
+typedef struct {
+  f3r_sensor_scene encoders;      /* rho_i and theta_i of the three legs */
+  f3r_sensor_scene strain_gauges; /* bending strain at each beam's root */
+  f3r_sensor_scene accelerometer; /* the platform's specific force and angular rate */
+} f3r_sensors_scene;
+
+/* A sensor's defaults (rate 1000 Hz, seed 1, no delay, noise or quantisation), enabled. */
+void f3r_sensor_scene_defaults(f3r_sensor_scene* sensor);
+/* Range checks of the enabled sensors; messages name "sensors.encoders.rate" and the range. */
+f3r_status f3r_sensors_scene_validate(const f3r_sensors_scene* sensors, f3r_error* err);
+
 typedef struct {
   /* geometry and materials (Table I) */
   double base_side;               /* |A_i A_j| (m), 0.66 */
@@ -187,6 +214,8 @@ typedef struct {
   double duration;    /* s, default 0.5 */
   double output_step; /* s, default 1e-4 */
   int beam_points;    /* stations per link for beam outputs, default 11 */
+
+  f3r_sensors_scene sensors; /* all off by default */
 } f3r_scene;
 
 /* Table I, rigid links, home pose (P = O, phi_p = 0), no inputs, minimal on IDA at rtol 2e-7. */

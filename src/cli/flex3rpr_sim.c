@@ -24,6 +24,7 @@
 #include "flex3rpr/sim.h"
 #include "cli_options.h"
 #include "csv_number.h"
+#include "sensor_columns.h"
 #include "model_reports.h"
 #include "flex3rpr/output_columns.h"
 #include "run_report.h"
@@ -56,20 +57,22 @@ static const column_digits* digits_of(const f3r_model* m) {
   return &cached;
 }
 
-static void write_header(FILE* f, const f3r_model* m) {
+static void write_header(FILE* f, const f3r_model* m, const f3r_sensors* sensors) {
   char name[F3R_OUTPUT_NAME];
   const int count = f3r_output_columns(m);
   for (int k = 0; k < count; ++k) {
     f3r_output_column_name(m, k, name);
     fprintf(f, "%s%s", k ? "," : "", name);
   }
+  f3r_cli_sensor_header(f, sensors);
   fprintf(f, "\n");
 }
 
 /* One row, formed in a buffer and written at once (a call to stdio a number took a fifth of the
  * writing); ",x" with x as "%.*g" (csv_number.h: the same text, 6 times faster). */
-static void write_row(FILE* f, const f3r_model* m, const f3r_outputs* o) {
-  char row[F3R_OUTPUT_MAX_COLUMNS * (F3R_FORMAT_G_SIZE + 1)];
+static void write_row(FILE* f, const f3r_model* m, const f3r_outputs* o,
+                      const f3r_sensors* sensors) {
+  char row[F3R_OUTPUT_MAX_COLUMNS * (F3R_FORMAT_G_SIZE + 1) + F3R_SENSOR_ROW_SIZE];
   double values[F3R_OUTPUT_MAX_COLUMNS];
   const column_digits* digits = digits_of(m);
   f3r_output_row(m, o, values);
@@ -78,6 +81,7 @@ static void write_row(FILE* f, const f3r_model* m, const f3r_outputs* o) {
     if (k) *end++ = ',';
     end += f3r_format_g(end, values[k], digits->digits[k]);
   }
+  end = f3r_cli_sensor_row(end, sensors);
   *end++ = '\n';
   fwrite(row, 1, (size_t)(end - row), f);
 }
@@ -266,7 +270,7 @@ static f3r_status apply_holds(const cli_options* o, double output_step, f3r_sim*
  * NULL) and the end-effector's (x, y) at every output to path (when not NULL; t = 0 first);
  * returns 1 when the simulation failed (reported), 0 otherwise. */
 static int run_outputs(const cli_options* o, const f3r_scene* scene, const f3r_model* model,
-                       f3r_sim* sim, FILE* csv, double* path, run_stats* r) {
+                       f3r_sim* sim, FILE* csv, double* path, run_stats* r, f3r_sensors* sensors) {
   static double shapes[3][101][F3R_MAX_MODES]; /* mode shapes at the stations */
   eval_mode_shapes(model, scene->beam_points, shapes);
   const long steps = output_count(scene);
@@ -291,7 +295,12 @@ static int run_outputs(const cli_options* o, const f3r_scene* scene, const f3r_m
     const f3r_outputs* out = f3r_sim_outputs(sim);
     r->wall_outputs += monotonic_seconds() - advanced;
     r->wall_integrating += advanced - before;
-    if (csv) write_row(csv, model, out);
+    if (st == F3R_OK && sensors && f3r_sensors_update(sensors, out, &err) != F3R_OK) {
+      cli_fail(f3r_status_name(err.code), "%s", err.message);
+      rc = 1;
+      break;
+    }
+    if (csv) write_row(csv, model, out, sensors);
     if (st != F3R_OK) {
       cli_fail(f3r_status_name(st), "%s", err.message);
       rc = 1;
@@ -427,12 +436,19 @@ static int run_config(const cli_options* o, int with_csv, config_run* c) {
     cli_fail(f3r_status_name(err.code), "%s", err.message);
     return 1;
   }
+  f3r_sensors* sensors = NULL;
+  if (with_csv && f3r_cli_sensors_start(c->model, sim, &sensors, &err) != F3R_OK) {
+    cli_fail(f3r_status_name(err.code), "%s", err.message);
+    f3r_sim_destroy(sim);
+    return 1;
+  }
   FILE* csv = with_csv ? open_memstream(&c->rows, &c->rows_size) : NULL;
   if (csv) {
-    write_header(csv, c->model);
-    write_row(csv, c->model, f3r_sim_outputs(sim));
+    write_header(csv, c->model, sensors);
+    write_row(csv, c->model, f3r_sim_outputs(sim), sensors);
   }
-  c->rc = run_outputs(o, &c->scene, c->model, sim, csv, c->path, &c->stats);
+  c->rc = run_outputs(o, &c->scene, c->model, sim, csv, c->path, &c->stats, sensors);
+  f3r_sensors_destroy(sensors);
   if (csv) fclose(csv);
   c->last = *f3r_sim_outputs(sim);
   f3r_sim_destroy(sim);
@@ -631,11 +647,22 @@ static int simulate(const cli_options* o, f3r_scene* scene, f3r_model** model,
      * it costs a page-cache round trip of its own; without the memory the default stays */
     if ((csv_buffer = malloc(CSV_BUFFER_BYTES)) != NULL)
       setvbuf(csv, csv_buffer, _IOFBF, CSV_BUFFER_BYTES);
-    write_header(csv, *model);
-    write_row(csv, *model, f3r_sim_outputs(sim));
+  }
+  f3r_sensors* sensors = NULL;
+  if (csv && f3r_cli_sensors_start(*model, sim, &sensors, &err) != F3R_OK) {
+    cli_fail(f3r_status_name(err.code), "%s", err.message);
+    fclose(csv);
+    free(csv_buffer);
+    f3r_sim_destroy(sim);
+    return 1;
+  }
+  if (csv) {
+    write_header(csv, *model, sensors);
+    write_row(csv, *model, f3r_sim_outputs(sim), sensors);
   }
   run_stats stats = {0};
-  const int rc = run_outputs(o, scene, *model, sim, csv, NULL, &stats);
+  const int rc = run_outputs(o, scene, *model, sim, csv, NULL, &stats, sensors);
+  f3r_sensors_destroy(sensors);
   if (csv) fclose(csv);
   free(csv_buffer);
   print_summary(o, scene, *model, f3r_sim_outputs(sim), &stats);

@@ -5,7 +5,7 @@ set(layers base scene physics solve accuracy)
 set(public_base status.h coords.h)
 set(public_scene scene.h)
 set(public_physics beam_modes.h model.h)
-set(public_solve sim.h output_columns.h)
+set(public_solve sim.h output_columns.h sensors.h)
 set(public_accuracy accuracy.h linear.h modal.h)
 
 # rank_<header name> for every public and private header

@@ -66,6 +66,7 @@ bool SimNode::Init() {
   sim_.reset(sim);
   inputs_.reset(new CommandInputs(pnh_, *model_, params_, &phi_p_));
   outputs_.reset(new StateOutputs(nh_, pnh_, *model_, params_));
+  if (!StartSensors()) return false;
   services_.reset(new Services(pnh_, &control_, Handlers()));
   ROS_INFO(
       "flex3rpr_node: scene %s, nq %d, %s, rtol %g, publishing at %g Hz of simulated time, "
@@ -139,6 +140,9 @@ static ros::WallDuration SpinFor(double seconds) {
 // integration error is often the last output) goes out without /tf, which would otherwise repeat
 // a stamp (TF_REPEATED_DATA).
 void SimNode::PublishAt(const f3r_outputs& out) {
+  std::string error;
+  if (!sensors_->Update(out, &error))
+    ROS_ERROR_THROTTLE(1.0, "flex3rpr_node: sensors: %s", error.c_str());
   if (out.t > last_published_t_) {
     outputs_->Publish(out, info_);
     last_published_t_ = out.t;
@@ -256,6 +260,7 @@ void SimNode::Restart(RunLoop* loop) {
   outputs_->RestartCount();
   commands_taken_ = false;
   last_published_t_ = -1.0;  // time starts over
+  sensors_->Reset();
   PublishAt(*f3r_sim_outputs(sim_.get()));
 }
 

@@ -8,6 +8,7 @@
 
 #include "command_inputs.hpp"
 #include "pacer.hpp"
+#include "sensor_outputs.hpp"
 #include "params.hpp"
 #include "services.hpp"
 #include "state_outputs.hpp"
@@ -73,6 +74,9 @@ class SimNode {
   void StepWithCommandCall(const StepWithCommand::Request& req, StepWithCommand::Response* res);
   void SetStateCall(const SetState::Request& req, SetState::Response* res);
   void LineariseCall(Linearise::Response* res);
+  // The scene's sensors with the ~sensors parameters (sensor_outputs.cpp); false with a
+  // ROS_ERROR.
+  bool StartSensors();
   // Into ~status and a throttled warning while the achieved factor is short of the request.
   void ReportPace();
   // rho_i outside the scene's stroke: into ~status, and a warning once per excursion.
@@ -84,6 +88,7 @@ class SimNode {
   std::unique_ptr<f3r_sim, SimDeleter> sim_;
   std::unique_ptr<CommandInputs> inputs_;
   std::unique_ptr<StateOutputs> outputs_;
+  std::unique_ptr<SensorOutputs> sensors_;  // the scene's sensors (sensor_outputs.hpp)
   std::unique_ptr<Services> services_;
   RunControl control_;
   RunInfo info_;

@@ -58,6 +58,22 @@ class NodeStartup(unittest.TestCase):
             self.assertNotEqual(code, 0, out[-2000:])
             self.assertIn(message, out)
 
+    def test_bad_sensor_parameters_are_named(self):
+        for value, message in (
+                ("{encoders: {rate: 0}}",
+                 "parameter ~sensors.encoders.rate: 0 is out of range (0, 1e+06] Hz"),
+                ("{strain_gauges: {delay: 2.5}}", "parameter ~sensors/strain_gauges/delay: not an integer"),
+                ("{accelerometer: {gyro_noise: -1.0}}",
+                 "parameter ~sensors.accelerometer.gyro_noise: -1 must be finite and at least 0")):
+            subprocess.run(["rosparam", "set", "/bad_sensors/sensors", value], check=True)
+            code, out = run_node("__name:=bad_sensors")
+            subprocess.run(["rosparam", "delete", "/bad_sensors/sensors"], check=True)
+            self.assertNotEqual(code, 0, out[-2000:])
+            self.assertIn(message, out)
+        code, out = run_node("__name:=bad_sensors_text", "_sensors:={encoders: {}}")
+        self.assertNotEqual(code, 0, out[-2000:])
+        self.assertIn("parameter ~sensors: not a mapping", out)
+
     def test_use_sim_time_of_the_wrong_type_is_named(self):
         rospy.set_param("/use_sim_time", "yes")
         try:

@@ -538,5 +538,6 @@ f3r_status f3r_scene_validate(const f3r_scene* s, f3r_error* err) {
   if (st == F3R_OK) st = validate_effects_and_pose(s, err);
   if (st == F3R_OK) st = validate_inputs(s, err);
   if (st == F3R_OK) st = validate_solver_and_run(s, err);
+  if (st == F3R_OK) st = f3r_sensors_scene_validate(&s->sensors, err);
   return st;
 }

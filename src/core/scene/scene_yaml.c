@@ -429,17 +429,11 @@ static f3r_status read_accuracy(loader* L, const yaml_node_t* map) {
 static const struct {
   const char* name;
   f3r_status (*read)(loader* L, const yaml_node_t* node);
-} sections[] = {{"geometry", read_geometry},
-                {"platform", read_platform},
-                {"link", read_link_material},
-                {"cylinder", read_cylinder},
-                {"links", read_links},
-                {"effects", read_effects},
-                {"initial", read_initial},
-                {"inputs", read_inputs},
-                {"solver", read_solver},
-                {"accuracy", read_accuracy},
-                {"run", read_run}};
+} sections[] = {
+    {"geometry", read_geometry}, {"platform", read_platform}, {"link", read_link_material},
+    {"cylinder", read_cylinder}, {"links", read_links},       {"effects", read_effects},
+    {"initial", read_initial},   {"inputs", read_inputs},     {"solver", read_solver},
+    {"accuracy", read_accuracy}, {"run", read_run},           {"sensors", f3r_yaml_read_sensors}};
 
 static f3r_status read_root(loader* L, const yaml_node_t* root) {
   f3r_status st = f3r_yaml_mapping(L, root, "scene");

@@ -80,4 +80,7 @@ f3r_status f3r_yaml_mapping(loader* L, const yaml_node_t* n, const char* field);
 f3r_status f3r_yaml_numbers(loader* L, const yaml_node_t* map, const char* section,
                             const number_field* fields, int count);
 
+/* The sensors section (scene_sensors.c). */
+f3r_status f3r_yaml_read_sensors(loader* L, const yaml_node_t* map);
+
 #endif
