@@ -73,6 +73,8 @@ _signatures = {
     "f3r_py_linear_destroy": (None, [_p]),
     "f3r_py_modal": (ctypes.c_int, [_p, _d, ctypes.POINTER(ctypes.c_int)]),
     "f3r_py_choice": (ctypes.c_char_p, [_p]),
+    "f3r_py_sensors": (ctypes.c_int, [_p, _d]),
+    "f3r_py_sensor_enabled": (ctypes.c_int, [_p, ctypes.c_int]),
 }
 for _name, (_restype, _argtypes) in _signatures.items():
     _f = getattr(lib, _name)

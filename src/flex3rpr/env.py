@@ -22,8 +22,10 @@ def tracking_vibration_reward(state, target, action, weights=(1e4, 1e6, 1e-6)):
 class Flex3rprEnv:
     """The robot as an environment: an action is the six actuator efforts (leg forces in N,
     cylinder torques in N m) held for one period; the observation is what a controller sees:
-    the joint positions (rho, theta), the platform pose and twist and the tip deflections and
-    their rates (21 values; `observation_names` names them). An episode ends (terminated) when
+    the scene's sensors' readings when it has sensors (encoders, root strain gauges,
+    accelerometer: noisy, quantised, delayed), else the joint positions (rho, theta), the
+    platform pose and twist and the tip deflections and their rates (`observation_names` names
+    them). An episode ends (terminated) when
     the physics stops (a leg collapsed, a singular pose: info["reason"] says which) or the pose
     leaves `limit` (m from the target), and is truncated after `horizon` periods.
 
@@ -49,17 +51,19 @@ class Flex3rprEnv:
                                       "x_p", "y_p", "phi_p", "x_p_dot", "y_p_dot", "phi_p_dot",
                                       "w_tip_1", "w_tip_2", "w_tip_3", "w_tip_1_dot",
                                       "w_tip_2_dot", "w_tip_3_dot")])
-        self.observation_names = [names[i] for i in self._obs_index]
+        self.observation_names = self.sim.sensor_names or [names[i] for i in self._obs_index]
         self.action_names = ["leg_force_1", "leg_force_2", "leg_force_3", "cylinder_torque_1",
                              "cylinder_torque_2", "cylinder_torque_3"]
         try:  # the spaces where Gymnasium is installed
             from gymnasium import spaces
             self.action_space = spaces.Box(-self.action_limit, self.action_limit, (6,))
-            self.observation_space = spaces.Box(-np.inf, np.inf, (len(self._obs_index),))
+            self.observation_space = spaces.Box(-np.inf, np.inf, (len(self.observation_names),))
         except ImportError:
             self.action_space = self.observation_space = None
 
     def _observe(self, state):
+        if self.sim.sensor_names:
+            return self.sim.sensors
         return state.vector[self._obs_index].copy()
 
     def reset(self, seed=None, options=None):

@@ -136,6 +136,12 @@ class Sim:
         self._held = np.zeros(self.nq)
         self._extras = np.zeros(21)
         lib.f3r_py_row(handle, _ptr(self._row))
+        sensor_names = (["enc_rho_1", "enc_rho_2", "enc_rho_3", "enc_theta_1", "enc_theta_2",
+                         "enc_theta_3"], ["strain_1", "strain_2", "strain_3"],
+                        ["accel_x", "accel_y", "gyro_z"])  # the CLI's sensor columns
+        self.sensor_names = [n for k, names in enumerate(sensor_names)
+                             if lib.f3r_py_sensor_enabled(handle, k) for n in names]
+        self._sensors = np.zeros(15)
 
     def __del__(self):
         if getattr(self, "_h", None):
@@ -206,6 +212,14 @@ class Sim:
         row = np.empty_like(self._row)
         lib.f3r_py_row(self._h, _ptr(row))
         return State(row, self)
+
+    @property
+    def sensors(self):
+        """The scene's sensors' readings now (sensor_names names them; empty without sensors):
+        sampled at their rate, delayed, quantised and noisy as the scene says (docs/scenes.md),
+        exactly as the node's ~sensors topics and the CLI's columns."""
+        n = lib.f3r_py_sensors(self._h, _ptr(self._sensors))
+        return self._sensors[:n].copy()
 
     @property
     def extras(self):

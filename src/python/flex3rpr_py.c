@@ -13,6 +13,7 @@
 #include "flex3rpr/linear.h"
 #include "flex3rpr/modal.h"
 #include "flex3rpr/output_columns.h"
+#include "flex3rpr/sensors.h"
 #include "flex3rpr/sim.h"
 
 #define F3R_PY_EXPORT __attribute__((visibility("default")))
@@ -22,6 +23,7 @@ typedef struct {
   f3r_model* model;
   f3r_sim* sim;
   f3r_accuracy_choice choice;
+  f3r_sensors* sensors; /* the scene's sensors, sampled at every period's end; NULL: none */
   long periods; /* periods stepped since the start or the last reset, as the node counts them:
                  * period k ends at exactly k * period */
   char message[2048];
@@ -46,6 +48,7 @@ F3R_PY_EXPORT const char* f3r_py_message(const f3r_py* p) { return p->message; }
 
 F3R_PY_EXPORT void f3r_py_destroy(f3r_py* p) {
   if (!p) return;
+  f3r_sensors_destroy(p->sensors);
   f3r_sim_destroy(p->sim);
   f3r_model_destroy(p->model);
   f3r_scene_free(&p->scene);
@@ -67,7 +70,28 @@ F3R_PY_EXPORT f3r_status f3r_py_create(const char* path, double accuracy, const 
   if ((st = f3r_accuracy_resolve(&p->scene, commanded, &p->choice, &err)) != F3R_OK ||
       (st = f3r_model_create(&p->scene, &p->model, &err)) != F3R_OK)
     return fail(p, &err, st);
-  return make_sim(p, 1, &p->sim);
+  if ((st = make_sim(p, 1, &p->sim)) != F3R_OK) return st;
+  if (!f3r_sensors_any(&p->scene.sensors)) return F3R_OK;
+  if ((st = f3r_sensors_create(p->model, &p->scene.sensors, &p->sensors, &err)) != F3R_OK ||
+      (st = f3r_sensors_update(p->sensors, f3r_sim_outputs(p->sim), &err)) != F3R_OK)
+    return fail(p, &err, st);
+  return F3R_OK;
+}
+
+/* The enabled sensors' readings (encoders, gauges, accelerometer, as the CLI's columns) into
+ * values; returns their count (0 without sensors). */
+F3R_PY_EXPORT int f3r_py_sensors(const f3r_py* p, double* values) {
+  int n = 0;
+  for (int k = 0; p->sensors && k < F3R_SENSOR_KINDS; ++k) {
+    const f3r_sensor_reading* r = f3r_sensors_reading(p->sensors, k);
+    for (int c = 0; r->enabled && c < r->channels; ++c) values[n++] = r->value[c];
+  }
+  return n;
+}
+
+/* 1 when sensor kind (F3R_SENSOR_*) is enabled. */
+F3R_PY_EXPORT int f3r_py_sensor_enabled(const f3r_py* p, int kind) {
+  return p->sensors && f3r_sensors_reading(p->sensors, kind)->enabled;
 }
 
 F3R_PY_EXPORT int f3r_py_nq(const f3r_py* p) { return f3r_model_nq(p->model); }
@@ -117,6 +141,8 @@ F3R_PY_EXPORT f3r_status f3r_py_step(f3r_py* p, const double* held, long periods
     ++p->periods;
     if ((st = f3r_sim_advance(p->sim, (double)p->periods * period, &err)) != F3R_OK)
       p->periods = (long)floor(f3r_sim_time(p->sim) / period + 1e-9);
+    else if (p->sensors)
+      st = f3r_sensors_update(p->sensors, f3r_sim_outputs(p->sim), &err);
   }
   if (row) f3r_py_row(p, row);
   return st == F3R_OK ? st : fail(p, &err, st);
@@ -124,8 +150,12 @@ F3R_PY_EXPORT f3r_status f3r_py_step(f3r_py* p, const double* held, long periods
 
 F3R_PY_EXPORT f3r_status f3r_py_reset(f3r_py* p) {
   f3r_error err = {0};
-  const f3r_status st = f3r_sim_reset(p->sim, &err);
+  f3r_status st = f3r_sim_reset(p->sim, &err);
   p->periods = 0;
+  if (st == F3R_OK && p->sensors) {
+    f3r_sensors_reset(p->sensors);
+    st = f3r_sensors_update(p->sensors, f3r_sim_outputs(p->sim), &err);
+  }
   return st == F3R_OK ? st : fail(p, &err, st);
 }
 
@@ -194,10 +224,9 @@ F3R_PY_EXPORT const char* f3r_py_choice(f3r_py* p) {
            "\"kinematics_error\": %.17g, \"solver_error\": %.17g, \"estimated_error\": %.17g, "
            "\"request_met\": %s, \"error_basis\": \"estimated\", \"summary\": \"%s\"}",
            c->request, c->modes[0], c->modes[1], c->modes[2], c->static_correction[0],
-           c->static_correction[1], c->static_correction[2],
-           c->exact_kinematics ? "true" : "false", f3r_formulation_name(p->scene.formulation),
-           f3r_integrator_name(p->scene.integrator), p->scene.table, p->scene.rtol,
-           p->scene.atol, c->model_error, c->kinematics_error, c->solver_error,
-           c->estimated_error, c->request_met ? "true" : "false", text);
+           c->static_correction[1], c->static_correction[2], c->exact_kinematics ? "true" : "false",
+           f3r_formulation_name(p->scene.formulation), f3r_integrator_name(p->scene.integrator),
+           p->scene.table, p->scene.rtol, p->scene.atol, c->model_error, c->kinematics_error,
+           c->solver_error, c->estimated_error, c->request_met ? "true" : "false", text);
   return p->message;
 }

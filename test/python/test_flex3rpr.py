@@ -234,3 +234,25 @@ def test_the_examples_run(example, tmp_path):
     subprocess.run([sys.executable, os.path.join(ROOT, "examples", "python", example), "--quick",
                     "--out", str(tmp_path)], check=True)
     assert any(name.endswith(".png") for name in os.listdir(str(tmp_path)))
+
+
+def test_the_scenes_sensors_are_read_as_the_cli_writes_them(tmp_path):
+    scene = os.path.join(ROOT, "test", "scenes", "sensors_fixed_free.yaml")
+    a, b = flex3rpr.Sim(scene), flex3rpr.Sim(scene)
+    assert a.sensor_names == ["enc_rho_1", "enc_rho_2", "enc_rho_3", "enc_theta_1",
+                              "enc_theta_2", "enc_theta_3", "strain_1", "strain_2", "strain_3",
+                              "accel_x", "accel_y", "gyro_z"]
+    header, _ = cli_csv(scene, ["run.duration=0.002"], str(tmp_path))
+    assert header[-len(a.sensor_names):] == a.sensor_names
+    readings = []
+    for k in range(30):
+        a.step([20.0, 0, 0, 0, 0, 0])
+        b.step([20.0, 0, 0, 0, 0, 0])
+        assert np.array_equal(a.sensors, b.sensors)  # the noise is the seed's, every run
+        readings.append(a.sensors)
+    readings = np.array(readings)
+    # the encoders are quantised to their 1 um resolution
+    assert np.allclose(readings[:, 0] / 1e-6, np.round(readings[:, 0] / 1e-6), atol=1e-6)
+    env = flex3rpr.Flex3rprEnv(scene=scene, horizon=5)
+    obs, _ = env.reset(seed=1)
+    assert env.observation_names == a.sensor_names and len(obs) == 12

@@ -10,14 +10,14 @@ static int walk(const f3r_model* m, const f3r_outputs* o, double* values, int wa
   static const char* tail[4] = {"kinetic_energy", "potential_energy", "external_work",
                                 "constraint_residual"};
   int k = 0, digits = 15;
-#define COLUMN(value, precision, ...)                                \
-  do {                                                               \
-    if (values) values[k] = (value);                                 \
-    if (name && k == want) {                                         \
-      snprintf(name, F3R_OUTPUT_NAME, __VA_ARGS__);                  \
-      digits = (precision);                                          \
-    }                                                                \
-    ++k;                                                             \
+#define COLUMN(value, precision, ...)               \
+  do {                                              \
+    if (values) values[k] = (value);                \
+    if (name && k == want) {                        \
+      snprintf(name, F3R_OUTPUT_NAME, __VA_ARGS__); \
+      digits = (precision);                         \
+    }                                               \
+    ++k;                                            \
   } while (0)
   COLUMN(o ? o->t : 0.0, 10, "t");
   for (int pass = 0; pass < 2; ++pass) {
