@@ -61,7 +61,7 @@ void StateOutputs::Advertise(ros::NodeHandle& nh, ros::NodeHandle& pnh) {
   tf_pub_ = nh.advertise<tf2_msgs::TFMessage>(
       "/tf", std::max(q, 100u),  // TransformBroadcaster's 100 at least
       [this](const ros::SingleSubscriberPublisher& subscriber) {
-        if (have_transforms_ && paused_) subscriber.publish(tf_);
+        if (have_transforms_ && still_) subscriber.publish(tf_);
       });
   if (params_.publish_clock) clock_pub_ = nh.advertise<rosgraph_msgs::Clock>("/clock", q);
 }
@@ -237,7 +237,7 @@ void StateOutputs::PublishState(const f3r_outputs& out, const ros::Time& stamp) 
 }
 
 void StateOutputs::Publish(const f3r_outputs& out, const RunInfo& info) {
-  paused_ = info.paused;
+  still_ = info.paused;
   const ros::Time stamp = Stamp(out.t);
   state_stamp_ = stamp;
   FillTransforms(out, stamp);
@@ -251,7 +251,7 @@ void StateOutputs::Publish(const f3r_outputs& out, const RunInfo& info) {
 }
 
 void StateOutputs::PublishPaused(const f3r_outputs& out, const RunInfo& info) {
-  paused_ = true;
+  still_ = true;
   const ros::Time stamp = Stamp(out.t);
   if (!params_.sim_stamps) {
     FillTransforms(out, stamp);
