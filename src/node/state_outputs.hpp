@@ -77,9 +77,10 @@ class StateOutputs {
   // The last joint_states message filled (for ~step_with_command's answer).
   const sensor_msgs::JointState& joint_state() const { return joints_; }
   // True when every output topic (joint_states, /tf, ~odom, ~status, ~beam_state, ~beams, and /clock
-  // when it is published) has at least n subscribers connected, and each subscriber the master
-  // lists for it: on /clock, rosout and other nodes on simulated time count too, so a count alone
-  // could pass before a recorder's own /clock connection is up.
+  // when it is published) has at least n subscribers connected, and each live subscriber the
+  // master lists for it: on /clock, rosout and other nodes on simulated time count too, so a
+  // count alone could pass before a recorder's own /clock connection is up. A listed node that
+  // does not answer at its URI (a killed process's stale entry) is not waited for.
   bool SubscribersConnected(int n) const;
 
  private:
