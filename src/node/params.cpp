@@ -1,6 +1,7 @@
 #include "params.hpp"
 
 #include <cstdio>
+#include <cstdlib>
 
 #include <ros/package.h>
 
@@ -145,6 +146,62 @@ std::string Number(double value) {
   return text;
 }
 
+// "x,y,phi" (brackets and spaces allowed) as three finite numbers; false on anything else.
+bool ParsePose(std::string text, std::array<double, 3>* pose) {
+  for (char& c : text)
+    if (c == '[' || c == ']') c = ' ';
+  const char* at = text.c_str();
+  for (int k = 0; k < 3; ++k) {
+    char* end = nullptr;
+    const double v = std::strtod(at, &end);
+    if (end == at || !std::isfinite(v)) return false;
+    (*pose)[static_cast<size_t>(k)] = v;
+    at = end;
+    while (*at == ' ') ++at;
+    if (k < 2 && *at++ != ',') return false;
+  }
+  return *at == '\0';
+}
+
+// ~initial_pose: the platform's pose at t = 0, "x,y,phi" (m, m, rad; a string, as roslaunch's
+// initial_pose:=x,y,phi gives it) or a list of three numbers: the scene's initial.platform_pose,
+// whose range the loader checks. Absent or "": the scene's own.
+bool ReadInitialPose(const ros::NodeHandle& pnh, NodeParams* p, std::vector<SceneOverride>* out,
+                     std::string* error) {
+  p->initial_pose_set = false;
+  if (!pnh.hasParam("initial_pose")) return true;
+  XmlRpc::XmlRpcValue value;
+  pnh.getParam("initial_pose", value);
+  std::string text;
+  if (value.getType() == XmlRpc::XmlRpcValue::TypeString) {
+    text = static_cast<std::string>(value);
+  } else if (value.getType() == XmlRpc::XmlRpcValue::TypeArray) {
+    for (int k = 0; k < value.size(); ++k) {
+      const auto type = value[k].getType();
+      if (type != XmlRpc::XmlRpcValue::TypeDouble && type != XmlRpc::XmlRpcValue::TypeInt) {
+        text = "?";
+        break;
+      }
+      const double v = type == XmlRpc::XmlRpcValue::TypeInt ? static_cast<int>(value[k])
+                                                            : static_cast<double>(value[k]);
+      text += (k ? "," : "") + Number(v);
+    }
+  } else {
+    text = "?";
+  }
+  if (text.find_first_not_of(' ') == std::string::npos) return true;  // "": the scene's
+  if (!ParsePose(text, &p->initial_pose)) {
+    *error = "parameter ~initial_pose: '" + text +
+             "' is not x,y,phi: three finite numbers, the platform's pose at t = 0 (m, m, rad)";
+    return false;
+  }
+  p->initial_pose_set = true;
+  const auto& q = p->initial_pose;
+  out->push_back({"initial_pose", "initial.platform_pose=[" + Number(q[0]) + ", " + Number(q[1]) +
+                                      ", " + Number(q[2]) + "]"});
+  return true;
+}
+
 // The solver parameters and ~end_stops as overrides of single entries of the scene: the loader
 // checks them as it checks the file, and a solver parameter is an explicit setting that the
 // accuracy knob keeps, as it would be in the file.
@@ -210,7 +267,7 @@ bool LoadScene(const ros::NodeHandle& pnh, NodeParams* p, std::string* error) {
     return false;
   }
   std::vector<SceneOverride> overrides;
-  if (!ReadSolverParams(pnh, p, &overrides, error) ||
+  if (!ReadSolverParams(pnh, p, &overrides, error) || !ReadInitialPose(pnh, p, &overrides, error) ||
       !LoadOverridden(p, accuracy, overrides, error))
     return false;
   if (!p->end_stops || p->scene.end_stops) return true;

@@ -64,6 +64,8 @@ struct NodeParams {
   bool lockstep = false;              // ~lockstep: each period waits for its command (sim_node.cpp)
   double lockstep_warn_after = 2.0;   // wall s without the period's command before a warning
   std::array<double, 3> base_pose{};  // ~base_pose: x (m), y (m), yaw (rad) of base in world
+  bool initial_pose_set = false;      // ~initial_pose given: the scene's initial.platform_pose
+  std::array<double, 3> initial_pose{};  // what it says: x (m), y (m), phi (rad)
   CommandLimits limits;
 };
 

@@ -24,6 +24,31 @@ static bool ReadFile(const std::string& path, std::string* text) {
   return true;
 }
 
+// Whom an error building the model or the simulation names: ~initial_pose when it set the pose
+// the error is about (a pose the legs cannot reach, or one beyond the end stops), else the
+// scene.
+std::string SimNode::PoseBlame(const std::string& message) const {
+  const bool about_pose = message.find("initial.platform_pose") != std::string::npos ||
+                          message.find("pose (") != std::string::npos;
+  return params_.initial_pose_set && about_pose ? "parameter ~initial_pose" : params_.scene_path;
+}
+
+// ~initial_pose as ~set_state would check it, on a simulation of its own: a pose the legs
+// reach only through the collapse guard, or beyond the end stops, would stop the first period.
+bool SimNode::CheckInitialPose() {
+  if (!params_.initial_pose_set) return true;
+  f3r_sim* probe = nullptr;
+  f3r_error err{};
+  const double twist[3] = {0.0, 0.0, 0.0};
+  f3r_status st = f3r_sim_create(model_.get(), &params_.settings, &probe, &err);
+  if (st == F3R_OK)
+    st = f3r_sim_set_state(probe, params_.initial_pose.data(), twist, nullptr, nullptr, &err);
+  f3r_sim_destroy(probe);
+  if (st == F3R_OK) return true;
+  ROS_ERROR("flex3rpr_node: parameter ~initial_pose: %s", err.message);
+  return false;
+}
+
 bool SimNode::Init() {
   std::string error;
   if (!LoadParams(pnh_, &params_, &error)) {
@@ -33,7 +58,7 @@ bool SimNode::Init() {
   f3r_model* model = nullptr;
   f3r_error err{};
   if (f3r_model_create(&params_.scene, &model, &err) != F3R_OK) {
-    ROS_ERROR("flex3rpr_node: %s: %s", params_.scene_path.c_str(), err.message);
+    ROS_ERROR("flex3rpr_node: %s: %s", PoseBlame(err.message).c_str(), err.message);
     return false;
   }
   model_.reset(model);
@@ -60,10 +85,11 @@ bool SimNode::Init() {
   }
   f3r_sim* sim = nullptr;
   if (f3r_sim_create(model_.get(), &params_.settings, &sim, &err) != F3R_OK) {
-    ROS_ERROR("flex3rpr_node: %s", err.message);
+    ROS_ERROR("flex3rpr_node: %s: %s", PoseBlame(err.message).c_str(), err.message);
     return false;
   }
   sim_.reset(sim);
+  if (!CheckInitialPose()) return false;
   inputs_.reset(new CommandInputs(pnh_, *model_, params_, &phi_p_));
   outputs_.reset(new StateOutputs(nh_, pnh_, *model_, params_));
   if (!StartSensors()) return false;
@@ -194,7 +220,10 @@ void SimNode::PublishPeriod(const f3r_outputs& out) {
 }
 
 void SimNode::AwaitCommand(double wall_now) {
-  if (waiting_since_ < 0.0) waiting_since_ = last_republish_ = wall_now;
+  if (waiting_since_ < 0.0) {
+    waiting_since_ = last_republish_ = wall_now;
+    outputs_->HoldStill();  // a late /tf listener gets the present frames on connection
+  }
   // An answer sent before the controller's publisher connected to this node is lost, and both
   // sides would wait for ever (a controller answering the latched first state at once): when a
   // command publisher connects while a period waits, and no command has come kConnectGraceSeconds
@@ -276,6 +305,7 @@ void SimNode::PublishDiagnosticsWhenDue(double now, RunLoop* loop) {
 
 void SimNode::IdlePaused(double now, RunLoop* loop) {
   loop->was_running = false;
+  outputs_->HoldStill();  // in lockstep too, where nothing below is published
   info_.behind = false;
   info_.lag = 0.0;
   // Not in lockstep: a controller answers every state it receives, and the state is latched.

@@ -51,6 +51,11 @@ class SimNode {
     double Wall() const { return ros::WallTime::now().toSec() - held; }
   };
 
+  // "parameter ~initial_pose" when an error building the model is about the pose it set;
+  // else the scene's path.
+  std::string PoseBlame(const std::string& message) const;
+  // ~initial_pose, if given, checked as ~set_state checks a pose; false with a ROS_ERROR.
+  bool CheckInitialPose();
   // Run's parts: waiting for ~wait_for_subscribers (false when they do not come), ~reset, the
   // periodic /diagnostics, a pass while paused, and one period of a running simulation (false
   // when the run ends).

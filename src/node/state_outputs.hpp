@@ -54,6 +54,10 @@ class StateOutputs {
   // only with wall stamps), when its first answer may have been lost: a command publisher that
   // connected after the state went out could not have delivered it.
   void Republish(const f3r_outputs& out, const RunInfo& info);
+  // Lockstep: the present period waits for its command, so the state stands still as when
+  // paused: a /tf subscriber that connects from now until the next period gets the present
+  // frames once, on connection (a late tf2 listener resolves them while simulated time stands).
+  void HoldStill() { still_ = true; }
   // The stamp of the last state Publish sent (its first publication).
   const ros::Time& state_stamp() const { return state_stamp_; }
   // /diagnostics: one status for the simulation (OK, WARN when behind or outside the stroke,
@@ -73,9 +77,10 @@ class StateOutputs {
   // The last joint_states message filled (for ~step_with_command's answer).
   const sensor_msgs::JointState& joint_state() const { return joints_; }
   // True when every output topic (joint_states, /tf, ~odom, ~status, ~beam_state, ~beams, and /clock
-  // when it is published) has at least n subscribers connected, and each subscriber the master
-  // lists for it: on /clock, rosout and other nodes on simulated time count too, so a count alone
-  // could pass before a recorder's own /clock connection is up.
+  // when it is published) has at least n subscribers connected, and each live subscriber the
+  // master lists for it: on /clock, rosout and other nodes on simulated time count too, so a
+  // count alone could pass before a recorder's own /clock connection is up. A listed node that
+  // does not answer at its URI (a killed process's stale entry) is not waited for.
   bool SubscribersConnected(int n) const;
 
  private:
@@ -102,7 +107,8 @@ class StateOutputs {
   bool energy_guard_ = false;      // tripped once since the balance began: it stays (a blow-up's
                                    // own T + V can bring the ratio back under the guard)
   bool have_transforms_ = false;   // tf_ holds a published state
-  bool paused_ = false;            // the last state was published paused
+  bool still_ = false;  // the state stands (paused, or a lockstep period waits): a /tf subscriber
+                        // that connects gets the present frames once
   ros::Publisher joints_pub_, status_pub_, beam_pub_, state_pub_, markers_pub_, clock_pub_, tf_pub_,
       odom_pub_, diagnostics_pub_;
   tf2_ros::StaticTransformBroadcaster static_tf_;

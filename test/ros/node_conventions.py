@@ -1,6 +1,6 @@
 #!/usr/bin/env python3
-"""rostest on the default launch (sim.launch with no arguments: rest.yaml, simulated time): what a
-ROS user expects of a simulator node.
+"""rostest on the default launch (sim.launch on simulated time, with rest.yaml for its symmetric
+home pose: conventions.test says why): what a ROS user expects of a simulator node.
 
   a  one clock: another node's tf2 lookup at now() succeeds (no extrapolation into the future)
   b  the URDF's joints are the TF tree: each parent -> child is published, fixed joints on
