@@ -10,8 +10,8 @@ workspace is sourced. docs/python.md has the whole interface.
 """
 from ._core import Error, SceneError
 from .sim import Sim, State
-from .rollouts import rollouts
+from .rollouts import rollouts, study
 from .env import Flex3rprEnv, tracking_vibration_reward
 
-__all__ = ["Error", "SceneError", "Sim", "State", "rollouts", "Flex3rprEnv",
+__all__ = ["Error", "SceneError", "Sim", "State", "rollouts", "study", "Flex3rprEnv",
            "tracking_vibration_reward"]

@@ -103,6 +103,34 @@ def rollouts(scene, policy=None, n=1, periods=1000, commands=None, overrides=Non
     return out
 
 
+def _study_run(i):
+    scene, overrides, duration, keep = _JOBS[i]
+    try:
+        result = Sim(scene, overrides=overrides).run(duration)
+    except Error as e:
+        return {"status": str(e)}
+    result = {k: v for k, v in result.items() if keep is None or k in keep}
+    result["status"] = ""
+    return result
+
+
+def study(scene, overrides, duration=None, columns=None, processes=None):
+    """A parameter study: the scene run open loop, as the CLI runs it (Sim.run), once for each
+    dict of scene fields in `overrides`, across `processes` processes (default: every core).
+    Returns one dict a run: the CSV's columns (only `columns` when given) and "status" ("" or
+    the error that stopped the run)."""
+    _JOBS[:] = [(scene, o, duration, None if columns is None else set(columns))
+                for o in overrides]
+    processes = processes or os.cpu_count() or 1
+    try:
+        if processes > 1 and len(_JOBS) > 1:
+            with multiprocessing.get_context("fork").Pool(min(processes, len(_JOBS))) as pool:
+                return pool.map(_study_run, range(len(_JOBS)), chunksize=1)
+        return [_study_run(i) for i in range(len(_JOBS))]
+    finally:
+        _JOBS[:] = []
+
+
 def _spec_call(spec, part):
     policy = spec.get("policy")
     if policy:
