@@ -256,3 +256,27 @@ def test_the_scenes_sensors_are_read_as_the_cli_writes_them(tmp_path):
     env = flex3rpr.Flex3rprEnv(scene=scene, horizon=5)
     obs, _ = env.reset(seed=1)
     assert env.observation_names == a.sensor_names and len(obs) == 12
+
+
+def test_rollouts_split_over_gnu_parallel_merge_into_the_whole(tmp_path):
+    spec = {"scene": REST, "n": 3, "periods": 20,
+            "overrides": [{"effects.payload.mass": m} for m in (0.0, 0.05, 0.1)],
+            "policy": "rollout_policy:push", "processes": 1}
+    with open(str(tmp_path / "spec.json"), "w") as f:
+        json.dump(spec, f)
+    with open(str(tmp_path / "rollout_policy.py"), "w") as f:
+        f.write("def push(state, k, run):\n    return [5.0, -2.0, 0.0, 0.0, 0.0, 0.0]\n")
+    env = dict(os.environ, PYTHONPATH=str(tmp_path) + os.pathsep +
+               os.environ.get("PYTHONPATH", ""))
+    subprocess.run(["parallel", sys.executable, "-m", "flex3rpr.rollouts",
+                    str(tmp_path / "spec.json"), "--part", "{}/2", "--out",
+                    str(tmp_path / "part{}.npz"), ":::", "0", "1"], check=True, env=env,
+                   cwd=str(tmp_path))
+    subprocess.run([sys.executable, "-m", "flex3rpr.rollouts", "--merge",
+                    str(tmp_path / "part0.npz"), str(tmp_path / "part1.npz"), "--out",
+                    str(tmp_path / "all.npz")], check=True, env=env)
+    merged = np.load(str(tmp_path / "all.npz"), allow_pickle=True)
+    whole = flex3rpr.rollouts(REST, policy=lambda s, k, r: [5.0, -2.0, 0, 0, 0, 0], n=3,
+                              periods=20, overrides=spec["overrides"], processes=1)
+    assert list(merged["runs"]) == [0, 1, 2]
+    assert np.array_equal(merged["x_p"], whole["x_p"])
