@@ -285,13 +285,9 @@ size_t f3r_solve_accelerations_work_size(const f3r_model* m) {
   return n * n + 2 * n + 2 * (size_t)F3R_MAX_Q;
 }
 
-f3r_status f3r_solve_accelerations(const f3r_model* m, const double* q, const double* v,
-                                   const double* Q, double* a, double* lambda, double* work) {
-  const int nq = m->nq, n = nq + F3R_NCON;
-  double* K = work;
-  double* b = K + (size_t)n * n;
-  int* piv = (int*)(b + n); /* n ints fit in n doubles */
-  double* el = b + 2 * n;
+void f3r_constrained_system(const f3r_model* m, const double* q, const double* v, const double* Q,
+                            int n, double* K, double* b, double* elastic) {
+  const int nq = m->nq;
   f3r_data d;
   f3r_forward_at(m, q, v, F3R_FWD_POSITION | F3R_FWD_VELOCITY, &d);
   for (size_t z = 0; z < (size_t)n * n; ++z) K[z] = 0.0;
@@ -299,9 +295,18 @@ f3r_status f3r_solve_accelerations(const f3r_model* m, const double* q, const do
   f3r_data_add_constraint_jacobian_transpose(m, &d, -1.0, K + (size_t)nq * n,
                                              n);           /* -G^T, top right */
   f3r_data_add_constraint_jacobian(m, &d, 1.0, K + nq, n); /* G, bottom left */
-  f3r_elastic_forces(m, q, el);
-  for (int r = 0; r < nq; ++r) b[r] = Q[r] - d.h[r] - el[r];
+  f3r_elastic_forces(m, q, elastic);
+  for (int r = 0; r < nq; ++r) b[r] = Q[r] - d.h[r] - elastic[r];
   for (int c = 0; c < F3R_NCON; ++c) b[nq + c] = -d.gamma[c];
+}
+
+f3r_status f3r_solve_accelerations(const f3r_model* m, const double* q, const double* v,
+                                   const double* Q, double* a, double* lambda, double* work) {
+  const int nq = m->nq, n = nq + F3R_NCON;
+  double* K = work;
+  double* b = K + (size_t)n * n;
+  int* piv = (int*)(b + n); /* n ints fit in n doubles */
+  f3r_constrained_system(m, q, v, Q, n, K, b, b + 2 * n);
   if (f3r_lu_factor(K, n, piv)) return F3R_ERR_SINGULAR;
   f3r_lu_solve(K, n, piv, b);
   for (int r = 0; r < nq; ++r) a[r] = b[r];

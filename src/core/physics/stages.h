@@ -103,6 +103,11 @@ size_t f3r_stop_forces_work_size(const f3r_model* m);
 /* Solves [M -G^T; G 0] [a; lambda] = [Q - h - k; -gamma] for the accelerations a (nq) and the
  * multipliers lambda (6) at (q, v). work holds (nq+6)^2 + 2(nq+6) doubles.
  * Returns F3R_ERR_SINGULAR if the system is singular. */
+/* The system above for a leading block of K (n >= nq + 6, all of K zeroed, n x n) and of b (its
+ * first nq + 6 rows), at (q, v) under Q; elastic (nq) receives k. Callers that add rows (the end
+ * stops' contact) put them after it. */
+void f3r_constrained_system(const f3r_model* m, const double* q, const double* v, const double* Q,
+                            int n, double* K, double* b, double* elastic);
 f3r_status f3r_solve_accelerations(const f3r_model* m, const double* q, const double* v,
                                    const double* Q, double* a, double* lambda, double* work);
 size_t f3r_solve_accelerations_work_size(const f3r_model* m);

@@ -27,17 +27,8 @@ f3r_status f3r_stop_forces(const f3r_model* m, const f3r_stop_locks* locks, cons
   const double rate = F3R_STOP_BAUMGARTE_RATE;
   double* K = work;
   double* b = K + (size_t)n * n;
-  int* piv = (int*)(b + n); /* n ints fit in n doubles */
-  double* elastic = b + 2 * n;
-  f3r_data d;
-  f3r_forward_at(m, q, v, F3R_FWD_POSITION | F3R_FWD_VELOCITY, &d);
-  for (size_t z = 0; z < (size_t)n * n; ++z) K[z] = 0.0;
-  f3r_data_add_mass_matrix(m, &d, 1.0, K, n);
-  f3r_data_add_constraint_jacobian_transpose(m, &d, -1.0, K + (size_t)nq * n, n);
-  f3r_data_add_constraint_jacobian(m, &d, 1.0, K + nq, n);
-  f3r_elastic_forces(m, q, elastic);
-  for (int r = 0; r < nq; ++r) b[r] = Q[r] - d.h[r] - elastic[r];
-  for (int c = 0; c < F3R_NCON; ++c) b[nq + c] = -d.gamma[c];
+  int* piv = (int*)(b + n);                               /* n ints fit in n doubles */
+  f3r_constrained_system(m, q, v, Q, n, K, b, b + 2 * n); /* its E rows and columns below */
   for (int c = 0; c < count; ++c) {
     const int leg = legs[c], row = nq + F3R_NCON + c;
     const double stop = locks->side[leg] < 0 ? m->stroke_min : m->stroke_max;
