@@ -4,10 +4,7 @@
 
 #include <set>
 
-#include "stages.h"
-extern "C" {
-#include "data.h"  // f3r_data, f3r_effects_add_forces: the inputs' forces alone
-}
+#include "queries.h"
 #include "independent_lagrangian.h"
 #include "test_support.h"
 

@@ -1,5 +1,5 @@
 // End stops held as contact: a leg that comes to rest against its stop locks there, its stop's
-// force is the contact's Lagrange multiplier (stages.h f3r_stop_forces), and it releases where
+// force is the contact's Lagrange multiplier (queries.h f3r_stop_forces), and it releases where
 // that force would have to pull. The static cases check the force against the platform's
 // equilibrium computed here from the geometry alone.
 #include <gtest/gtest.h>

@@ -9,7 +9,7 @@
 
 #include "flex3rpr/beam_modes.h"
 #include "flex3rpr/modal.h"
-#include "stages.h"
+#include "queries.h"
 #include "test_support.h"
 
 namespace {

@@ -2,7 +2,7 @@
 // public residual, at states along a real trajectory.
 #include <gtest/gtest.h>
 
-#include "stages.h"
+#include "queries.h"
 #include "test_support.h"
 
 namespace {
@@ -12,7 +12,7 @@ struct Case {
   f3r_formulation form;
   bool exact;
   double tolerance;  // relative to the largest entry of the column
-  int locks[3];      // legs held at their end stops (stages.h f3r_stop_locks)
+  int locks[3];      // legs held at their end stops (equations.h f3r_stop_locks)
 };
 
 class ResidualJacobianTest : public ::testing::TestWithParam<Case> {};

@@ -5,7 +5,7 @@
 
 #include <cstring>
 
-#include "stages.h"
+#include "queries.h"
 #include "test_support.h"
 
 namespace {

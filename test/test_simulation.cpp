@@ -6,7 +6,7 @@
 #include <map>
 
 #include "flex3rpr/modal.h"
-#include "stages.h"
+#include "queries.h"
 #include "stepper.h" /* before the ARKODE headers: it includes stdio.h, which they need */
 #include "test_support.h"
 
@@ -288,7 +288,7 @@ TEST(Simulation, TwoSimulationsShareOneModelIndependently) {
   EXPECT_EQ(f3r_sim_outputs(sc.get())->q[6], xa);
 }
 
-// The outputs of one forward pass against the (q, v) functions of stages.h at the output state:
+// The outputs of one forward pass against the queries of queries.h at the output state:
 // the loop forces against an LU solve of the whole constrained system [M -G^T; G 0] (the
 // minimal formulation's come from its accelerations y', so they agree to the solver's
 // tolerance; the dae's are its state), energies, deflections and constraint residuals.

@@ -6,10 +6,7 @@
 #include <functional>
 #include <random>
 
-#include "stages.h"
-extern "C" {
-#include "data.h"  // f3r_forward, f3r_fwd_leg_strokes: the event roots' closure
-}
+#include "queries.h"
 #include "independent_lagrangian.h"
 #include "test_support.h"
 

@@ -18,7 +18,7 @@
 #include "linsol_schur.h"
 #include "model_layout.h"
 #include "residual.h"
-#include "stages.h"
+#include "queries.h"
 
 /* weak: absent from cores built before the forward pass */
 extern long f3r_workspace_sincos_pairs(const f3r_workspace* ws) __attribute__((weak));

@@ -82,7 +82,7 @@
 #include "residual.h"
 #include "flex3rpr/scene.h"
 #include "model_layout.h"
-#include "stages.h"
+#include "queries.h"
 
 #define F3R_PEER_EXPORT __attribute__((visibility("default")))
 

@@ -1,7 +1,7 @@
 /* The accuracy knob (include/flex3rpr/accuracy.h): chooses mode counts (accuracy_search.c),
  * compares the paper's modes with the static correction (accuracy_basis.c), checks them and the
- * solver with a pilot (accuracy_pilot.c), and picks the measured solver
- * relation; exact kinematics is on unless the scene turns it off, and then its effect is counted.
+ * solver with a pilot (accuracy_pilot.c), and picks the measured solver relation (their costs:
+ * accuracy_solver.c); exact kinematics is on unless the scene turns it off, and then its effect is counted.
  * Runs once before a simulation, so it allocates freely; nothing here touches the step loop. */
 #include <math.h>
 #include <stdarg.h>
@@ -11,99 +11,6 @@
 
 #include "accuracy_choice.h"
 
-/* A relation's cost, an explicit integrator's scaled by explicit_scale. */
-static double relation_cost(const f3r_solver_relation* r, double explicit_scale) {
-  return r->integrator == F3R_INTEGRATOR_ERK ? r->cost * explicit_scale : r->cost;
-}
-
-/* The cheapest measured solver whose error fits `budget`, among those the scene leaves open, with
- * explicit integrators' cost scaled by `explicit_scale`. */
-static const f3r_solver_relation* pick_solver(const f3r_scene* s, const char* kind, double budget,
-                                              double explicit_scale) {
-  const f3r_solver_relation* best = NULL;
-  double best_cost = 0.0;
-  const unsigned fixed = s->explicit_settings;
-  for (int k = 0; k < f3r_solver_relation_count; ++k) {
-    const f3r_solver_relation* r = &f3r_solver_relations[k];
-    if (strcmp(r->kind, kind) || r->error > budget) continue;
-    if ((fixed & F3R_EXPLICIT_FORMULATION) && r->formulation != s->formulation) continue;
-    if ((fixed & F3R_EXPLICIT_INTEGRATOR) && r->integrator != s->integrator) continue;
-    if ((fixed & F3R_EXPLICIT_RTOL) && r->rtol != s->rtol) continue;
-    if ((fixed & F3R_EXPLICIT_TABLE) && strcmp(r->table, s->table)) continue;
-    const double cost = relation_cost(r, explicit_scale);
-    if (!best || cost < best_cost || (cost == best_cost && r->rtol > best->rtol)) {
-      best = r;
-      best_cost = cost;
-    }
-  }
-  return best;
-}
-
-/* Explicit integrators' cost scale at these mode counts: a step's right-hand side grows with the
- * modes beyond the benchmark's, and so does an explicit method's step count. */
-static double explicit_scale_of(const int modes[3]) {
-  int most = 0;
-  for (int i = 0; i < 3; ++i) most = modes[i] > most ? modes[i] : most;
-  return most > BENCHMARK_MODES ? (double)(most * most) / (BENCHMARK_MODES * BENCHMARK_MODES) : 1.0;
-}
-
-/* The relative cost of the solver a basis leaves room for: the cheapest measured relation within
- * the request less the basis's model error and the kinematics' (at least the solver's share), a
- * tenth of that on the static correction (pick_relation keeps it there); 1, minimal IDA at rtol
- * 1e-6, where the scene sets its solver or none fits. The bases' costs are compared with it: on
- * resonance_damped at 1e-5 m they tie (3 modes, 1 mode + shapes), and the correction's tighter
- * solver made it 1.6 times the CPU time (docs/benchmarks/accuracy_knob.md). */
-/* The solver's budget: what the request leaves beside the model's and the kinematics' errors,
- * at least the solver's share of it where the model keeps to its own share (past it, the model's
- * error was let in only with room left for a solver: f3r_choice_wide_model_target). */
-static double solver_budget(const choice_run* run, const f3r_accuracy_choice* c,
-                            double model_error) {
-  const double left = run->request - model_error - c->kinematics_error;
-  if (model_error > run->model_target) return left;
-  return fmax(left, F3R_ACCURACY_SOLVER_SHARE * run->request);
-}
-
-double f3r_choice_wide_model_target(const choice_run* run, const f3r_accuracy_choice* c) {
-  if (!run->solver_open) return 0.0;
-  double least = INFINITY; /* the smallest measured error of a solver the scene leaves open */
-  for (double budget = run->request; budget > 0.0; budget = least * 0.5) {
-    const f3r_solver_relation* r = pick_solver(run->scene, run->kind, budget, 1.0);
-    if (!r || !(r->error < least)) break;
-    least = r->error;
-  }
-  return run->request - c->kinematics_error - least / SOLVER_CHECK_SHARE;
-}
-
-double f3r_choice_solver_cost(const choice_run* run, const f3r_accuracy_choice* c,
-                              const int modes[3], double model_error, int corrected) {
-  if (!run->solver_open) return 1.0;
-  double budget = solver_budget(run, c, model_error);
-  if (corrected) budget *= SOLVER_CHECK_SHARE;
-  const double scale = explicit_scale_of(modes);
-  const f3r_solver_relation* r = pick_solver(run->scene, run->kind, budget, scale);
-  return r ? relation_cost(r, scale) : 1.0;
-}
-
-/* The measured error of the scene's own fixed solver (the nearest tolerance at or below). */
-static double solver_error_of(const f3r_scene* s, const char* kind) {
-  double error = NAN, at = 0.0;
-  for (int k = 0; k < f3r_solver_relation_count; ++k) {
-    const f3r_solver_relation* r = &f3r_solver_relations[k];
-    if (strcmp(r->kind, kind) || r->formulation != s->formulation ||
-        r->integrator != s->integrator ||
-        strcmp(r->table, s->explicit_settings & F3R_EXPLICIT_TABLE ? s->table : "") ||
-        r->rtol > s->rtol * (1.0 + 1e-9))
-      continue;
-    if (r->rtol > at) {
-      at = r->rtol;
-      error = r->error;
-    }
-  }
-  return error;
-}
-
-/* What the scene leaves open (links' mode counts, exact kinematics, the solver) and which
- * solver relations apply to it; s becomes the working copy, a view sharing scene's tables. */
 static void open_choice(const f3r_scene* scene, double request, int commanded, f3r_scene* s,
                         choice_run* run) {
   *run = (choice_run){.scene = scene, .s = s, .request = request};
@@ -270,9 +177,9 @@ static f3r_status pick_relation(choice_run* run, const f3r_accuracy_choice* c, s
    * set then) 2.2e-5 m from the converged path, at rtol 1e-4 2.4e-8 m for the same steps; a
    * pilot over the first tenth of the run saw nothing of it (the resonance builds up later). */
   if (run->unmeasured_basis) p->limit *= SOLVER_CHECK_SHARE;
-  const double explicit_scale = explicit_scale_of(c->modes);
+  const double explicit_scale = f3r_explicit_scale_of(c->modes);
   for (int attempt = 0; attempt < 4; ++attempt) {
-    const f3r_solver_relation* next = pick_solver(scene, run->kind, p->limit, explicit_scale);
+    const f3r_solver_relation* next = f3r_pick_solver(scene, run->kind, p->limit, explicit_scale);
     if (!next || next == p->relation) break;
     const f3r_solver_relation* r = p->relation = next;
     /* once a relation fell short here, its successors are checked too */
@@ -283,13 +190,14 @@ static f3r_status pick_relation(choice_run* run, const f3r_accuracy_choice* c, s
       /* A check runs a pilot window at the relation, after the tight pilot's when none ran yet;
        * the cheapest relation that needs no check may cost less than that over the run. */
       const double check = F3R_PILOT_SHARE *
-                           (relation_cost(r, explicit_scale) +
+                           (f3r_relation_cost(r, explicit_scale) +
                             (run->pilot_started ? 0.0
                                                 : f3r_pilot_cost(run->kind, 0.1 * run->model_target,
                                                                  run->long_run)));
       const f3r_solver_relation* safe =
-          pick_solver(scene, run->kind, SOLVER_CHECK_SHARE * budget, explicit_scale);
-      if (safe && relation_cost(safe, explicit_scale) <= relation_cost(r, explicit_scale) + check) {
+          f3r_pick_solver(scene, run->kind, SOLVER_CHECK_SHARE * budget, explicit_scale);
+      if (safe &&
+          f3r_relation_cost(safe, explicit_scale) <= f3r_relation_cost(r, explicit_scale) + check) {
         p->skipped_check = r;
         p->relation = safe;
         p->limit = SOLVER_CHECK_SHARE * budget;
@@ -322,14 +230,14 @@ static f3r_status pick_relation(choice_run* run, const f3r_accuracy_choice* c, s
 static f3r_status choose_solver(choice_run* run, f3r_accuracy_choice* c, f3r_error* err) {
   const f3r_scene* scene = run->scene;
   solver_pick p = {0};
-  p.budget = solver_budget(run, c, c->model_error);
+  p.budget = f3r_choice_solver_budget(run, c, c->model_error);
   c->formulation = scene->formulation;
   c->integrator = scene->integrator;
   c->rtol = scene->rtol;
   c->atol = scene->atol;
   snprintf(c->table, sizeof c->table, "%s", scene->table);
   if (!run->solver_open) {
-    c->solver_error = solver_error_of(scene, run->kind);
+    c->solver_error = f3r_solver_error_of(scene, run->kind);
     f3r_accuracy_append(c->summary, sizeof c->summary,
                         "solver: %s, %s, rtol %g, as the scene sets (measured error %.3g m)\n",
                         f3r_formulation_name(scene->formulation),
@@ -340,7 +248,7 @@ static f3r_status choose_solver(choice_run* run, f3r_accuracy_choice* c, f3r_err
   if (st != F3R_OK) return st;
   const f3r_solver_relation* r = p.relation;
   if (!r) {
-    c->solver_error = solver_error_of(scene, run->kind);
+    c->solver_error = f3r_solver_error_of(scene, run->kind);
     f3r_accuracy_append(c->summary, sizeof c->summary,
                         "solver: no measured solver fits %.3g m; keeping %s, rtol %g\n", p.limit,
                         f3r_integrator_name(scene->integrator), scene->rtol);

@@ -84,7 +84,18 @@ typedef struct {
       skipped_check; /* the cheapest one, whose check cost more than it saves */
 } solver_pick;
 
-/* The relative cost of the solver a basis leaves room for (accuracy.c): the cheapest measured
+/* The solver relations as costs (accuracy_solver.c). A relation's cost, an explicit integrator's
+ * scaled by explicit_scale; the cheapest measured solver whose error fits `budget` among those the
+ * scene leaves open; explicit integrators' cost scale at these mode counts; the solver's budget
+ * beside a model error; the measured error of the scene's own fixed solver. */
+double f3r_relation_cost(const f3r_solver_relation* r, double explicit_scale);
+const f3r_solver_relation* f3r_pick_solver(const f3r_scene* s, const char* kind, double budget,
+                                           double explicit_scale);
+double f3r_explicit_scale_of(const int modes[3]);
+double f3r_choice_solver_budget(const choice_run* run, const f3r_accuracy_choice* c,
+                                double model_error);
+double f3r_solver_error_of(const f3r_scene* s, const char* kind);
+/* The relative cost of the solver a basis leaves room for: the cheapest measured
  * relation within the request less the model error and the kinematics', a tenth of that on the
  * static correction; 1 where the scene sets its solver or none fits. */
 double f3r_choice_solver_cost(const choice_run* run, const f3r_accuracy_choice* c,

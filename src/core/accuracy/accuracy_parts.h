@@ -150,7 +150,7 @@ f3r_status f3r_pilot_solver(const f3r_scene* s, const f3r_mode_search* ms, f3r_p
                             const f3r_solver_settings* solver, double* error, f3r_error* err);
 void f3r_pilot_free(f3r_pilot* p);
 
-/* L = the Cholesky factor of the linear model's mass matrix (n x n, state_space.c); who names
+/* L = the Cholesky factor of the linear model's mass matrix (n x n, linear_model.c); who names
  * the caller in the error when the matrix is not positive definite. */
 f3r_status f3r_linear_mass_factor(const f3r_linear_model* lin, double* L, const char* who,
                                   f3r_error* err);

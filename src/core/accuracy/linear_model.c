@@ -31,6 +31,15 @@ static f3r_linear_model* linear_alloc(int n) {
   return lin;
 }
 
+f3r_status f3r_linear_mass_factor(const f3r_linear_model* lin, double* L, const char* who,
+                                  f3r_error* err) {
+  memcpy(L, lin->mass, (size_t)lin->n * lin->n * sizeof(double));
+  if (f3r_cholesky_factor(L, lin->n))
+    return f3r_error_set(err, F3R_ERR_SINGULAR,
+                         "%s: the reduced mass matrix is not positive definite", who);
+  return F3R_OK;
+}
+
 /* Phi and omega^2 of K Phi = M Phi diag(omega^2): M = L L^T, C = L^-1 K L^-T = V diag V^T,
  * Phi = L^-T V; then sorted by omega^2. */
 static f3r_status modes(f3r_linear_model* lin, f3r_error* err) {

@@ -31,15 +31,6 @@ static f3r_state_space* state_space_alloc(int nx) {
   return ss;
 }
 
-f3r_status f3r_linear_mass_factor(const f3r_linear_model* lin, double* L, const char* who,
-                                  f3r_error* err) {
-  memcpy(L, lin->mass, (size_t)lin->n * lin->n * sizeof(double));
-  if (f3r_cholesky_factor(L, lin->n))
-    return f3r_error_set(err, F3R_ERR_SINGULAR,
-                         "%s: the reduced mass matrix is not positive definite", who);
-  return F3R_OK;
-}
-
 static void name_everything(const f3r_model* m, f3r_state_space* ss) {
   const int n = ss->nx / 2;
   static const char* pose[3] = {"x_p", "y_p", "phi_p"};

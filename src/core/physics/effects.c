@@ -12,16 +12,14 @@
 
 #include "dense.h"
 #include "effects.h"
-#include "data.h"
 
 /* --- gravity --------------------------------------------------------------------------------- */
 static double cylinder_moment(const f3r_model* m) {
   return m->cylinder_mass * m->cylinder_length / 2.0;
 }
 
-static void gravity_add(const f3r_model* m, double t, const double* q, const double* v,
-                        const f3r_data* d, double* Q) {
-  (void)t, (void)v;
+static void gravity_add(const f3r_model* m, f3r_data* d, double* Q) {
+  const double* q = d->q;
   const double gx = m->gravity[0], gy = m->gravity[1], mass = m->link_mass;
   for (int i = 0; i < 3; ++i) {
     const f3r_link_data* k = &d->link[i];
@@ -36,9 +34,8 @@ static void gravity_add(const f3r_model* m, double t, const double* q, const dou
   Q[F3R_Q_Y] += m->platform_mass * gy;
 }
 
-static void gravity_add_dq(const f3r_model* m, const double* q, const double* v, const f3r_data* d,
-                           double scale, double* A, int ld) {
-  (void)v;
+static void gravity_add_dq(const f3r_model* m, const f3r_data* d, double scale, double* A, int ld) {
+  const double* q = d->q;
   const double gx = m->gravity[0], gy = m->gravity[1], mass = m->link_mass;
   for (int i = 0; i < 3; ++i) {
     const f3r_link_data* k = &d->link[i];
@@ -62,15 +59,14 @@ static void gravity_add_dq(const f3r_model* m, const double* q, const double* v,
 const f3r_force_effect f3r_gravity_effect = {"gravity", gravity_add, gravity_add_dq, 0};
 
 /* --- joint friction ---------------------------------------------------------------------------- */
-static void friction_add(const f3r_model* m, double t, const double* q, const double* v,
-                         const f3r_data* d, double* Q) {
-  (void)t, (void)q, (void)d;
+static void friction_add(const f3r_model* m, f3r_data* d, double* Q) {
+  const double* v = d->v;
   for (int n = 0; n < F3R_Q_LEG_JOINTS; ++n) Q[n] -= m->joint_friction[n] * v[n];
 }
 
-static void friction_add_dv(const f3r_model* m, const double* q, const double* v, double scale,
-                            double* A, int ld) {
-  (void)q, (void)v;
+static void friction_add_dv(const f3r_model* m, const f3r_data* d, double scale, double* A,
+                            int ld) {
+  (void)d;
   for (int n = 0; n < F3R_Q_LEG_JOINTS; ++n) F3R_AT(A, ld, n, n) -= scale * m->joint_friction[n];
 }
 
@@ -78,34 +74,34 @@ const f3r_force_effect f3r_friction_effect = {"joint_friction", friction_add, 0,
 
 /* --- modal damping ------------------------------------------------------------------------------ */
 
-static void damping_add(const f3r_model* m, double t, const double* q, const double* v,
-                        const f3r_data* d, double* Q) {
-  (void)t, (void)q, (void)d;
+static void damping_add(const f3r_model* m, f3r_data* d, double* Q) {
+  const double* v = d->v;
   for (int n = F3R_Q_MODAL; n < m->nq; ++n) Q[n] -= m->modal_damping[n] * v[n];
 }
 
-static void damping_add_dv(const f3r_model* m, const double* q, const double* v, double scale,
-                           double* A, int ld) {
-  (void)q, (void)v;
+static void damping_add_dv(const f3r_model* m, const f3r_data* d, double scale, double* A, int ld) {
+  (void)d;
   for (int n = F3R_Q_MODAL; n < m->nq; ++n) F3R_AT(A, ld, n, n) -= scale * m->modal_damping[n];
 }
 
 const f3r_force_effect f3r_damping_effect = {"damping", damping_add, 0, damping_add_dv};
 
 /* --- scripted inputs ------------------------------------------------------------------------------ */
-static void inputs_add(const f3r_model* m, double t, const double* q, const double* v,
-                       const f3r_data* d, double* Q) {
-  (void)q, (void)v, (void)d;
+/* Each input's force also into d->input, where the actuator lag (forces.c) reads its command. */
+static void inputs_add(const f3r_model* m, f3r_data* d, double* Q) {
+  const double t = d->t;
   double wave[F3R_RIGID_FORCES]; /* cos(omega t + phase), once per distinct harmonic */
   for (int n = 0; n < F3R_RIGID_FORCES; ++n) { /* an input that is off adds nothing */
     const f3r_input* in = &m->scene.inputs[n];
     const int source = m->wave_source[n];
     if (source < 0) {
-      if (in->kind != F3R_INPUT_NONE) Q[n] += f3r_input_value(in, t);
+      d->input[n] = in->kind != F3R_INPUT_NONE ? f3r_input_value(in, t) : 0.0;
+      if (in->kind != F3R_INPUT_NONE) Q[n] += d->input[n];
       continue;
     }
     wave[n] = source == n ? cos(in->omega * t + in->phase) : wave[source];
-    Q[n] += in->offset + in->amplitude * wave[n]; /* as f3r_input_value sums it */
+    d->input[n] = in->offset + in->amplitude * wave[n]; /* as f3r_input_value sums it */
+    Q[n] += d->input[n];
   }
 }
 
@@ -113,8 +109,8 @@ const f3r_force_effect f3r_inputs_effect = {"inputs", inputs_add, 0, 0};
 
 /* --- the list: every caller's one loop over the enabled effects -------------------------------- */
 
-void f3r_effects_add_forces(const f3r_model* m, const f3r_data* d, double* Q) {
-  for (int e = 0; e < m->n_effects; ++e) m->effects[e]->add(m, d->t, d->q, d->v, d, Q);
+void f3r_effects_add_forces(const f3r_model* m, f3r_data* d, double* Q) {
+  for (int e = 0; e < m->n_effects; ++e) m->effects[e]->add(m, d, Q);
 }
 
 int f3r_effects_have_derivatives(const f3r_model* m) {
@@ -127,21 +123,9 @@ void f3r_effects_add_derivatives(const f3r_model* m, const f3r_data* d, double s
                                  double* dQ_dv, int ld) {
   for (int e = 0; e < m->n_effects; ++e) {
     const f3r_force_effect* effect = m->effects[e];
-    if (dQ_dq && effect->add_dq) effect->add_dq(m, d->q, d->v, d, scale, dQ_dq, ld);
-    if (dQ_dv && effect->add_dv) effect->add_dv(m, d->q, d->v, scale, dQ_dv, ld);
+    if (dQ_dq && effect->add_dq) effect->add_dq(m, d, scale, dQ_dq, ld);
+    if (dQ_dv && effect->add_dv) effect->add_dv(m, d, scale, dQ_dv, ld);
   }
-}
-
-void f3r_add_generalized_forces_dq(const f3r_model* m, const double* q, const double* v,
-                                   double scale, double* A, int ld) {
-  f3r_data d;
-  f3r_effects_add_derivatives(m, f3r_forward_at(m, q, v, F3R_FWD_POSITION, &d), scale, A, NULL, ld);
-}
-
-void f3r_add_generalized_forces_dv(const f3r_model* m, const double* q, const double* v,
-                                   double scale, double* A, int ld) {
-  f3r_data d = {.q = q, .v = v}; /* no effect's dQ/dv needs a stage */
-  f3r_effects_add_derivatives(m, &d, scale, NULL, A, ld);
 }
 
 void f3r_model_compile_effects(f3r_model* m) {

@@ -3,69 +3,44 @@
  * index-3 form `index3` (no mu, no velocity constraint) that the paper's MEBDFI integrates.
  * Layouts and equations: residual.h. */
 #include "dense.h"
-#include "workspace.h"
+#include "derivatives.h"
+#include "effects.h"
+#include "form_dae.h"
 
-/* The forward pass at the state y: position, velocity and force stages. */
-static f3r_status forward(const f3r_model* m, f3r_formulation form, double t, const double* y,
-                          const double* held, f3r_workspace* ws) {
-  f3r_data* d = &ws->data;
-  d->t = t;
-  d->q = y;
-  d->v = y + m->nq;
-  d->held = held;
-  d->lag = m->n_lag ? y + f3r_lag_index(m, form) : 0;
-  f3r_forward(m, d, F3R_FWD_POSITION | F3R_FWD_VELOCITY | F3R_FWD_FORCES);
-  return f3r_workspace_add_stop_forces(m, ws, 0);
-}
-
-f3r_status f3r_dae_residual(const f3r_model* m, f3r_formulation form, double t, const double* y,
-                            const double* yp, const double* held, double* res, f3r_workspace* ws) {
+void f3r_dae_rows(const f3r_model* m, f3r_formulation form, const double* y, const double* yp,
+                  const f3r_data* d, double* res) {
   const int nq = m->nq, ggl = form == F3R_FORMULATION_DAE;
-  const double *v = y + nq, *lambda = y + 2 * nq, *mu = lambda + F3R_NCON;
-  const double *qd = yp, *vd = yp + nq;
-  const int lag_at = f3r_lag_index(m, form), w_at = lag_at + m->n_lag;
-  f3r_data* d = &ws->data;
-  double* tmp = ws->tmp;
-  const f3r_status st = forward(m, form, t, y, held, ws);
-  if (st != F3R_OK) return st;
+  const double *v = y + nq, *qd = yp;
+  const int lag_at = m->lag_index[form], w_at = lag_at + m->n_lag;
 
   /* kinematic rows: q' - v (+ G^T mu) */
   for (int n = 0; n < nq; ++n) res[n] = qd[n] - v[n];
-  if (ggl) {
-    f3r_data_constraint_transpose_times(m, d, mu, tmp);
-    for (int n = 0; n < nq; ++n) res[n] += tmp[n];
-  }
+  if (ggl)
+    for (int n = 0; n < nq; ++n) res[n] += d->gt_mu[n];
 
-  /* dynamic rows: M v' + h + k - Q - G^T lambda */
-  double* dyn = res + nq;
-  f3r_data_mass_times(m, d, vd, dyn);
-  f3r_data_constraint_transpose_times(m, d, lambda, tmp);
-  for (int n = 0; n < nq; ++n) dyn[n] += d->h[n] + d->k[n] - d->Q[n] - tmp[n];
-  for (int c = 0; c < F3R_NCON; ++c) d->lambda[c] = lambda[c];
+  /* dynamic rows: M v' + h + k - Q - G^T lambda, the acceleration stage's R */
+  for (int n = 0; n < nq; ++n) res[nq + n] = d->R[n];
 
   /* position (and velocity) constraints: g(q) (, G v) */
   for (int c = 0; c < F3R_NCON; ++c) res[2 * nq + c] = d->g[c];
-  if (ggl) f3r_data_constraint_times(m, d, v, res + 2 * nq + F3R_NCON);
+  if (ggl)
+    for (int c = 0; c < F3R_NCON; ++c) res[2 * nq + F3R_NCON + c] = d->gv[c];
 
   /* actuator lag and work */
   for (int i = 0; i < m->n_lag; ++i)
     res[lag_at + i] = m->lag_time_constant * yp[lag_at + i] - (d->commanded[i] - y[lag_at + i]);
   res[w_at] = yp[w_at] - d->power;
-  return F3R_OK;
 }
 
-f3r_status f3r_dae_jacobian(const f3r_model* m, f3r_formulation form, double t, double cj,
-                            const double* y, const double* yp, const double* held, double* J,
-                            int ld, f3r_workspace* ws) {
+void f3r_dae_jacobian(const f3r_model* m, f3r_formulation form, double cj, const double* y,
+                      const double* yp, double* J, int ld, f3r_workspace* ws) {
   const int nq = m->nq, ggl = form == F3R_FORMULATION_DAE;
   const int row_v = nq, row_g = 2 * nq, row_gv = 2 * nq + F3R_NCON;
-  const int row_lag = f3r_lag_index(m, form), row_w = row_lag + m->n_lag;
+  const int row_lag = m->lag_index[form], row_w = row_lag + m->n_lag;
   const int col_v = nq, col_lambda = 2 * nq, col_mu = 2 * nq + F3R_NCON, col_w = row_w;
   const double *q = y, *v = y + nq, *lambda = y + 2 * nq, *mu = lambda + F3R_NCON;
   const double* vd = yp + nq;
-  f3r_data* d = &ws->data;
-  const f3r_status st = forward(m, form, t, y, held, ws);
-  if (st != F3R_OK) return st;
+  const f3r_data* d = &ws->data;
 #define BLOCK(row, col) (J + (size_t)(col) * (size_t)ld + (row))
 
   /* q' - v (+ G^T mu) */
@@ -121,5 +96,4 @@ f3r_status f3r_dae_jacobian(const f3r_model* m, f3r_formulation form, double t, 
   }
   F3R_AT(J, ld, row_w, col_w) += cj;
 #undef BLOCK
-  return F3R_OK;
 }

@@ -1,126 +1,21 @@
-/* The minimal-coordinate residual: independent z = (X_p, Y_p, phi_p, eta), with rho and theta
- * from the closed-form loop closure. Layout and equations: residual.h.
- *
- * Per link, the dependent block of G is G_d = [e, L n - w e], det = L = rho + l, so
- *   G_d x = V     gives  theta = (n.V)/L,  rho = e.V + w theta,
- *   G_d^T x = R   gives  x = R_rho e + ((R_theta + w R_rho)/L) n.
- * Accelerations: a_d = G_d^{-1} (-G_z a_z - gamma). The reduced equations B^T R = 0 are
- * R_z - G_z^T lambda with lambda = G_d^{-T} R_d, which is also the constraint force. */
+/* The minimal-coordinate residual and right-hand side: independent z = (X_p, Y_p, phi_p, eta),
+ * with rho and theta from the closed-form loop closure. Layout and equations: residual.h; the
+ * reduced equations come from the closed acceleration stage (equations.c). */
 #include <math.h>
 #include <string.h>
 
 #include "dense.h"
-#include "workspace.h"
+#include "form_minimal.h"
 
-/* The forward pass at the minimal state y: the closed stages fill rho, rho', theta' (not theta:
- * nothing in the residual needs the angle itself). */
-static f3r_status forward(const f3r_model* m, double t, const double* y, const double* held,
-                          f3r_workspace* ws) {
-  f3r_data* d = &ws->data;
-  d->t = t;
-  d->z = y;
-  d->u = y + m->n_independent;
-  d->held = held;
-  d->lag = m->n_lag ? y + f3r_lag_index(m, F3R_FORMULATION_MINIMAL) : 0;
-  const f3r_status st =
-      f3r_forward(m, d, F3R_FWD_POSITION_CLOSED | F3R_FWD_VELOCITY_CLOSED | F3R_FWD_FORCES);
-  return st != F3R_OK ? st : f3r_workspace_add_stop_forces(m, ws, 1);
-}
-
-/* Link i's dependent accelerations a_d = G_d^{-1} (-G_z a_z - gamma), with a_z in d->a; G_z a_z
- * summed as f3r_data_constraint_times sums it (its zero terms of a_d drop out exactly). */
-static void link_accelerations(const f3r_model* m, int i, f3r_data* d) {
-  const f3r_link_data* k = &d->link[i];
-  const f3r_link_params* lp = &m->link[i];
-  double* a = d->a;
-  double gx = 0.0 - a[F3R_Q_X], gy = 0.0 - a[F3R_Q_Y];
-  gx += k->g_phi[0] * a[F3R_Q_PHI];
-  gy += k->g_phi[1] * a[F3R_Q_PHI];
-  if (lp->model == F3R_LINK_FIXED_FREE)
-    for (int j = 0; j < lp->modes; ++j) {
-      double g_x, g_y;
-      f3r_link_modal_constraint(lp, k, j, &g_x, &g_y);
-      gx += g_x * a[lp->eta_index + j];
-      gy += g_y * a[lp->eta_index + j];
-    }
-  f3r_link_solve_dependent(k, -gx - d->gamma[2 * i], -gy - d->gamma[2 * i + 1], &a[i],
-                           &a[F3R_Q_THETA + i]);
-}
-
-/* Link i's rows of R = M a + h + k - Q (as f3r_data_mass_times and the force stage give them),
- * its loop force lambda_i = G_d^{-T} R_d and, into res_eta, its modal rows of the reduced
- * equations R_eta - (G^T lambda)_eta. */
-static void link_loop_forces(const f3r_model* m, int i, f3r_data* d, double* res_eta) {
-  const f3r_link_data* k = &d->link[i];
-  const f3r_link_params* lp = &m->link[i];
-  const double mass = m->link_mass, *a = d->a;
-  const int r = i, t = F3R_Q_THETA + i, base = lp->eta_index;
-  double* R = d->R;
-  double coupled = 0.0;
-  for (int j = 0; j < lp->modes; ++j) {
-    const int n = base + j;
-    coupled += k->m_theta_eta[j] * a[n];
-    R[n] = k->m_theta_eta[j] * a[t] + mass * a[n] + (d->h[n] + d->k[n] - d->Q[n]);
-  }
-  R[r] = mass * a[r] + k->m_rho_theta * a[t] + (d->h[r] + d->k[r] - d->Q[r]);
-  R[t] = k->m_rho_theta * a[r] + k->m_theta_theta * a[t] + coupled + (d->h[t] + d->k[t] - d->Q[t]);
-  f3r_link_solve_dependent_transpose(k, R[r], R[t], &d->lambda[2 * i], &d->lambda[2 * i + 1]);
-  const double lx = d->lambda[2 * i], ly = d->lambda[2 * i + 1];
-  if (!res_eta) return;
-  const int tip = lp->model == F3R_LINK_FIXED_FREE;
-  for (int j = 0; j < lp->modes; ++j) {
-    double gt_lambda = 0.0;
-    if (tip) {
-      double g_x, g_y;
-      f3r_link_modal_constraint(lp, k, j, &g_x, &g_y);
-      gt_lambda += g_x * lx, gt_lambda += g_y * ly;
-    }
-    res_eta[j] = R[base + j] - gt_lambda;
-  }
-}
-
-/* The accelerations a (a_z given in a_z), R = M a + h + k - Q, the loop forces lambda and, when
- * res_u is not NULL, the reduced equations B^T R = R_z - G_z^T lambda, one pass per link. */
-static void reduced_equations(const f3r_model* m, f3r_data* d, const double* a_z, double* res_u) {
+void f3r_minimal_rows(const f3r_model* m, const double* y, const double* yp, const f3r_data* d,
+                      double* res) {
   const int nz = m->n_independent;
-  double* a = d->a;
-  for (int j = 0; j < nz; ++j) a[F3R_Q_INDEPENDENT + j] = a_z[j];
-  double pose[3] = {0.0, 0.0, 0.0}; /* G_P^T lambda, summed as constraint_transpose_times */
-  /* two passes: the three links' divisions then run side by side */
-  for (int i = 0; i < 3; ++i) link_accelerations(m, i, d);
-  for (int i = 0; i < 3; ++i) {
-    link_loop_forces(m, i, d, res_u ? res_u + m->link[i].eta_index - F3R_Q_INDEPENDENT : NULL);
-    const double lx = d->lambda[2 * i], ly = d->lambda[2 * i + 1];
-    pose[0] += -1.0 * lx;
-    pose[1] += -1.0 * ly;
-    pose[2] += d->link[i].g_phi[0] * lx;
-    pose[2] += d->link[i].g_phi[1] * ly;
-  }
-  const double inertia[3] = {m->platform_mass, m->platform_mass, m->platform_inertia};
-  for (int c = 0; c < 3; ++c) {
-    const int n = F3R_Q_INDEPENDENT + c;
-    d->R[n] = inertia[c] * a[n] + (d->h[n] + d->k[n] - d->Q[n]);
-    if (res_u) res_u[c] = d->R[n] - pose[c];
-  }
-}
-
-void f3r_minimal_multipliers(const f3r_model* m, const double* yp, f3r_data* d) {
-  reduced_equations(m, d, yp + m->n_independent, NULL);
-}
-
-f3r_status f3r_minimal_residual(const f3r_model* m, double t, const double* y, const double* yp,
-                                const double* held, double* res, f3r_workspace* ws) {
-  const int nz = m->n_independent;
-  f3r_data* d = &ws->data;
-  const f3r_status st = forward(m, t, y, held, ws);
-  if (st != F3R_OK) return st;
-  const int lag_at = f3r_lag_index(m, F3R_FORMULATION_MINIMAL), w_at = lag_at + m->n_lag;
-  reduced_equations(m, d, yp + nz, res + nz);
+  const int lag_at = m->lag_index[F3R_FORMULATION_MINIMAL], w_at = lag_at + m->n_lag;
   for (int j = 0; j < nz; ++j) res[j] = yp[j] - y[nz + j];
+  /* res[nz .. 2 nz): the closed acceleration stage wrote the reduced equations there */
   for (int i = 0; i < m->n_lag; ++i)
     res[lag_at + i] = m->lag_time_constant * yp[lag_at + i] - (d->commanded[i] - y[lag_at + i]);
   res[w_at] = yp[w_at] - d->power;
-  return F3R_OK;
 }
 
 /* The reduced mass K = B^T M B, B = dq/dz, in its arrow blocks at the position stage in
@@ -325,21 +220,17 @@ static f3r_status low_rank_solve(const f3r_model* m, const f3r_data* d, double* 
   return F3R_OK;
 }
 
-/* y' of the minimal formulation. F_u is linear in u': F_u(u') = F_u(0) + K u', F_u(0) from
- * the forward pass and reduced_equations at u' = 0 (the residual's z rows are not needed);
- * likewise the lag and W rows. The solve uses K's low-rank structure (low_rank_solve); dense
- * assembles K whole and factors it (the benchmark's and the tests' comparison). */
-static f3r_status minimal_rhs(const f3r_model* m, double t, const double* y, const double* held,
-                              double* ydot, f3r_workspace* ws, int dense) {
-  static const double no_rate[F3R_MAX_Q]; /* u' = 0: the residual rows F_u(0) */
-  const int nz = m->n_independent, ny = f3r_state_size(m, F3R_FORMULATION_MINIMAL);
-  f3r_data* d = &ws->data;
-  f3r_status st = forward(m, t, y, held, ws);
-  if (st != F3R_OK) return st;
+/* y' of the minimal formulation. F_u is linear in u': F_u(u') = F_u(0) + K u', F_u(0) the
+ * reduced equations of the closed acceleration stage at u' = 0 (the residual's z rows are not
+ * needed); likewise the lag and W rows. The solve uses K's low-rank structure (low_rank_solve);
+ * dense assembles K whole and factors it (the benchmark's and the tests' comparison). */
+f3r_status f3r_minimal_rhs(const f3r_model* m, int structured, const double* y, double* ydot,
+                           f3r_workspace* ws) {
+  const int nz = m->n_independent, ny = m->state_size[F3R_FORMULATION_MINIMAL];
+  const f3r_data* d = &ws->data;
   double* rate = ydot + nz;
-  reduced_equations(m, d, no_rate, rate);
-  for (int i = 0; i < nz; ++i) rate[i] = -rate[i];
-  if (dense) {
+  for (int i = 0; i < nz; ++i) rate[i] = -rate[i]; /* the stage wrote F_u(0) there */
+  if (!structured) {
     f3r_minimal_reduced_mass_blocks(m, ws);
     double* K = ws->solve_work; /* nz x nz fits in the (nq + 6)^2 of the acceleration solver */
     memset(K, 0, (size_t)nz * (size_t)nz * sizeof(double));
@@ -347,8 +238,8 @@ static f3r_status minimal_rhs(const f3r_model* m, double t, const double* y, con
     double inv[F3R_MAX_Q]; /* 1 / L_jj: multiplications, not divisions */
     if (f3r_cholesky_factor_inv(K, nz, inv)) return F3R_ERR_SINGULAR; /* K is positive definite */
     f3r_cholesky_solve_inv(K, nz, inv, rate, 1);
-  } else if ((st = low_rank_solve(m, d, rate)) != F3R_OK) {
-    return st;
+  } else if (low_rank_solve(m, d, rate) != F3R_OK) {
+    return F3R_ERR_SINGULAR;
   }
   for (int i = 0; i < nz; ++i) ydot[i] = y[nz + i];
   const int lag_at = 2 * nz;
@@ -358,14 +249,4 @@ static f3r_status minimal_rhs(const f3r_model* m, double t, const double* y, con
   }
   ydot[ny - 1] = -(0.0 - d->power); /* F_W(W' = 0) = -Q.v */
   return F3R_OK;
-}
-
-f3r_status f3r_minimal_rhs(const f3r_model* m, double t, const double* y, const double* held,
-                           double* ydot, f3r_workspace* ws) {
-  return minimal_rhs(m, t, y, held, ydot, ws, 0);
-}
-
-f3r_status f3r_minimal_rhs_dense(const f3r_model* m, double t, const double* y, const double* held,
-                                 double* ydot, f3r_workspace* ws) {
-  return minimal_rhs(m, t, y, held, ydot, ws, 1);
 }

@@ -4,7 +4,9 @@
 #include <string.h>
 
 #include "dense.h"
-#include "workspace.h"
+#include "derivatives.h"
+#include "effects.h"
+#include "form_minimal.h"
 
 /* The links a column of B reaches: every link for the pose (owner -1), its own for a modal one. */
 static void links_of_column(int owner, int* first, int* end) {
@@ -14,7 +16,7 @@ static void links_of_column(int owner, int* first, int* end) {
 
 /* Link l's rows (rho_l, theta_l, eta_l). The nq x nq products Z and H (and the effects' dQ/dq,
  * dQ/dv) couple each link's coordinates only among themselves, and the platform's among
- * themselves (the terms of dynamics.c, constraints.c and effects.c; test_residual_jacobian checks
+ * themselves (the terms of derivatives.c and effects.c; test_residual_jacobian checks
  * the result against finite differences). So column rho_l or theta_l of X reaches these rows
  * only, and a modal column of link l (whose B column moves link l's legs alone) too. */
 typedef struct {
@@ -176,7 +178,7 @@ static void force_derivatives(const f3r_model* m, f3r_workspace* ws, const jacob
 
 /* Link i's rows of -G's column z_j, as f3r_data_add_constraint_jacobian(-1) adds them into a
  * cleared G (0.0 + -1.0 * entry; an entry G does not have stays 0.0): -G_P = I on (X, Y), -g_phi
- * on phi_p, -psi_j(1) n (f3r_link_modal_constraint) on a fixed-free link's own modes. */
+ * on phi_p, -psi_j(1) n (the position stage's g_eta) on a fixed-free link's own modes. */
 static void minus_constraint_column(const f3r_model* m, const f3r_link_data* k, int i, int j,
                                     double* vx, double* vy) {
   const f3r_link_params* lp = &m->link[i];
@@ -190,10 +192,8 @@ static void minus_constraint_column(const f3r_model* m, const f3r_link_data* k, 
     *vx += -1.0 * k->g_phi[0];
     *vy += -1.0 * k->g_phi[1];
   } else if (lp->model == F3R_LINK_FIXED_FREE && e >= 0 && e < lp->modes) {
-    double g_x, g_y;
-    f3r_link_modal_constraint(lp, k, e, &g_x, &g_y);
-    *vx += -1.0 * g_x;
-    *vy += -1.0 * g_y;
+    *vx += -1.0 * k->g_eta_x[e];
+    *vy += -1.0 * k->g_eta_y[e];
   }
 }
 
@@ -389,13 +389,9 @@ static void add_work_row(const f3r_model* m, const f3r_workspace* ws, double cj,
  *   dF_u/dz = B^T (Z B + H V_z + M A_z),  dF_u/du = B^T (H B + M A_u),  dF_u/du' = B^T M B;
  * the lag states enter R_rho with -1; F_W = W' - Q.v gives dF_W/dz = -(v^T dQ/dq B +
  * (v^T dQ/dv + Q^T) V_z), dF_W/du = -(v^T dQ/dv + Q^T) B, dF_W/dF_a = -rho'. */
-f3r_status f3r_minimal_jacobian(const f3r_model* m, double t, double cj, const double* y,
-                                const double* yp, const double* held, double* J, int ld,
-                                f3r_workspace* ws) {
-  const int nq = m->nq, nz = m->n_independent, ny = f3r_state_size(m, F3R_FORMULATION_MINIMAL);
+void f3r_minimal_jacobian(const f3r_model* m, double cj, double* J, int ld, f3r_workspace* ws) {
+  const int nq = m->nq, nz = m->n_independent, ny = m->state_size[F3R_FORMULATION_MINIMAL];
   const int w_at = ny - 1;
-  f3r_status st = f3r_minimal_residual(m, t, y, yp, held, ws->res_base, ws);
-  if (st != F3R_OK) return st;
   const jacobian_products p = jacobian_products_in(ws, nq, nz);
   force_derivatives(m, ws, &p);
   int owner[F3R_MAX_Q];
@@ -405,5 +401,4 @@ f3r_status f3r_minimal_jacobian(const f3r_model* m, double t, double cj, const d
   add_force_blocks(m, &ws->data, owner, &p, J, ld);
   add_rate_and_lag_blocks(m, ws, cj, p.Bd, w_at, J, ld);
   add_work_row(m, ws, cj, &p, w_at, J, ld);
-  return F3R_OK;
 }

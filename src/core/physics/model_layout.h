@@ -16,18 +16,17 @@ extern "C" {
 
 struct f3r_data; /* the core's evaluation data (data.h) */
 
-/* An optional force stage: adds its generalized forces to Q and, where they depend on q or v,
- * scale times their derivatives into a column-major A. A NULL derivative is zero. d holds the
- * forward pass's position stage at q (the legs' directions), so an effect computes no
- * trigonometry of its own. */
+/* An optional force stage: adds its generalized forces at d's t, q and v to Q and, where they
+ * depend on q or v, scale times their derivatives into a column-major A. A NULL derivative is
+ * zero. d holds the forward pass's position stage at q (the legs' directions), so an effect
+ * computes no trigonometry of its own. */
 typedef struct {
   const char* name;
-  void (*add)(const struct f3r_model* m, double t, const double* q, const double* v,
-              const struct f3r_data* d, double* Q);
-  void (*add_dq)(const struct f3r_model* m, const double* q, const double* v,
-                 const struct f3r_data* d, double scale, double* A, int ld);
-  void (*add_dv)(const struct f3r_model* m, const double* q, const double* v, double scale,
-                 double* A, int ld);
+  void (*add)(const struct f3r_model* m, struct f3r_data* d, double* Q);
+  void (*add_dq)(const struct f3r_model* m, const struct f3r_data* d, double scale, double* A,
+                 int ld);
+  void (*add_dv)(const struct f3r_model* m, const struct f3r_data* d, double scale, double* A,
+                 int ld);
 } f3r_force_effect;
 
 #define F3R_MAX_EFFECTS 8
@@ -81,10 +80,19 @@ struct f3r_model {
   double stroke_min, stroke_max; /* limits of rho_i (m) */
   double restitution;            /* Newton's coefficient c: rho_i' -> -c rho_i' at a stop */
 
+  /* each formulation's state vector y (residual.h), indexed by f3r_formulation: its size and
+   * where its actuator lag states start (W follows them, last) */
+  int state_size[3], lag_index[3];
+
   int nq;                 /* number of generalized coordinates */
   int n_independent;      /* 3 + sum r_i: platform pose and modal coordinates */
   double theta_branch[3]; /* leg directions at the scene's initial pose: branch of atan2 */
 };
+
+/* Index of the actuator lag states in y (valid when model->n_lag == 3). */
+static inline int f3r_lag_index(const f3r_model* model, f3r_formulation form) {
+  return model->lag_index[form];
+}
 
 #ifdef __cplusplus
 }

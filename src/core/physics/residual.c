@@ -1,65 +1,25 @@
-/* The public residual interface: workspace, state layouts and dispatch to a formulation. */
+/* The residual interface: dispatch to a formulation, the end stops' share of the Jacobian, the
+ * state layouts' kinds and consistent states. The formulations never call back here. */
 #include <math.h>
-#include <stdlib.h>
 #include <string.h>
 
 #include "dense.h"
-#include "workspace.h"
-
-f3r_workspace* f3r_workspace_create(const f3r_model* m) {
-  f3r_workspace* ws = calloc(1, sizeof *ws);
-  if (!ws) return NULL;
-  ws->nq = m->nq;
-  ws->nz = m->n_independent;
-  const int ny_dae = f3r_state_size(m, F3R_FORMULATION_DAE);
-  ws->ny = ny_dae;
-  ws->solve_work = calloc(f3r_solve_accelerations_work_size(m), sizeof(double));
-  ws->y_perturbed = calloc((size_t)ny_dae, sizeof(double));
-  ws->res_base = calloc((size_t)ny_dae, sizeof(double));
-  ws->dQ = calloc(2 * (size_t)m->nq * (size_t)m->nq, sizeof(double));
-  ws->stop_work = calloc(f3r_stop_forces_work_size(m), sizeof(double));
-  const size_t nq = (size_t)m->nq, nz = (size_t)ws->nz;
-  ws->jac_work = calloc(2 * nq * nq + 18 * nq + 3 * nq * nz + 6 * nz, sizeof(double));
-  if (!ws->solve_work || !ws->y_perturbed || !ws->res_base || !ws->dQ || !ws->jac_work ||
-      !ws->stop_work) {
-    f3r_workspace_destroy(ws);
-    return NULL;
-  }
-  return ws;
-}
-
-void f3r_workspace_destroy(f3r_workspace* ws) {
-  if (!ws) return;
-  free(ws->solve_work);
-  free(ws->jac_work);
-  free(ws->y_perturbed);
-  free(ws->res_base);
-  free(ws->dQ);
-  free(ws->stop_work);
-  free(ws);
-}
-
-long f3r_workspace_sincos_pairs(const f3r_workspace* ws) { return ws->data.sincos_pairs; }
-
-/* The number of multipliers a redundant form carries after q and v: lambda and mu (dae),
- * lambda (index3), none (minimal). */
-static int multipliers(f3r_formulation form) {
-  return form == F3R_FORMULATION_DAE ? 2 * F3R_NCON : form == F3R_FORMULATION_INDEX3 ? F3R_NCON : 0;
-}
-
-int f3r_state_size(const f3r_model* m, f3r_formulation form) {
-  return (form == F3R_FORMULATION_MINIMAL ? 2 * m->n_independent : 2 * m->nq + multipliers(form)) +
-         m->n_lag + 1;
-}
+#include "form_dae.h"
+#include "form_minimal.h"
+#include "forward.h"
+#include "queries.h"
+#include "residual.h"
 
 void f3r_state_kinds(const f3r_model* m, f3r_formulation form, double* id) {
-  const int ny = f3r_state_size(m, form);
+  const int ny = m->state_size[form];
+  /* the multipliers of a redundant form, between v and the lag states */
+  const int multipliers = form == F3R_FORMULATION_MINIMAL ? 0 : m->lag_index[form] - 2 * m->nq;
   for (int n = 0; n < ny; ++n) id[n] = 1.0;
-  for (int c = 0; c < multipliers(form); ++c) id[2 * m->nq + c] = 0.0;
+  for (int c = 0; c < multipliers; ++c) id[2 * m->nq + c] = 0.0;
 }
 
 void f3r_index3_variable_indices(const f3r_model* m, int* index_of, int counts[3]) {
-  const int nq = m->nq, ny = f3r_state_size(m, F3R_FORMULATION_INDEX3);
+  const int nq = m->nq, ny = m->state_size[F3R_FORMULATION_INDEX3];
   for (int n = 0; n < ny; ++n) {
     const int k = n < nq ? 1 : n < 2 * nq ? 2 : n < 2 * nq + F3R_NCON ? 3 : 1; /* lag, W: 1 */
     if (index_of) index_of[n] = k;
@@ -83,25 +43,51 @@ static f3r_status check_finite(const double* x, int n) {
   return (acc[0] + acc[1]) + (acc[2] + acc[3]) == 0.0 ? F3R_OK : F3R_ERR_NONFINITE;
 }
 
+/* The forward pass's inputs from a formulation's state y (residual.h's layouts) and its rate yp
+ * (NULL: no acceleration stage), and the stages its residual needs through the end stops' forces
+ * and, with yp, the acceleration stage. */
+static unsigned bind_state(const f3r_model* m, f3r_formulation form, double t, const double* y,
+                           const double* yp, const double* held, f3r_workspace* ws, f3r_data* d) {
+  d->t = t;
+  d->held = held;
+  d->lag = m->n_lag ? y + m->lag_index[form] : NULL;
+  d->locks = &ws->locks;
+  d->stop_work = ws->stop_work;
+  if (form == F3R_FORMULATION_MINIMAL) {
+    const int nz = m->n_independent;
+    d->z = y, d->u = y + nz, d->udot = yp ? yp + nz : NULL, d->reduced = NULL;
+    return F3R_FWD_POSITION_CLOSED | F3R_FWD_VELOCITY_CLOSED | F3R_FWD_FORCES | F3R_FWD_STOPS |
+           (yp ? F3R_FWD_ACCELERATION_CLOSED : 0);
+  }
+  const int nq = m->nq;
+  d->q = y, d->v = y + nq, d->vdot = yp ? yp + nq : NULL;
+  d->multipliers = y + 2 * nq, d->mu = form == F3R_FORMULATION_DAE ? y + 2 * nq + F3R_NCON : NULL;
+  return F3R_FWD_POSITION | F3R_FWD_VELOCITY | F3R_FWD_FORCES | F3R_FWD_STOPS |
+         (yp ? F3R_FWD_ACCELERATION : 0);
+}
+
 f3r_status f3r_residual(const f3r_model* m, f3r_formulation form, double t, const double* y,
                         const double* yp, const double* held, double* res, f3r_workspace* ws) {
-  const f3r_status st = form == F3R_FORMULATION_MINIMAL
-                            ? f3r_minimal_residual(m, t, y, yp, held, res, ws)
-                            : f3r_dae_residual(m, form, t, y, yp, held, res, ws);
+  f3r_data* d = &ws->data;
+  const unsigned what = bind_state(m, form, t, y, yp, held, ws, d);
+  if (form == F3R_FORMULATION_MINIMAL) d->reduced = res + m->n_independent; /* the rows' place */
+  const f3r_status st = f3r_forward(m, d, what);
   if (st != F3R_OK) return st;
-  return check_finite(res, f3r_state_size(m, form));
+  if (form == F3R_FORMULATION_MINIMAL)
+    f3r_minimal_rows(m, y, yp, d, res);
+  else
+    f3r_dae_rows(m, form, y, yp, d, res);
+  return check_finite(res, m->state_size[form]);
 }
 
 f3r_status f3r_stop_forces_at(const f3r_model* m, f3r_formulation form, double t, const double* y,
                               const double* held, double* f, f3r_workspace* ws) {
-  double q[F3R_MAX_Q], v[F3R_MAX_Q], lag[3];
-  f3r_status st = f3r_state_to_full(m, form, y, q, v);
+  f3r_data d = {.t = t}; /* the formulation's own pass, as its residual runs it */
+  const unsigned what = bind_state(m, form, t, y, NULL, held, ws, &d);
+  const f3r_status st = f3r_forward(m, &d, what);
   if (st != F3R_OK) return st;
-  for (int i = 0; i < m->n_lag; ++i) lag[i] = y[f3r_lag_index(m, form) + i];
-  f3r_data d = {.t = t, .q = q, .v = v, .held = held, .lag = m->n_lag ? lag : NULL};
-  if ((st = f3r_forward(m, &d, F3R_FWD_POSITION | F3R_FWD_VELOCITY | F3R_FWD_FORCES)) != F3R_OK)
-    return st;
-  return f3r_stop_forces(m, &ws->locks, q, v, d.Q, f, ws->stop_work);
+  memcpy(f, d.stop_force, sizeof d.stop_force);
+  return F3R_OK;
 }
 
 /* The residual's derivative through the stops' forces f(y), which the formulations take as
@@ -112,8 +98,8 @@ f3r_status f3r_stop_forces_at(const f3r_model* m, f3r_formulation form, double t
 static f3r_status add_stop_force_derivatives(const f3r_model* m, f3r_formulation form, double t,
                                              const double* y, const double* held, double* J, int ld,
                                              f3r_workspace* ws) {
-  const int ny = f3r_state_size(m, form), minimal = form == F3R_FORMULATION_MINIMAL;
-  const int n_pos = minimal ? m->n_independent : m->nq, lag_at = f3r_lag_index(m, form);
+  const int ny = m->state_size[form], minimal = form == F3R_FORMULATION_MINIMAL;
+  const int n_pos = minimal ? m->n_independent : m->nq, lag_at = m->lag_index[form];
   double q[F3R_MAX_Q], v[F3R_MAX_Q], f0[3], f1[3];
   double dF_df[3][2 * F3R_MAX_Q + 16] = {{0.0}};
   f3r_status st = f3r_state_to_full(m, form, y, q, v);
@@ -156,31 +142,39 @@ static f3r_status add_stop_force_derivatives(const f3r_model* m, f3r_formulation
 f3r_status f3r_residual_jacobian(const f3r_model* m, f3r_formulation form, double t, double cj,
                                  const double* y, const double* yp, const double* held, double* J,
                                  int ld, f3r_workspace* ws) {
-  const int ny = f3r_state_size(m, form);
+  const int ny = m->state_size[form], minimal = form == F3R_FORMULATION_MINIMAL;
   if (ld == ny) /* one call, not one a column */
     memset(J, 0, (size_t)ny * (size_t)ny * sizeof(double));
   else
     for (int j = 0; j < ny; ++j) memset(J + (size_t)j * (size_t)ld, 0, (size_t)ny * sizeof(double));
-  const f3r_status st = form == F3R_FORMULATION_MINIMAL
-                            ? f3r_minimal_jacobian(m, t, cj, y, yp, held, J, ld, ws)
-                            : f3r_dae_jacobian(m, form, t, cj, y, yp, held, J, ld, ws);
-  if (st != F3R_OK || !f3r_stop_locks_any(&ws->locks)) return st;
+  f3r_data* d = &ws->data;
+  /* the dae Jacobian reads no acceleration stage; the minimal one its a, R and lambda */
+  const unsigned what = bind_state(m, form, t, y, minimal ? yp : NULL, held, ws, d);
+  const f3r_status st = f3r_forward(m, d, what);
+  if (st != F3R_OK) return st;
+  if (minimal)
+    f3r_minimal_jacobian(m, cj, J, ld, ws);
+  else
+    f3r_dae_jacobian(m, form, cj, y, yp, J, ld, ws);
+  if (!f3r_stop_locks_any(&ws->locks)) return F3R_OK;
   return add_stop_force_derivatives(m, form, t, y, held, J, ld, ws);
 }
 
 f3r_status f3r_explicit_rhs(const f3r_model* m, double t, const double* y, const double* held,
                             double* ydot, f3r_workspace* ws) {
-  const f3r_status st = f3r_minimal_rhs(m, t, y, held, ydot, ws);
-  if (st != F3R_OK) return st;
-  return check_finite(ydot, f3r_state_size(m, F3R_FORMULATION_MINIMAL));
+  return f3r_explicit_rhs_solver(m, 1, t, y, held, ydot, ws);
 }
 
 f3r_status f3r_explicit_rhs_solver(const f3r_model* m, int structured, double t, const double* y,
                                    const double* held, double* ydot, f3r_workspace* ws) {
-  const f3r_status st = structured ? f3r_minimal_rhs(m, t, y, held, ydot, ws)
-                                   : f3r_minimal_rhs_dense(m, t, y, held, ydot, ws);
+  const f3r_formulation form = F3R_FORMULATION_MINIMAL;
+  f3r_data* d = &ws->data;
+  const unsigned what = bind_state(m, form, t, y, NULL, held, ws, d); /* u' = 0: F_u(0) */
+  d->reduced = ydot + m->n_independent;
+  f3r_status st = f3r_forward(m, d, what | F3R_FWD_ACCELERATION_CLOSED);
+  if (st == F3R_OK) st = f3r_minimal_rhs(m, structured, y, ydot, ws);
   if (st != F3R_OK) return st;
-  return check_finite(ydot, f3r_state_size(m, F3R_FORMULATION_MINIMAL));
+  return check_finite(ydot, m->state_size[form]);
 }
 
 f3r_status f3r_state_to_full(const f3r_model* m, f3r_formulation form, const double* y, double* q,
@@ -202,16 +196,18 @@ f3r_status f3r_state_to_full(const f3r_model* m, f3r_formulation form, const dou
 f3r_status f3r_consistent_state(const f3r_model* m, f3r_formulation form, double t, const double* q,
                                 const double* v, const double* held, const double* lag, double work,
                                 double* y, double* yp, double* lambda_out, f3r_workspace* ws) {
-  const int nq = m->nq, nz = m->n_independent, ny = f3r_state_size(m, form);
+  const int nq = m->nq, nz = m->n_independent, ny = m->state_size[form];
   f3r_data* d = &ws->data;
   d->t = t;
   d->q = q;
   d->v = v;
   d->held = held;
   d->lag = lag;
-  f3r_forward(m, d, F3R_FWD_POSITION | F3R_FWD_VELOCITY | F3R_FWD_FORCES);
-  f3r_status st = f3r_workspace_add_stop_forces(m, ws, 0);
-  if (st == F3R_OK) st = f3r_solve_accelerations(m, q, v, d->Q, d->a, d->lambda, ws->solve_work);
+  d->locks = &ws->locks;
+  d->stop_work = ws->stop_work;
+  f3r_status st =
+      f3r_forward(m, d, F3R_FWD_POSITION | F3R_FWD_VELOCITY | F3R_FWD_FORCES | F3R_FWD_STOPS);
+  if (st == F3R_OK) st = f3r_data_solve_accelerations(m, d, d->Q, d->a, d->lambda, ws->solve_work);
   if (st != F3R_OK) return st;
   if (lambda_out) memcpy(lambda_out, d->lambda, sizeof d->lambda);
   if (form != F3R_FORMULATION_MINIMAL) { /* mu = 0 (dae) */
@@ -229,15 +225,11 @@ f3r_status f3r_consistent_state(const f3r_model* m, f3r_formulation form, double
     memcpy(yp + nz, d->a + F3R_Q_INDEPENDENT, (size_t)nz * sizeof(double));
   }
   for (int i = 0; i < m->n_lag; ++i) {
-    const int k = f3r_lag_index(m, form) + i;
+    const int k = m->lag_index[form] + i;
     y[k] = lag ? lag[i] : 0.0;
     yp[k] = (d->commanded[i] - y[k]) / m->lag_time_constant;
   }
   y[ny - 1] = work;
   yp[ny - 1] = d->power;
-  return check_finite(y, f3r_state_size(m, form));
-}
-
-void f3r_workspace_set_locks(f3r_workspace* ws, const int side[3]) {
-  for (int i = 0; i < 3; ++i) ws->locks.side[i] = side[i];
+  return check_finite(y, ny);
 }

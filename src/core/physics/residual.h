@@ -32,24 +32,12 @@
 
 #include <stddef.h>
 
-#include "flex3rpr/model.h"
-
 #ifdef __cplusplus
 extern "C" {
 #endif
 
-typedef struct f3r_workspace f3r_workspace;
+#include "workspace.h" /* its scratch memory, and the model's state layouts (model_layout.h) */
 
-f3r_workspace* f3r_workspace_create(const f3r_model* model);
-void f3r_workspace_destroy(f3r_workspace* ws);
-
-/* sin/cos pairs the forward pass has evaluated through this workspace since its creation: a
- * counter for tests and the benchmark (one evaluation's share is the difference of two reads). */
-long f3r_workspace_sincos_pairs(const f3r_workspace* ws);
-/* Index of the actuator lag states in y (valid when model->n_lag == 3). */
-static inline int f3r_lag_index(const f3r_model* model, f3r_formulation form) {
-  return f3r_state_size(model, form) - 1 - f3r_model_lag_states(model);
-}
 /* 1 for differential components of y, 0 for algebraic ones (lambda, mu of dae; lambda of index3). */
 void f3r_state_kinds(const f3r_model* model, f3r_formulation form, double* id);
 /* The index3 form's variables by differentiation index, as MEBDFI and RADAU5 want them:
@@ -58,7 +46,7 @@ void f3r_state_kinds(const f3r_model* model, f3r_formulation form, double* id);
 void f3r_index3_variable_indices(const f3r_model* model, int* index_of, int counts[3]);
 
 /* The shapes of a residual F(t, y, y'), its Jacobian and an explicit right-hand side y' = f(t, y),
- * which the public functions below and the formulations' own (workspace.h) share. */
+ * which the functions below and the peers (src/bench) share. */
 typedef f3r_status f3r_residual_fn(const f3r_model* model, f3r_formulation form, double t,
                                    const double* y, const double* yp, const double* held,
                                    double* res, f3r_workspace* ws);
@@ -68,10 +56,9 @@ typedef f3r_status f3r_jacobian_fn(const f3r_model* model, f3r_formulation form,
 typedef f3r_status f3r_rhs_fn(const f3r_model* model, double t, const double* y, const double* held,
                               double* ydot, f3r_workspace* ws);
 
-/* End stops held as contact: the legs locked at their stops for the workspace's next evaluations
- * (side[i]: -1 at stroke_min, +1 at stroke_max, 0 free; stages.h), and the stops' forces (3, N
- * along rho_i, zero on free legs) at state y of the formulation under held forces. */
-void f3r_workspace_set_locks(f3r_workspace* ws, const int side[3]);
+/* End stops held as contact (f3r_workspace_set_locks): the stops' forces (3, N along rho_i, zero
+ * on free legs) at state y of the formulation under held forces, from the formulation's own
+ * forward pass. */
 f3r_status f3r_stop_forces_at(const f3r_model* model, f3r_formulation form, double t,
                               const double* y, const double* held, double* f, f3r_workspace* ws);
 

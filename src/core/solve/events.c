@@ -5,8 +5,7 @@
 #include <string.h>
 
 #include "residual.h"
-#include "stages.h"
-#include "data.h"
+#include "queries.h"
 
 int f3r_event_roots(const f3r_model* m, f3r_formulation form, const double* y, const int* locked,
                     const double* stop_force, double* g) {

@@ -6,7 +6,7 @@
 
 #include "flex3rpr/sim.h"
 #include "residual.h"
-#include "stages.h"
+#include "queries.h"
 
 /* Root functions of state y, all crossing downwards: the end stops rho_i - min and max - rho_i
  * (rows 2i, 2i + 1; constant 1 without end stops) and the collapse guard

@@ -9,7 +9,7 @@
 
 #include "beam_basis.h"
 #include "model_layout.h"
-#include "stages.h"
+#include "queries.h"
 
 #define LINE (F3R_SENSOR_MAX_DELAY + 1)
 

@@ -7,7 +7,7 @@
 
 #include "flex3rpr/sim.h"
 #include "residual.h"
-#include "stages.h"
+#include "queries.h"
 #include "stepper.h"
 #include "workspace.h"
 
@@ -30,7 +30,7 @@ struct f3r_sim {
   double impact_loss;
   f3r_impact_record last_impact;
   f3r_impact_window impact_window; /* impacts in the last ms (events.h) */
-  int locked[3];                   /* the legs held at their stops (stages.h f3r_stop_locks) */
+  int locked[3];                   /* the legs held at their stops (equations.h f3r_stop_locks) */
   f3r_outputs out;
 };
 
@@ -450,17 +450,17 @@ const f3r_outputs* f3r_sim_outputs(f3r_sim* s) {
   for (int j = 0; j < F3R_Q_LEG_JOINTS; ++j) o->passive[j] = d->Q[j] - o->actuator[j];
   /* the stops' reactions: reported apart, in neither forces nor passive, but in the balance of
    * forces that the multipliers follow from */
-  if (f3r_workspace_add_stop_forces(m, s->out_ws, 0) != F3R_OK) return o;
+  const int minimal = s->settings.formulation == F3R_FORMULATION_MINIMAL;
+  d->locks = &s->out_ws->locks, d->stop_work = s->out_ws->stop_work;
+  d->udot = N_VGetArrayPointer(s->yp) + m->n_independent; /* the minimal form's multipliers */
+  d->reduced = NULL;
+  if (f3r_forward(m, d, F3R_FWD_STOPS | (minimal ? F3R_FWD_ACCELERATION_CLOSED : 0)) != F3R_OK)
+    return o;
   for (int i = 0; i < 3; ++i) {
     o->stop_locked[i] = s->locked[i];
-    o->stop_force[i] = s->out_ws->stop_force[i];
+    o->stop_force[i] = d->stop_force[i];
   }
-  if (s->settings.formulation == F3R_FORMULATION_DAE) {
-    memcpy(o->lambda, y + 2 * nq, sizeof o->lambda);
-  } else {
-    f3r_minimal_multipliers(m, N_VGetArrayPointer(s->yp), d);
-    memcpy(o->lambda, d->lambda, sizeof o->lambda);
-  }
+  memcpy(o->lambda, minimal ? d->lambda : y + 2 * nq, sizeof o->lambda);
   o->kinetic_energy = d->kinetic;
   o->potential_energy = d->potential;
   for (int i = 0; i < 3; ++i) {

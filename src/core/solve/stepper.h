@@ -55,7 +55,7 @@ typedef struct {
                            * the segment after it */
   int yp_stale;              /* 1: advance left y' unset (an explicit method needs no y'); the
                            * simulation evaluates it only when outputs ask for it */
-  int locked[3];             /* the legs held at their stops (stages.h f3r_stop_locks), as the
+  int locked[3];             /* the legs held at their stops (equations.h f3r_stop_locks), as the
                               * simulation set them in ws too: the roots watch their forces */
   char message[256];         /* the solver's last error message: the core never prints */
 } f3r_stepper;

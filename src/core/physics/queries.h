@@ -1,6 +1,9 @@
-/* The stages the equations of motion are built from, in the redundant coordinates q of model.h.
- * Private (flex3rpr_core_private): the tests, the benchmark and the peer library assemble the
- * same model from them.
+/* The physics layer's edge: the query functions that take (q, v), run the forward pass
+ * (forward.c) into a local f3r_data for the caller, and read its stages (queries.c); with the
+ * kernels that take (q, v) directly (derivatives.h, forces.h) and the assembled equations
+ * (equations.h), the whole private interface in one include, in the redundant coordinates q of
+ * model.h. Private (flex3rpr_core_private): the tests, the benchmark and the peer library assemble
+ * the same model from them.
  *
  * Equations of motion (paper eq. 18-19, derived from eqs. 8-17, docs/model.md):
  *   M(q) a + h(q, v) + k(q) = Q(t, q, v) + G(q)^T lambda,     g(q) = 0
@@ -11,16 +14,21 @@
  * Matrices are dense and column-major with a leading dimension `ld` (as SUNDIALS' dense
  * matrices): element (i, j) is at A[j*ld + i]. Functions named `f3r_add_*` add `scale` times
  * their matrix into A, so that a Jacobian can be assembled block by block in place. */
-#ifndef FLEX3RPR_STAGES_H
-#define FLEX3RPR_STAGES_H
+#ifndef FLEX3RPR_QUERIES_H
+#define FLEX3RPR_QUERIES_H
 
 #include <stddef.h>
 
-#include "flex3rpr/model.h"
-
 #ifdef __cplusplus
-extern "C" {
+extern "C" { /* the private headers below are C's alone */
 #endif
+
+#include "derivatives.h"
+#include "effects.h"
+#include "equations.h"
+#include "forces.h"
+#include "forward.h"
+#include "position.h"
 
 /* The two shapes most functions below share: out = a matrix at q times x (x is a, v or lambda),
  * and scale * the derivative of such a product (x held fixed) added into A. */
@@ -29,20 +37,14 @@ typedef void f3r_add_derivative_fn(const f3r_model* m, const double* q, const do
                                    double scale, double* A, int ld);
 
 /* --- inertia ------------------------------------------------------------------------------- */
-/* scale * M(q) (nq x nq) added into A. */
+/* scale * M(q) (nq x nq) added into A; out = M(q) a (nq). d(M a)/dq: derivatives.h. */
 void f3r_add_mass_matrix(const f3r_model* m, const double* q, double scale, double* A, int ld);
-/* out = M(q) a (nq); scale * d(M(q) a)/dq added into A (nq x nq), a held fixed. */
 f3r_product_fn f3r_mass_times;
-f3r_add_derivative_fn f3r_add_mass_times_dq;
 
 /* --- velocity-dependent forces h(q, v) --------------------------------------------------------- */
-/* h (nq) at (q, v); scale * dh/dq, dh/dv (nq x nq) added into A. */
+/* h (nq) at (q, v); scale * dh/dv (nq x nq) added into A. dh/dq: derivatives.h. */
 f3r_product_fn f3r_velocity_forces;
-f3r_add_derivative_fn f3r_add_velocity_forces_dq, f3r_add_velocity_forces_dv;
-
-/* --- elastic forces k(q) = dV/dq --------------------------------------------------------------- */
-void f3r_elastic_forces(const f3r_model* m, const double* q, double* k);
-void f3r_add_elastic_forces_dq(const f3r_model* m, double scale, double* A, int ld);
+f3r_add_derivative_fn f3r_add_velocity_forces_dv;
 
 /* --- generalized forces Q = held + the scene's effects (inputs, gravity, friction, damping) ----- */
 /* held (nq) are the caller's forces (may be NULL for none). */
@@ -82,35 +84,18 @@ f3r_status f3r_impact(const f3r_model* m, const double* q, const double* v, cons
                       int count, double restitution, double* v_out, double* impulse, double* work);
 size_t f3r_impact_work_size(const f3r_model* m);
 
-/* --- end stops held as contact (stops.c) ---------------------------------------------------------- */
-/* A leg at rest against a stop is locked there: its stroke obeys the acceleration constraint
- * rho_i'' = -2 a rho_i' - a^2 (rho_i - stop) (a = F3R_STOP_BAUMGARTE_RATE, which pulls the
- * integrator's drift back onto the stop), and the stop's force f_i on rho_i is that constraint's
- * Lagrange multiplier. side[i]: -1 locked at stroke_min, +1 at stroke_max, 0 free. */
-typedef struct {
-  int side[3];
-} f3r_stop_locks;
-#define F3R_STOP_BAUMGARTE_RATE 200.0
-int f3r_stop_locks_any(const f3r_stop_locks* locks);
-/* The stops' forces f (3, zero on free legs; N along rho_i) at (q, v) under the generalized forces
- * Q without them: [M -G^T -E; G 0 0; E^T 0 0] [a; lambda; f] = [Q - h - k; -gamma; -baumgarte],
- * E the unit columns of the locked legs. work holds f3r_stop_forces_work_size doubles. */
+/* --- end stops held as contact (equations.h) at (q, v) ----------------------------------------- */
+/* The stops' forces f (3) under the generalized forces Q without them. work holds
+ * f3r_stop_forces_work_size doubles. */
 f3r_status f3r_stop_forces(const f3r_model* m, const f3r_stop_locks* locks, const double* q,
                            const double* v, const double* Q, double* f, double* work);
-size_t f3r_stop_forces_work_size(const f3r_model* m);
 
 /* --- accelerations ------------------------------------------------------------------------------ */
 /* Solves [M -G^T; G 0] [a; lambda] = [Q - h - k; -gamma] for the accelerations a (nq) and the
- * multipliers lambda (6) at (q, v). work holds (nq+6)^2 + 2(nq+6) doubles.
+ * multipliers lambda (6) at (q, v). work holds f3r_solve_accelerations_work_size doubles.
  * Returns F3R_ERR_SINGULAR if the system is singular. */
-/* The system above for a leading block of K (n >= nq + 6, all of K zeroed, n x n) and of b (its
- * first nq + 6 rows), at (q, v) under Q; elastic (nq) receives k. Callers that add rows (the end
- * stops' contact) put them after it. */
-void f3r_constrained_system(const f3r_model* m, const double* q, const double* v, const double* Q,
-                            int n, double* K, double* b, double* elastic);
 f3r_status f3r_solve_accelerations(const f3r_model* m, const double* q, const double* v,
                                    const double* Q, double* a, double* lambda, double* work);
-size_t f3r_solve_accelerations_work_size(const f3r_model* m);
 
 #ifdef __cplusplus
 }
