@@ -51,7 +51,7 @@ def scene(name):
 
 
 def open_scene(name, directory):
-    """The shipped scene without its links' mode counts, as scripts/bench_accuracy gives it to the
+    """The shipped scene without its links' mode counts, as bench/accuracy_knob gives it to the
     knob (here through PyYAML)."""
     with open(scene(name)) as f:
         data = yaml.safe_load(f)

@@ -1,9 +1,9 @@
 # DASPK (R deSolve) on flex3rpr's compiled residual, for the work-precision benchmark
-# (scripts/bench_peers.py runs it). The residual F(t, y, y') and its Jacobian dF/dy + cj dF/dy'
+# (bench/peers.py runs it). The residual F(t, y, y') and its Jacobian dF/dy + cj dF/dy'
 # are those of the core, called by DASPK directly through deSolve's compiled-code interface
 # (src/bench/f3r_peer.c: f3r_peer_desolve_res, f3r_peer_desolve_jac); R only drives.
 #
-#   Rscript scripts/bench_daspk.R LIB SCENE FORMULATION RTOL ATOL OUT_CSV [JACOBIAN [OUTPUT_STEP]]
+#   Rscript bench/daspk.R LIB SCENE FORMULATION RTOL ATOL OUT_CSV [JACOBIAN [OUTPUT_STEP]]
 #     LIB          path of libf3r_peer.so
 #     FORMULATION  dae | minimal
 #     JACOBIAN     1: the core's Jacobian (jacres, default), 0: DASPK's difference quotients
@@ -24,7 +24,7 @@
 suppressPackageStartupMessages(library(deSolve))
 
 args <- commandArgs(trailingOnly = TRUE)
-if (length(args) < 6) stop("usage: bench_daspk.R LIB SCENE dae|minimal RTOL ATOL OUT_CSV [JACOBIAN [OUTPUT_STEP]]")
+if (length(args) < 6) stop("usage: daspk.R LIB SCENE dae|minimal RTOL ATOL OUT_CSV [JACOBIAN [OUTPUT_STEP]]")
 lib <- normalizePath(args[1])
 scene <- normalizePath(args[2])
 formulation <- args[3]
