@@ -10,7 +10,8 @@
                        (catkin_tools; skipped with --no-catkin-build)
   catkin_lint          `catkin_lint --strict` on the source tree finds nothing, and the scripts it
                        is told to ignore as uninstalled are the checkout's own tools: the
-                       benchmarks (bench/) and the checkout's commands in scripts/
+                       benchmarks (bench/), the CI helpers (scripts/ci/) and the user's
+                       commands in scripts/
   roslaunch_check      roslaunch-check on every launch file: each package it uses is a dependency
   launch_clock         every launch file sets /use_sim_time true by default
   launch_arguments     sim.launch's end_stops, paused, accuracy and tf_prefix reach the node
@@ -136,11 +137,10 @@ def case_catkin_build():
 
 # Executables that work on the source tree and its build/ folder and so are not installed; the
 # pragma in CMakeLists.txt silences catkin_lint on exactly these. They are sorted by folder: the
-# benchmarks in bench/, and in scripts/ itself, the folder of what rosrun starts, only the
-# commands run in a checkout (the rest of scripts/ is installed).
-CHECKOUT_FOLDERS = ("bench/",)
-CHECKOUT_COMMANDS = {"scripts/install_deps", "scripts/build", "scripts/build_sundials", "scripts/demo",
-                     "scripts/count_results.py", "scripts/fuzz", "scripts/lint"}
+# benchmarks in bench/, the CI helpers in scripts/ci/, and in scripts/ itself, the folder of what
+# rosrun starts, only the commands a user runs in a checkout (the rest of scripts/ is installed).
+CHECKOUT_FOLDERS = ("bench/", "scripts/ci/")
+CHECKOUT_COMMANDS = {"scripts/install_deps", "scripts/build", "scripts/build_sundials", "scripts/demo"}
 
 
 def uninstalled_misfiled(ignored):
@@ -153,8 +153,8 @@ def uninstalled_misfiled(ignored):
 def case_catkin_lint():
     """catkin_lint --strict on the source tree itself (the workspace's package is a folder of
     links, which catkin_lint does not walk into), and the only uninstalled executables it
-    ignores are the checkout's own tools: those in bench/, and the checkout's commands in
-    scripts/."""
+    ignores are the checkout's own tools: those in bench/ and scripts/ci/, and the user's
+    commands in scripts/."""
     p = subprocess.run(["catkin_lint", "--strict", ROOT], capture_output=True, text=True, timeout=600)
     if p.returncode != 0 or "found 0 problems" not in p.stdout + p.stderr:
         return "catkin_lint --strict:\n" + p.stdout + p.stderr
@@ -163,8 +163,8 @@ def case_catkin_lint():
     ignored = set(re.findall(r"file '([^']+)' is executable but not installed", p.stdout + p.stderr))
     misfiled = uninstalled_misfiled(ignored)
     if misfiled:
-        return (f"uninstalled executables {misfiled} are neither in {' or '.join(CHECKOUT_FOLDERS)} nor a "
-                f"checkout command of scripts/: install them (catkin_install_python) or move them")
+        return (f"uninstalled executables {misfiled} are in none of {', '.join(CHECKOUT_FOLDERS)} and not a "
+                f"user's command in scripts/: install them (catkin_install_python) or move them")
     stale = sorted(CHECKOUT_COMMANDS - ignored)
     if stale:
         return f"{stale} are no longer uninstalled executables: update CHECKOUT_COMMANDS"
