@@ -21,6 +21,14 @@
 # iteration fails at the first step from rtol 1e-8 on (paper_sim3_fixed_free). Their absolute
 # tolerance is the CLI's (atol 1e4, at least 1e-6: see src/core/solve/stepper_ida.c); with the scaling a
 # plain scalar atol works as well.
+
+# --help (or -h): the header above, before any package is loaded.
+if (any(commandArgs(trailingOnly = TRUE)[1] == c("-h", "--help"), na.rm = TRUE)) {
+  self <- sub("^--file=", "", grep("^--file=", commandArgs(FALSE), value = TRUE)[1])
+  text <- readLines(self)
+  cat(sub("^# ?", "", text[seq_len(match(FALSE, startsWith(text, "#")) - 1)]), sep = "\n")
+  quit(status = 0)
+}
 suppressPackageStartupMessages(library(deSolve))
 
 args <- commandArgs(trailingOnly = TRUE)

@@ -40,6 +40,14 @@
 # from a consistent state, as in the DASPK script; but MEBDFI does not clamp its steps at TEND
 # (deTestSet passes tcrit as TEND): the last step of a segment may pass the breakpoint and be
 # interpolated back to it.
+
+# --help (or -h): the header above, before any package is loaded.
+if (any(commandArgs(trailingOnly = TRUE)[1] == c("-h", "--help"), na.rm = TRUE)) {
+  self <- sub("^--file=", "", grep("^--file=", commandArgs(FALSE), value = TRUE)[1])
+  text <- readLines(self)
+  cat(sub("^# ?", "", text[seq_len(match(FALSE, startsWith(text, "#")) - 1)]), sep = "\n")
+  quit(status = 0)
+}
 suppressPackageStartupMessages(library(deSolve))
 
 say <- function(...) cat(..., "\n", sep = "")

@@ -425,9 +425,15 @@ def run_mebdfi(scene_path, rtol, atol, jacobian=True, time_limit=TIME_LIMIT_S):
     return _run_r(MEBDFI_SCRIPT, "F3R_MEBDFI", "MEBDFI", scene_path, "index3", rtol, atol, jacobian, time_limit)
 
 
-if __name__ == "__main__":  # a quick look: python3 bench/peers.py SCENE RTOL
-    scene = sys.argv[1] if len(sys.argv) > 1 else os.path.join(ROOT, "config/scenes/paper_sim3_fixed_free.yaml")
-    rtol = float(sys.argv[2]) if len(sys.argv) > 2 else 1e-6
+if __name__ == "__main__":  # a quick look: python3 bench/peers.py [SCENE [RTOL]]
+    import argparse
+
+    ap = argparse.ArgumentParser(description="A quick look: each peer once on SCENE at RTOL (atol RTOL/100), "
+                                             "after installing what is missing (ensure_installed).")
+    ap.add_argument("scene", nargs="?", default=os.path.join(ROOT, "config/scenes/paper_sim3_fixed_free.yaml"))
+    ap.add_argument("rtol", nargs="?", type=float, default=1e-6)
+    cli_args = ap.parse_args()
+    scene, rtol = cli_args.scene, cli_args.rtol
     ensure_installed()
     for name, fn in (("MEBDFI index3", lambda: run_mebdfi(scene, rtol, rtol * 1e-2)),
                      ("DASPK dae", lambda: run_daspk(scene, rtol, rtol * 1e-2, formulation="dae")),
