@@ -17,11 +17,13 @@ import time
 
 import numpy as np
 
-import flex3rpr
-
 ROOT = os.path.dirname(os.path.dirname(os.path.realpath(__file__)))
+# flex3rpr_tools, the module the scripts share, lives in scripts/ beside the rosrun tools.
+sys.path.insert(0, os.path.join(ROOT, "scripts"))
+import flex3rpr_tools as T  # noqa: E402
+
+flex3rpr = None  # the built module, imported in main() once the arguments are read (--help needs no build)
 SCENE = os.path.join(ROOT, "config", "scenes", "rest.yaml")
-CLI = os.path.join(ROOT, "build", "ws", "devel", "lib", "flex3rpr", "flex3rpr_sim")
 START = {"initial.platform_pose": [0.0, 0.0, 0.3]}  # away from the singular home
 
 
@@ -59,12 +61,11 @@ def cli_hold_table(commands, workdir):
     with open(scene, "w") as f:
         f.write(text + "\n" + tables)
     out = os.path.join(workdir, "pd.csv")
-    summary = subprocess.run([CLI, scene, "--out", out, "--summary-json", "-", "--set",
-                              "run.duration=%r" % (periods * 1e-3), "--set",
-                              "run.output_step=0.001", "--set",
-                              "initial.platform_pose=[0.0, 0.0, 0.3]"],
-                             check=True, capture_output=True, text=True).stdout
-    cpu = json.loads(summary)["run"]["cpu_time_s"]
+    summary, p = T.run_sim(T.find_binary(), scene, "--out", out, "--set", "run.duration=%r" % (periods * 1e-3),
+                           "--set", "run.output_step=0.001", "--set", "initial.platform_pose=[0.0, 0.0, 0.3]")
+    if p.returncode != 0 or not summary:
+        raise RuntimeError("flex3rpr_sim: " + T.error_message(summary, p))
+    cpu = summary["run"]["cpu_time_s"]
     with open(out) as f:
         last = list(csv.reader(f))[-1]
     assert abs(float(last[0]) - periods * 1e-3) < 1e-12, "the CLI ran %s s" % last[0]
@@ -131,6 +132,8 @@ def main():
     parser.add_argument("--quick", action="store_true", help="shorter runs, for a smoke test")
     parser.add_argument("--out", help="also write the report to this file")
     args = parser.parse_args()
+    global flex3rpr
+    import flex3rpr  # noqa: F811  (source build/ws/devel/setup.bash first)
     periods = 200 if args.quick else 1000
     lines = ["| measurement | value |", "|---|---|"]
     with tempfile.TemporaryDirectory() as work:

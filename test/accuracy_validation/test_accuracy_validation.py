@@ -1,6 +1,6 @@
 #!/usr/bin/env python3
 """The accuracy knob's measured error, on a quick subset of the held-out validation suite
-(scripts/validate_accuracy; the full suite and its table: docs/benchmarks/accuracy_validation.md).
+(bench/validate_accuracy; the full suite and its table: docs/benchmarks/accuracy_validation.md).
 
 Three of test/accuracy_validation/scenes, cut to their first 0.1 s, at 1e-3 and 1e-4 m, against
 references on the corrected basis at r = 8 and rtol 1e-11 (cached in --work). For each (scene,
@@ -23,7 +23,7 @@ import unittest
 import xml.etree.ElementTree as ET
 
 ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
-SCRIPT = os.path.join(ROOT, "scripts", "validate_accuracy")
+SCRIPT = os.path.join(ROOT, "bench", "validate_accuracy")
 sys.path.insert(0, os.path.join(ROOT, "scripts"))
 import flex3rpr_tools as T  # noqa: E402
 
@@ -37,7 +37,7 @@ ARGS = None
 
 
 def load_script():
-    """scripts/validate_accuracy as a module (it has no .py suffix)."""
+    """bench/validate_accuracy as a module (it has no .py suffix)."""
     loader = importlib.machinery.SourceFileLoader("validate_accuracy", SCRIPT)
     module = importlib.util.module_from_spec(importlib.util.spec_from_loader(loader.name, loader))
     loader.exec_module(module)

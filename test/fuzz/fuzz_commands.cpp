@@ -13,7 +13,7 @@
 //  - the decision agrees with an independent statement of the rules (docs/ros.md, "Inputs"): a
 //    message is accepted exactly when its lengths, frame and values are allowed.
 //
-//   scripts/fuzz [SECONDS]   builds this with clang++ -fsanitize=fuzzer,address,undefined
+//   scripts/ci/fuzz [SECONDS]   builds this with clang++ -fsanitize=fuzzer,address,undefined
 #include <fuzzer/FuzzedDataProvider.h>
 
 #include <cfloat>

@@ -6,7 +6,7 @@
  * accepts satisfies f3r_scene_validate; an error always carries a message; a model built from an
  * accepted scene has nq = 9 + sum of its links' modes within 9..F3R_MAX_Q.
  *
- *   scripts/fuzz [SECONDS]   builds this with clang -fsanitize=fuzzer,address,undefined */
+ *   scripts/ci/fuzz [SECONDS]   builds this with clang -fsanitize=fuzzer,address,undefined */
 #ifndef _GNU_SOURCE
 #define _GNU_SOURCE
 #endif

@@ -19,7 +19,7 @@ hold the whole flood, ~command_queue_size), more that a valid command was reject
 
 Nothing here depends on how fast the machine is: no wall-clock rate, real-time factor or count of
 messages this process happened to receive is asserted (a loaded machine under a sanitizer may
-run the node far slower than the wall clock). The rates reached are logged; scripts/node_speed
+run the node far slower than the wall clock). The rates reached are logged; bench/node_speed
 measures them.
 
 test_b_replay: the replay node is paused and reset, then advanced with ~step one publish period
@@ -349,7 +349,7 @@ class NodeFlood(unittest.TestCase):
                              rejected, report["invalid"], seed,
                              "ROS dropped commands in the node's subscriber queues" if rejected < report["invalid"]
                              else "valid commands were rejected"))
-        # Logged, never asserted: how fast this machine ran the flood (scripts/node_speed measures).
+        # Logged, never asserted: how fast this machine ran the flood (bench/node_speed measures).
         w0, w1 = report["wall_start"], report["wall_end"]
         with self.flood.lock:
             during = [(w, m.header.stamp.to_sec()) for w, m in self.flood.joints if w0 <= w <= w1]

@@ -1,7 +1,7 @@
 #!/usr/bin/python3
 """flex3rpr_sim --summary-json: the JSON parses, has every key, and its numbers are the human
 summary's (each JSON number, printed with the human summary's own format, gives the printed text;
-the human text is parsed here, in the test, and nowhere in scripts/):
+the human text is parsed here, in the test, and nowhere in scripts/ or bench/):
 - paper simulation 1, JSON on stdout (-) with the human summary on stderr, and the same into a file
   with the human summary on stdout;
 - the accuracy knob at 1e-4 m on paper simulations 1 and 3 (fixed-free) with the links' mode counts
@@ -51,7 +51,7 @@ def scene(name):
 
 
 def open_scene(name, directory):
-    """The shipped scene without its links' mode counts, as scripts/bench_accuracy gives it to the
+    """The shipped scene without its links' mode counts, as bench/accuracy_knob gives it to the
     knob (here through PyYAML)."""
     with open(scene(name)) as f:
         data = yaml.safe_load(f)

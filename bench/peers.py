@@ -1,6 +1,6 @@
 """Peers of the work-precision benchmark: other solvers on flex3rpr's own compiled model.
 
-Imported by scripts/bench (plain /usr/bin/python3, Debian's numpy and scipy):
+Imported by bench/work_precision (plain /usr/bin/python3, Debian's numpy and scipy):
   ensure_installed()                      apt-get installs r-cran-desolve and python3-scipy if missing
                                           (not deTestSet: without it run_mebdfi fails, the rest runs)
   build_library()                         path of libf3r_peer.so (src/bench/f3r_peer.c): the CMake
@@ -31,7 +31,7 @@ Each run_* returns None on failure, else a dict:
   error           (on success: None)
 Failures (a solver giving up, a missing dependency) return None; the reason is in last_error.
 
-rtol and atol are rounded to 3 significant digits, as scripts/bench passes them to the CLI
+rtol and atol are rounded to 3 significant digits, as bench/work_precision passes them to the CLI
 ("%.3g"): rtol * 1e-2 is not exactly 1e-6 in floating point, and a one-ulp change of atol moves
 DASPK's step count by ~2 % on paper_sim3_fixed_free.
 
@@ -67,8 +67,8 @@ def core_source(name):
     return next(os.path.join(d, name + ".c") for d in CORE_LAYERS if os.path.exists(os.path.join(d, name + ".c")))
 
 
-R_SCRIPT = os.path.join(ROOT, "scripts/bench_daspk.R")
-MEBDFI_SCRIPT = os.path.join(ROOT, "scripts/bench_mebdfi.R")
+R_SCRIPT = os.path.join(ROOT, "bench/daspk.R")
+MEBDFI_SCRIPT = os.path.join(ROOT, "bench/mebdfi.R")
 R_LOCAL_LIBRARY = os.path.join(ROOT, "build/rlib")  # where a deTestSet built here is installed
 OUTPUT_STEP = 1e-3
 TIME_LIMIT_S = 600.0  # one run is abandoned (None) past this much CPU time
@@ -264,7 +264,7 @@ class Model:
 
 
 def _tol(x):
-    """A tolerance as the CLI receives it from scripts/bench: 3 significant digits."""
+    """A tolerance as the CLI receives it from bench/work_precision: 3 significant digits."""
     return float(f"{float(x):.3g}")
 
 
@@ -409,7 +409,7 @@ def _run_r(script, tag, name, scene_path, formulation, rtol, atol, jacobian, tim
 
 def run_daspk(scene_path, rtol, atol, formulation="dae", jacobian=True, time_limit=TIME_LIMIT_S):
     """DASPK of R's deSolve on the core's residual in `formulation` (dae: GGL index 2 with the
-    multipliers as index-2 variables; minimal: an implicit ODE). Runs scripts/bench_daspk.R."""
+    multipliers as index-2 variables; minimal: an implicit ODE). Runs bench/daspk.R."""
     if formulation not in FORMULATIONS:
         raise ValueError(f"formulation {formulation!r}: dae or minimal")
     return _run_r(R_SCRIPT, "F3R_DASPK", "DASPK", scene_path, formulation, rtol, atol, jacobian, time_limit)
@@ -420,14 +420,20 @@ def run_daspk(scene_path, rtol, atol, formulation="dae", jacobian=True, time_lim
 def run_mebdfi(scene_path, rtol, atol, jacobian=True, time_limit=TIME_LIMIT_S):
     """MEBDFI of R's deTestSet, the paper's solver, on the core's plain index-3 residual (q, W index
     1; v index 2; lambda index 3, MEBDFI's nind) with the core's Jacobian (jacobian=True) or
-    MEBDFI's difference quotients. Runs scripts/bench_mebdfi.R; None with last_error "deTestSet is
+    MEBDFI's difference quotients. Runs bench/mebdfi.R; None with last_error "deTestSet is
     not installed ..." when deTestSet does not load (see have_mebdfi())."""
     return _run_r(MEBDFI_SCRIPT, "F3R_MEBDFI", "MEBDFI", scene_path, "index3", rtol, atol, jacobian, time_limit)
 
 
-if __name__ == "__main__":  # a quick look: python3 scripts/bench_peers.py SCENE RTOL
-    scene = sys.argv[1] if len(sys.argv) > 1 else os.path.join(ROOT, "config/scenes/paper_sim3_fixed_free.yaml")
-    rtol = float(sys.argv[2]) if len(sys.argv) > 2 else 1e-6
+if __name__ == "__main__":  # a quick look: python3 bench/peers.py [SCENE [RTOL]]
+    import argparse
+
+    ap = argparse.ArgumentParser(description="A quick look: each peer once on SCENE at RTOL (atol RTOL/100), "
+                                             "after installing what is missing (ensure_installed).")
+    ap.add_argument("scene", nargs="?", default=os.path.join(ROOT, "config/scenes/paper_sim3_fixed_free.yaml"))
+    ap.add_argument("rtol", nargs="?", type=float, default=1e-6)
+    cli_args = ap.parse_args()
+    scene, rtol = cli_args.scene, cli_args.rtol
     ensure_installed()
     for name, fn in (("MEBDFI index3", lambda: run_mebdfi(scene, rtol, rtol * 1e-2)),
                      ("DASPK dae", lambda: run_daspk(scene, rtol, rtol * 1e-2, formulation="dae")),

@@ -1,10 +1,10 @@
 # MEBDFI (R deTestSet) on flex3rpr's compiled index-3 residual, for the work-precision benchmark
-# (scripts/bench_peers.py runs it): the solver and the form of the paper. The residual
+# (bench/peers.py runs it): the solver and the form of the paper. The residual
 # F(t, y, y') = [q' - v; W' - Q.v; M v' + h + k - Q - G^T lambda; g(q)] and its exact Jacobian are
 # the core's, called by MEBDFI directly through deTestSet's compiled-code interface
 # (src/bench/f3r_peer.c: f3r_peer_desolve_res, f3r_peer_mebdfi_jac); R only drives.
 #
-#   Rscript scripts/bench_mebdfi.R LIB SCENE index3 RTOL ATOL OUT_CSV [JACOBIAN [OUTPUT_STEP]]
+#   Rscript bench/mebdfi.R LIB SCENE index3 RTOL ATOL OUT_CSV [JACOBIAN [OUTPUT_STEP]]
 #     LIB          path of libf3r_peer.so
 #     JACOBIAN     1: the core's Jacobian (jacres, default), 0: MEBDFI's difference quotients
 #
@@ -40,6 +40,14 @@
 # from a consistent state, as in the DASPK script; but MEBDFI does not clamp its steps at TEND
 # (deTestSet passes tcrit as TEND): the last step of a segment may pass the breakpoint and be
 # interpolated back to it.
+
+# --help (or -h): the header above, before any package is loaded.
+if (any(commandArgs(trailingOnly = TRUE)[1] == c("-h", "--help"), na.rm = TRUE)) {
+  self <- sub("^--file=", "", grep("^--file=", commandArgs(FALSE), value = TRUE)[1])
+  text <- readLines(self)
+  cat(sub("^# ?", "", text[seq_len(match(FALSE, startsWith(text, "#")) - 1)]), sep = "\n")
+  quit(status = 0)
+}
 suppressPackageStartupMessages(library(deSolve))
 
 say <- function(...) cat(..., "\n", sep = "")
@@ -57,7 +65,7 @@ if (!suppressPackageStartupMessages(requireNamespace("deTestSet", quietly = TRUE
 }
 
 args <- commandArgs(trailingOnly = TRUE)
-if (length(args) < 6) stop("usage: bench_mebdfi.R LIB SCENE index3 RTOL ATOL OUT_CSV [JACOBIAN [OUTPUT_STEP]]")
+if (length(args) < 6) stop("usage: mebdfi.R LIB SCENE index3 RTOL ATOL OUT_CSV [JACOBIAN [OUTPUT_STEP]]")
 lib <- normalizePath(args[1])
 scene <- normalizePath(args[2])
 formulation <- args[3]

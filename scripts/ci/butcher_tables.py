@@ -41,7 +41,7 @@ import tempfile
 
 import mpmath as mp
 
-ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))  # the checkout (scripts/ci/../..)
 ERK_C = os.path.join(ROOT, "src", "core", "solve", "erk_tables.c")
 SUNDIALS_DIR = os.path.join(ROOT, "build", "sundials", "sundials-6.4.1+dfsg1", "src", "arkode")
 SUNDIALS_TABLES = [  # (file, ARKODE name)
@@ -784,7 +784,7 @@ def main():
             failures.append("%s: weights or row sums inconsistent" % t.name)
         failed_tables[t.name] = failures[before:]
     if args.junit:  # one test case a table: its order conditions at the order it claims
-        sys.path.insert(0, os.path.dirname(os.path.realpath(__file__)))
+        sys.path.insert(0, os.path.join(ROOT, "scripts"))  # the scripts' shared module
         import flex3rpr_tools
 
         flex3rpr_tools.write_junit(args.junit, "butcher_tables",

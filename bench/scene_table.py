@@ -6,9 +6,12 @@ measured alone against paper simulation 3 (fixed-free) without it. Long scenes a
 usage: scene_table.py FLEX3RPR_SIM SCENES_DIR"""
 import argparse
 import os
+import sys
 import tempfile
 
-import flex3rpr_tools as T
+# flex3rpr_tools, the module the scripts share, lives in scripts/ beside the rosrun tools.
+sys.path.insert(0, os.path.join(os.path.dirname(os.path.dirname(os.path.realpath(__file__))), "scripts"))
+import flex3rpr_tools as T  # noqa: E402
 
 SHORTEN = {"free_vibration_long.yaml": 2.0, "stiff_high_modes.yaml": 0.01}
 

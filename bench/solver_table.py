@@ -1,6 +1,6 @@
 #!/usr/bin/python3
 """Writes src/core/accuracy/solver_table.def, the accuracy knob's measured solver relations, from the
-work-precision benchmark's build/bench/tolerance.csv (scripts/bench calls it after a full run).
+work-precision benchmark's build/bench/tolerance.csv (bench/work_precision calls it after a full run).
 
 For each kind of scene (flexible links; all links rigid; held commands, as the node gives them),
 each of our own methods measured on every benchmark scene of that kind and each tolerance
@@ -57,13 +57,13 @@ def relations(rows):
 
 def write(rels, stamp):
     """The rows as solver_table.c's data: one F3R_RELATION(...) per line."""
-    lines = ["/* Written by scripts/solver_table.py from the work-precision benchmark (scripts/bench): do not",
+    lines = ["/* Written by bench/solver_table.py from the work-precision benchmark (bench/work_precision): do not",
              " * edit. Data for solver_table.c: error is the largest end-effector error (m) over the benchmark",
              " * scenes of the kind, cost the median over them of CPU time / CPU time of minimal IDA at rtol 1e-6.",
              " * F3R_RELATION(kind, formulation, integrator, table, rtol, atol, error, cost, scenes) */",
              f'F3R_RELATIONS_SOURCE("{stamp}")']
     for kind, (form, integ, table), rtol, error, cost, n in rels:
-        atol = rtol * 1e-2  # scripts/bench's tol_args
+        atol = rtol * 1e-2  # bench/work_precision's tol_args
         lines.append(f'F3R_RELATION("{kind}", {form}, {integ}, "{table}", {rtol:.6g}, {atol:.6g}, {error:.3g}, {cost:.3g}, {n})')
     with open(OUT, "w") as f:
         f.write("\n".join(lines) + "\n")

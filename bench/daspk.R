@@ -1,9 +1,9 @@
 # DASPK (R deSolve) on flex3rpr's compiled residual, for the work-precision benchmark
-# (scripts/bench_peers.py runs it). The residual F(t, y, y') and its Jacobian dF/dy + cj dF/dy'
+# (bench/peers.py runs it). The residual F(t, y, y') and its Jacobian dF/dy + cj dF/dy'
 # are those of the core, called by DASPK directly through deSolve's compiled-code interface
 # (src/bench/f3r_peer.c: f3r_peer_desolve_res, f3r_peer_desolve_jac); R only drives.
 #
-#   Rscript scripts/bench_daspk.R LIB SCENE FORMULATION RTOL ATOL OUT_CSV [JACOBIAN [OUTPUT_STEP]]
+#   Rscript bench/daspk.R LIB SCENE FORMULATION RTOL ATOL OUT_CSV [JACOBIAN [OUTPUT_STEP]]
 #     LIB          path of libf3r_peer.so
 #     FORMULATION  dae | minimal
 #     JACOBIAN     1: the core's Jacobian (jacres, default), 0: DASPK's difference quotients
@@ -21,10 +21,18 @@
 # iteration fails at the first step from rtol 1e-8 on (paper_sim3_fixed_free). Their absolute
 # tolerance is the CLI's (atol 1e4, at least 1e-6: see src/core/solve/stepper_ida.c); with the scaling a
 # plain scalar atol works as well.
+
+# --help (or -h): the header above, before any package is loaded.
+if (any(commandArgs(trailingOnly = TRUE)[1] == c("-h", "--help"), na.rm = TRUE)) {
+  self <- sub("^--file=", "", grep("^--file=", commandArgs(FALSE), value = TRUE)[1])
+  text <- readLines(self)
+  cat(sub("^# ?", "", text[seq_len(match(FALSE, startsWith(text, "#")) - 1)]), sep = "\n")
+  quit(status = 0)
+}
 suppressPackageStartupMessages(library(deSolve))
 
 args <- commandArgs(trailingOnly = TRUE)
-if (length(args) < 6) stop("usage: bench_daspk.R LIB SCENE dae|minimal RTOL ATOL OUT_CSV [JACOBIAN [OUTPUT_STEP]]")
+if (length(args) < 6) stop("usage: daspk.R LIB SCENE dae|minimal RTOL ATOL OUT_CSV [JACOBIAN [OUTPUT_STEP]]")
 lib <- normalizePath(args[1])
 scene <- normalizePath(args[2])
 formulation <- args[3]
