@@ -587,7 +587,7 @@ TEST(Accuracy, ThePilotPairRunsWhereTheLinearEstimateComesNearTheShare) {
 }
 
 // Exact kinematics costs no measurable CPU time (the same steps and time as the runs without it,
-// scripts/bench_accuracy), so the knob turns it on wherever the scene leaves it open, and neither
+// bench/accuracy_knob), so the knob turns it on wherever the scene leaves it open, and neither
 // estimates its effect nor runs a pilot for it: on paper simulation 3 with fixed-pinned links at
 // 1e-5 m, where an estimate would have needed a pilot, none runs at all.
 TEST(Accuracy, ExactKinematicsIsOnWhereverTheSceneLeavesItOpen) {

@@ -350,7 +350,7 @@ TEST(StaticCorrection, ShapeMixIsASceneOptionThatTheResolverFits) {
   }
 }
 
-// The CLI's --modal-csv, which scripts/basis_convergence reads: the frequencies of the public
+// The CLI's --modal-csv, which bench/basis_convergence reads: the frequencies of the public
 // modal API to 17 digits and each link's basis; --geometry names it too.
 TEST(StaticCorrection, CliWritesTheFrequenciesAndNamesTheBasis) {
   const std::string csv = ::testing::TempDir() + "sc_modal.csv", out = csv + ".txt";

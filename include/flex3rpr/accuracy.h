@@ -120,7 +120,7 @@ double f3r_accuracy_check_rtol(double run_rtol, double request);
 /* The largest distance between two end-effector paths, (x, y) pairs at the same count times. */
 double f3r_path_distance(const double* a, const double* b, int count);
 
-/* A measured point of the work-precision relation (solver_table.c, written by scripts/bench). */
+/* A measured point of the work-precision relation (solver_table.c, written by bench/work_precision). */
 typedef struct {
   const char* kind; /* "flexible", "rigid" (all links rigid), "commanded" (held commands) */
   f3r_formulation formulation;

@@ -29,7 +29,7 @@ static void open_choice(const f3r_scene* scene, double request, int commanded, f
   run->model_target = F3R_ACCURACY_MODEL_SHARE * request;
   /* Exact kinematics costs no measurable CPU time: runs with it on take 0.86 to 1.05 times the
    * steps of the same runs without it and, within the machine's noise, the same time (median 0.98
-   * to 1.01 in three runs of scripts/bench_accuracy: 39 pairs each, every shipped scene with a
+   * to 1.01 in three runs of bench/accuracy_knob: 39 pairs each, every shipped scene with a
    * flexible link at r = 1 and 3, minimal and dae on IDA; 0.89 to 1.11, median 0.98, over 15 more
    * pairs up to r = 20 and with both ERK tables, medians of 7 to 15 runs in turns). So it is on
    * wherever the scene leaves it open: its part of the error goes to 0 at no cost, where an

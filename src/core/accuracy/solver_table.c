@@ -1,6 +1,6 @@
 /* The accuracy knob's measured solver relations (accuracy.h): one row per formulation,
  * integrator, Butcher table and tolerance measured by the work-precision benchmark. The rows are
- * data, written by scripts/solver_table.py into solver_table.def; this file only lays them out. */
+ * data, written by bench/solver_table.py into solver_table.def; this file only lays them out. */
 #include "flex3rpr/accuracy.h"
 
 #define F3R_RELATIONS_SOURCE(text) const char f3r_solver_relations_source[] = text;

@@ -31,7 +31,7 @@ f3r_scene f3r_default_scene(void) {
   s.stroke_max = 0.2;
   s.restitution = 0.5;
   s.formulation = F3R_FORMULATION_MINIMAL; /* measured 2-3x faster than dae at equal accuracy */
-  /* The cheapest solver at 6 correct digits on paper simulation 3 (scripts/bench, 2026-11-23):
+  /* The cheapest solver at 6 correct digits on paper simulation 3 (bench/work_precision, 2026-11-23):
    * minimal on IDA at rtol 2.2e-7..4.6e-7, 6.1 digits at a real-time factor of 2.8-3.1, ahead of
    * Dormand-Prince 5(4) at 1e-5 (6.0 digits, 3.0) and Fehlberg 7(8) at 3e-4 (6.1, 2.6). */
   s.rtol = 2e-7;

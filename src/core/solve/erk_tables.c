@@ -1,7 +1,7 @@
 /* Explicit Runge-Kutta pairs missing from SUNDIALS 6.4 (see erk_tables.h). Coefficients are
  * copied digit for digit from the sources named per table (30-40 significant digits; the compiler
  * rounds each literal to the nearest double). Unlisted entries are zero. Checked by
- * scripts/butcher_tables.py: order conditions to order 9, measured orders, stability. */
+ * scripts/ci/butcher_tables.py: order conditions to order 9, measured orders, stability. */
 #include "erk_tables.h"
 
 #include <string.h>

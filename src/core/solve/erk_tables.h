@@ -1,6 +1,6 @@
 /* Explicit Runge-Kutta pairs that SUNDIALS 6.4 lacks, as plain data. The caller builds the
  * ARKODE table: ARKodeButcherTable_Create(stages, order, embedded_order, c, A, b, b_embedded).
- * scripts/butcher_tables.py parses erk_tables.c and checks every table (order conditions,
+ * scripts/ci/butcher_tables.py parses erk_tables.c and checks every table (order conditions,
  * measured convergence order, stability on the imaginary axis). Private. */
 #ifndef FLEX3RPR_ERK_TABLES_H
 #define FLEX3RPR_ERK_TABLES_H
