@@ -104,20 +104,6 @@ void f3r_data_constraint_transpose_times(const f3r_model* m, const f3r_data* d, 
 #undef PUT_GTL
 }
 
-void f3r_data_solve_dependent(const f3r_data* d, const double* V, int ncols, double scale,
-                              double* x) {
-  for (int j = 0; j < ncols; ++j) {
-    const double* v = V + 6 * j;
-    double rho[3], theta[3]; /* all read before x, which may be V, is written */
-    for (int i = 0; i < 3; ++i)
-      f3r_link_solve_dependent(&d->link[i], v[2 * i], v[2 * i + 1], &rho[i], &theta[i]);
-    for (int i = 0; i < 3; ++i) {
-      x[i + 6 * j] = scale * rho[i];
-      x[F3R_Q_THETA + i + 6 * j] = scale * theta[i];
-    }
-  }
-}
-
 /* --- energies ------------------------------------------------------------------------------------ */
 
 /* T = v^T M v / 2 and V = sum k_j eta_j^2 / 2. */
@@ -145,8 +131,10 @@ size_t f3r_solve_accelerations_work_size(const f3r_model* m) {
   return n * n + 2 * n;
 }
 
-void f3r_data_constrained_system(const f3r_model* m, const f3r_data* d, const double* Q, int n,
-                                 double* K, double* b) {
+/* [M -G^T; G 0] (n x n, n >= nq + 6, all of K zeroed) and b = [Q - h - k; -gamma] (its first
+ * nq + 6 rows): the accelerations' system, and the stops' with their rows after it. */
+static void constrained_system(const f3r_model* m, const f3r_data* d, const double* Q, int n,
+                               double* K, double* b) {
   const int nq = m->nq;
   for (size_t z = 0; z < (size_t)n * n; ++z) K[z] = 0.0;
   f3r_data_add_mass_matrix(m, d, 1.0, K, n);
@@ -162,7 +150,7 @@ f3r_status f3r_data_solve_accelerations(const f3r_model* m, const f3r_data* d, c
   double* K = work;
   double* b = K + (size_t)n * n;
   int* piv = (int*)(b + n); /* n ints fit in n doubles */
-  f3r_data_constrained_system(m, d, Q, n, K, b);
+  constrained_system(m, d, Q, n, K, b);
   if (f3r_lu_factor(K, n, piv)) return F3R_ERR_SINGULAR;
   f3r_lu_solve(K, n, piv, b);
   for (int r = 0; r < nq; ++r) a[r] = b[r];
@@ -193,8 +181,8 @@ f3r_status f3r_data_stop_forces(const f3r_model* m, const f3r_data* d, const f3r
   const double rate = F3R_STOP_BAUMGARTE_RATE;
   double* K = work;
   double* b = K + (size_t)n * n;
-  int* piv = (int*)(b + n);                      /* n ints fit in n doubles */
-  f3r_data_constrained_system(m, d, Q, n, K, b); /* its E rows and columns below */
+  int* piv = (int*)(b + n);             /* n ints fit in n doubles */
+  constrained_system(m, d, Q, n, K, b); /* its E rows and columns below */
   for (int c = 0; c < count; ++c) {
     const int leg = legs[c], row = nq + F3R_NCON + c;
     const double stop = locks->side[leg] < 0 ? m->stroke_min : m->stroke_max;

@@ -32,23 +32,15 @@ static inline void f3r_link_solve_dependent(const f3r_link_data* k, double vx, d
   *rho = (c * vx + s * vy) + w * th;
   *theta = th;
 }
-/* x = scale G_d^{-1} V per link for the ncols columns of V (6 x ncols, (x, y) per link): x's rho
- * and theta rows (6 x ncols; x may be V). */
-void f3r_data_solve_dependent(const f3r_data* d, const double* V, int ncols, double scale,
-                              double* x);
 
 /* --- the energy stage (forward.c calls it last): T = v^T M v / 2 and V = sum k_j eta_j^2 / 2
  * from the position, mass and velocity stages ---------------------------------------------- */
 void f3r_energy_stage(const f3r_model* m, f3r_data* d);
 
 /* --- the constrained system at the position, mass, velocity and force stages ---------------- */
-/* [M -G^T; G 0] (n x n, n >= nq + 6, all of K zeroed) and b = [Q - h - k; -gamma] (its first
- * nq + 6 rows), under the generalized forces Q. Callers that add rows (the end stops' contact)
- * put them after it. */
-void f3r_data_constrained_system(const f3r_model* m, const f3r_data* d, const double* Q, int n,
-                                 double* K, double* b);
-/* Its solution for the accelerations a (nq) and the multipliers lambda (6). work holds
- * f3r_solve_accelerations_work_size doubles. F3R_ERR_SINGULAR if the system is singular. */
+/* [M -G^T; G 0] [a; lambda] = [Q - h - k; -gamma] solved for the accelerations a (nq) and the
+ * multipliers lambda (6). work holds f3r_solve_accelerations_work_size doubles.
+ * F3R_ERR_SINGULAR if the system is singular. */
 f3r_status f3r_data_solve_accelerations(const f3r_model* m, const f3r_data* d, const double* Q,
                                         double* a, double* lambda, double* work);
 size_t f3r_solve_accelerations_work_size(const f3r_model* m);
