@@ -128,9 +128,12 @@ const f3r_outputs* f3r_sim_outputs(f3r_sim* sim);
  * others below 3.2e-4); Verner 8(5)6 on undamped fast modes and IDA held to BDF order 3 exit 0
  * at 0.90 and 0.998 with paths millimetres to decimetres off (docs/solvers.md). */
 #define F3R_ENERGY_GUARD 0.1
+/* An error below this (J) is rounding, whatever the fraction: a mechanism at rest whose T + V is
+ * 5e-30 J balances to 1e-29 J (and a node would latch its warning on that). */
+#define F3R_ENERGY_GUARD_FLOOR 1e-9
 
 /* 1 when energy_balance_error (J) passes F3R_ENERGY_GUARD of largest_energy (J, the largest
- * T + V seen so far). */
+ * T + V seen so far) and F3R_ENERGY_GUARD_FLOOR. */
 int f3r_energy_guard_tripped(double energy_balance_error, double largest_energy);
 
 /* Current state vector y of the formulation (f3r_state_size values). */

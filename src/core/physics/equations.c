@@ -169,14 +169,14 @@ size_t f3r_stop_forces_work_size(const f3r_model* m) {
   return n * n + 2 * n;
 }
 
-f3r_status f3r_data_stop_forces(const f3r_model* m, const f3r_data* d, const f3r_stop_locks* locks,
-                                const double* Q, double* f, double* work) {
+f3r_status f3r_data_contact_solve(const f3r_model* m, const f3r_data* d, const f3r_stop_locks* locks,
+                                 const double* Q, double* f, double* a, double* work) {
   int legs[3], count = 0;
   for (int i = 0; i < 3; ++i) {
     f[i] = 0.0;
     if (locks->side[i]) legs[count++] = i;
   }
-  if (!count) return F3R_OK;
+  if (!count && !a) return F3R_OK;
   const int nq = m->nq, n = nq + F3R_NCON + count;
   const double rate = F3R_STOP_BAUMGARTE_RATE;
   double* K = work;
@@ -193,7 +193,14 @@ f3r_status f3r_data_stop_forces(const f3r_model* m, const f3r_data* d, const f3r
   if (f3r_lu_factor(K, n, piv)) return F3R_ERR_SINGULAR;
   f3r_lu_solve(K, n, piv, b);
   for (int c = 0; c < count; ++c) f[legs[c]] = b[nq + F3R_NCON + c];
+  if (a)
+    for (int r = 0; r < nq; ++r) a[r] = b[r];
   return F3R_OK;
+}
+
+f3r_status f3r_data_stop_forces(const f3r_model* m, const f3r_data* d, const f3r_stop_locks* locks,
+                                const double* Q, double* f, double* work) {
+  return f3r_data_contact_solve(m, d, locks, Q, f, NULL, work);
 }
 
 f3r_status f3r_stop_stage(const f3r_model* m, f3r_data* d) {

@@ -160,13 +160,21 @@ f3r_status f3r_stop_forces(const f3r_model* m, const f3r_stop_locks* locks, cons
   return f3r_data_stop_forces(m, forward_at(m, q, v, AT_QVF, &d), locks, Q, f, work);
 }
 
+f3r_status f3r_contact_accelerations(const f3r_model* m, const f3r_stop_locks* locks,
+                                     const double* q, const double* v, const double* Q, double* f,
+                                     double* a, double* work) {
+  f3r_data d;
+  return f3r_data_contact_solve(m, forward_at(m, q, v, AT_QVF, &d), locks, Q, f, a, work);
+}
+
 size_t f3r_impact_work_size(const f3r_model* m) {
   const size_t n = (size_t)m->nq + F3R_NCON + 3;
   return n * n + 2 * n;
 }
 
 f3r_status f3r_impact(const f3r_model* m, const double* q, const double* v, const int* legs,
-                      int count, double restitution, double* v_out, double* impulse, double* work) {
+                      int count, const double* rates, double* v_out, double* impulse,
+                      double* work) {
   const int nq = m->nq, n = nq + F3R_NCON + count;
   double* K = work;
   double* b = K + (size_t)n * n;
@@ -182,7 +190,7 @@ f3r_status f3r_impact(const f3r_model* m, const double* q, const double* v, cons
     F3R_AT(K, n, nq + F3R_NCON + c, legs[c]) = 1.0;  /* E^T dv */
   }
   for (int r = 0; r < n; ++r) b[r] = 0.0;
-  for (int c = 0; c < count; ++c) b[nq + F3R_NCON + c] = -(1.0 + restitution) * v[legs[c]];
+  for (int c = 0; c < count; ++c) b[nq + F3R_NCON + c] = rates[c] - v[legs[c]];
   if (f3r_lu_factor(K, n, piv)) return F3R_ERR_SINGULAR;
   f3r_lu_solve(K, n, piv, b);
   for (int r = 0; r < nq; ++r) v_out[r] = v[r] + b[r];

@@ -76,12 +76,14 @@ double f3r_kinetic_energy(const f3r_model* m, const double* q, const double* v);
 double f3r_potential_energy(const f3r_model* m, const double* q);
 
 /* --- impacts at the end stops ---------------------------------------------------------------------- */
-/* Newton's impact law with restitution c for the legs in contact (legs, count <= 3): the jump dv
- * solves [M -G^T -E; G 0 0; E^T 0 0] [dv; Lambda; p] = [0; 0; -(1 + c) E^T v], E the unit columns
- * of rho_legs, so the loops stay closed (G dv = 0) and rho_i' -> -c rho_i'. v_out = v + dv,
- * impulse[count] the impulses (N s). work holds f3r_impact_work_size doubles. */
+/* An impact at the end stops for the legs in contact (legs, count <= 3), each leg's rate after it
+ * given (rates[count], m/s: -c rho_i' for Newton's law with restitution c, 0 for a leg that
+ * stays): the jump dv solves [M -G^T -E; G 0 0; E^T 0 0] [dv; Lambda; p] = [0; 0; rates - E^T v],
+ * E the unit columns of rho_legs, so the loops stay closed (G dv = 0). v_out = v + dv,
+ * impulse[count] the impulses (N s, along rho_i). work holds f3r_impact_work_size doubles. */
 f3r_status f3r_impact(const f3r_model* m, const double* q, const double* v, const int* legs,
-                      int count, double restitution, double* v_out, double* impulse, double* work);
+                      int count, const double* rates, double* v_out, double* impulse,
+                      double* work);
 size_t f3r_impact_work_size(const f3r_model* m);
 
 /* --- end stops held as contact (equations.h) at (q, v) ----------------------------------------- */
@@ -89,6 +91,10 @@ size_t f3r_impact_work_size(const f3r_model* m);
  * f3r_stop_forces_work_size doubles. */
 f3r_status f3r_stop_forces(const f3r_model* m, const f3r_stop_locks* locks, const double* q,
                            const double* v, const double* Q, double* f, double* work);
+/* The same forces and the accelerations a (nq) under them. work as f3r_stop_forces'. */
+f3r_status f3r_contact_accelerations(const f3r_model* m, const f3r_stop_locks* locks,
+                                     const double* q, const double* v, const double* Q, double* f,
+                                     double* a, double* work);
 
 /* --- accelerations ------------------------------------------------------------------------------ */
 /* Solves [M -G^T; G 0] [a; lambda] = [Q - h - k; -gamma] for the accelerations a (nq) and the

@@ -23,10 +23,22 @@
  * integrator step, so root finding would miss one and let the piston pass the stop. */
 #define F3R_RESTING_SPEED 0.01
 
+/* A free leg's stop roots fire this far (m) past the stop, not on it: a leg that starts a segment
+ * on its stop (put there by contacts.c) then has its root armed however it moves, and an event
+ * puts it back (contacts.h F3R_STROKE_TOLERANCE bounds what a run accepts). */
+#define F3R_STOP_ROOT_OFFSET 1e-10
+/* A locked leg's force root fires where its stop pulls by this much (N), so that at the event the
+ * stop clearly pulls and the leg is released. */
+#define F3R_STOP_FORCE_ROOT_OFFSET 1e-8
+/* A locked leg whose integrated stroke drifts this far (m) off its stop stops the integrator,
+ * which puts it back on the stop (the Baumgarte term only pulls it back at its rate). */
+#define F3R_LOCK_DRIFT 5e-10
+
 /* g (F3R_NROOTS) at state y of the formulation. A leg locked at a stop (locked[i] -1 at min, +1
- * at max) watches its stop's force stop_force[i] instead: rows 2i (min) or 2i + 1 (max) cross
- * zero where the stop would have to pull, and the leg is released. Returns 0, or 1 when y does
- * not close (the integrators take that as a recoverable failure). */
+ * at max) watches its stop's force stop_force[i] instead: row 2i (min) or 2i + 1 (max) crosses
+ * zero where the stop would have to pull, and the leg is released; its other row crosses zero
+ * where it drifts F3R_LOCK_DRIFT off the stop. Returns 0, or 1 when y does not close (the
+ * integrators take that as a recoverable failure). */
 int f3r_event_roots(const f3r_model* m, f3r_formulation form, const double* y, const int* locked,
                     const double* stop_force, double* g);
 
@@ -40,21 +52,10 @@ int f3r_event_collapsed_leg(const int* root_info);
 f3r_status f3r_event_collapse_error(const f3r_model* m, f3r_formulation form, const double* y,
                                     int leg, double t, f3r_error* err);
 
-/* Impacts counted in the current window of 1 ms, for F3R_MAX_IMPACTS_PER_MS. */
+/* Impacts counted in the current window of 1 ms, for F3R_MAX_IMPACTS_PER_MS (contacts.h). */
 typedef struct {
   double window_start;
   long count;
 } f3r_impact_window;
-
-/* At an end-stop event at t (root_info from the integrator, the locked legs' rows cleared) in the
- * full state q, v: the legs that hit a stop, Newton's impact law (f3r_impact) with the model's
- * restitution, or with none for legs that come to rest (a rebound below F3R_RESTING_SPEED, or
- * chatter past F3R_MAX_IMPACTS_PER_MS): those get lock[i] = -1 (stroke_min) or +1 (stroke_max),
- * the rest 0. Fills v_after, the record of the first leg, and *legs_hit (0 when no end-stop root
- * fired). work holds f3r_impact_work_size doubles. */
-f3r_status f3r_event_impact(const f3r_model* m, double t, const int* root_info, const double* q,
-                            const double* v, f3r_impact_window* window, double* v_after,
-                            f3r_impact_record* record, int* legs_hit, int* lock, double* work,
-                            f3r_error* err);
 
 #endif

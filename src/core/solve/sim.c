@@ -8,6 +8,7 @@
 #include "flex3rpr/sim.h"
 #include "residual.h"
 #include "queries.h"
+#include "contacts.h"
 #include "stepper.h"
 #include "workspace.h"
 
@@ -80,26 +81,21 @@ static f3r_status consistent_once(f3r_sim* s, const double* q, const double* v, 
   return F3R_OK;
 }
 
-/* y, y' at s->t from full coordinates and work W, consistent by construction, for the legs
- * locked at their stops: a locked leg whose stop would have to pull to hold it (after an impact
- * locked it, or a force changed) is released first, from rest. */
-static f3r_status consistent(f3r_sim* s, const double* q, const double* v, const double* lag,
-                             double work, f3r_error* err) {
-  for (int pass = 0; pass < 4; ++pass) {
-    f3r_status st = consistent_once(s, q, v, lag, work, err);
-    if (st != F3R_OK) return st;
-    double force[3];
-    st = f3r_stop_forces_at(s->model, s->settings.formulation, nextafter(s->t, INFINITY),
-                            N_VGetArrayPointer(s->y), s->held, force, s->out_ws);
-    if (st != F3R_OK) return f3r_error_set(err, st, "end stop at t = %.9g: singular contact", s->t);
-    int locked[3], released = 0;
-    for (int i = 0; i < 3; ++i) {
-      locked[i] = s->locked[i];
-      if (locked[i] && -locked[i] * force[i] <= 0.0) locked[i] = 0, released = 1;
-    }
-    if (!released) return F3R_OK;
-    set_locks(s, locked);
-  }
+/* y, y' at s->t from full coordinates and work W, consistent by construction, after the end
+ * stops' contacts there (contacts.h: the legs in contact put on their stops, the impact, which
+ * legs stay locked); q and v change with them. roots: the roots that stopped the integrator, or
+ * NULL at a restart. */
+static f3r_status consistent(f3r_sim* s, double* q, double* v, const double* lag, double work,
+                             const int* roots, f3r_error* err) {
+  int locked[3], legs_hit = 0;
+  memcpy(locked, s->locked, sizeof locked);
+  f3r_status st = f3r_contacts_resolve(s->model, s->t, s->held, lag, roots, q, v, locked,
+                                       &s->impact_window, &s->last_impact, &legs_hit,
+                                       s->impact_work, err);
+  if (st != F3R_OK) return st;
+  s->impacts += legs_hit;
+  if (legs_hit) s->impact_loss += s->last_impact.kinetic_before - s->last_impact.kinetic_after;
+  set_locks(s, locked);
   return consistent_once(s, q, v, lag, work, err);
 }
 
@@ -161,7 +157,7 @@ f3r_status f3r_sim_create(const f3r_model* model, const f3r_solver_settings* set
     goto fail;
   }
   s->energy0 = f3r_kinetic_energy(model, q, v) + f3r_potential_energy(model, q);
-  if ((st = consistent(s, q, v, NULL, 0.0, err)) != F3R_OK) goto fail;
+  if ((st = consistent(s, q, v, NULL, 0.0, NULL, err)) != F3R_OK) goto fail;
   if ((st = s->ops->setup(stp, s->y, s->yp, 0.0, err)) != F3R_OK) goto fail;
   *out = s;
   return F3R_OK;
@@ -193,7 +189,7 @@ f3r_status f3r_sim_reset(f3r_sim* s, f3r_error* err) {
   memset(&s->impact_window, 0, sizeof s->impact_window);
   memset(&s->last_impact, 0, sizeof s->last_impact);
   set_locks(s, (const int[3]){0, 0, 0});
-  if ((st = consistent(s, q, v, NULL, 0.0, err)) != F3R_OK) return st;
+  if ((st = consistent(s, q, v, NULL, 0.0, NULL, err)) != F3R_OK) return st;
   st = s->ops->restart(&s->stepper, s->y, s->yp, 0.0, err);
   memset(&s->stepper.base, 0, sizeof s->stepper.base); /* a reset starts the count anew */
   s->stepper.recoverable = 0;
@@ -215,13 +211,21 @@ f3r_status f3r_sim_set_forces(f3r_sim* s, const double* held, f3r_error* err) {
   if (st != F3R_OK) return f3r_error_set(err, st, "the current state cannot be closed");
   memcpy(keep, s->held, sizeof keep);
   memcpy(s->held, held, (size_t)nq * sizeof(double));
-  int keep_locks[3]; /* a new force may release a leg from its stop */
+  int keep_locks[3]; /* a new force may release a leg from its stop, or press one into it */
   memcpy(keep_locks, s->locked, sizeof keep_locks);
-  st = consistent(s, q, v, lag_states(s, lag), y[s->ny - 1], err);
+  const long keep_impacts = s->impacts;
+  const double keep_loss = s->impact_loss;
+  const f3r_impact_window keep_window = s->impact_window;
+  const f3r_impact_record keep_record = s->last_impact;
+  st = consistent(s, q, v, lag_states(s, lag), y[s->ny - 1], NULL, err);
   if (st == F3R_OK) st = s->ops->restart(&s->stepper, s->y, s->yp, s->t, err);
   if (st != F3R_OK) {
     memcpy(s->held, keep, sizeof keep);
     set_locks(s, keep_locks);
+    s->impacts = keep_impacts;
+    s->impact_loss = keep_loss;
+    s->impact_window = keep_window;
+    s->last_impact = keep_record;
   }
   return st;
 }
@@ -297,9 +301,17 @@ f3r_status f3r_sim_set_state(f3r_sim* s, const double pose[3], const double twis
   /* The consistent state goes to scratch first (the outputs' workspace, which the integrator
    * never reads), so that a failure leaves the simulation as it was. */
   double y[F3R_MAX_STATE], yp[F3R_MAX_STATE];
-  int keep_locks[3]; /* the new state starts free of the stops */
+  /* The new state's contacts: a leg set on its stop and pressed into it locks there, one set
+   * moving into it rebounds. */
+  int locks[3] = {0, 0, 0}, legs_hit = 0;
+  f3r_impact_window window = {0};
+  f3r_impact_record record;
+  if ((st = f3r_contacts_resolve(m, s->t, s->held, lag_states(s, lag), NULL, q, v, locks, &window,
+                                 &record, &legs_hit, s->impact_work, err)) != F3R_OK)
+    return st;
+  int keep_locks[3];
   memcpy(keep_locks, s->locked, sizeof keep_locks);
-  set_locks(s, (const int[3]){0, 0, 0});
+  set_locks(s, locks);
   st = f3r_consistent_state(m, s->settings.formulation, nextafter(s->t, INFINITY), q, v, s->held,
                             lag_states(s, lag), 0.0, y, yp, NULL, s->out_ws);
   if (st != F3R_OK) {
@@ -332,34 +344,26 @@ f3r_status f3r_sim_set_state(f3r_sim* s, const double pose[3], const double twis
   return F3R_OK;
 }
 
-/* At an end-stop event: locked legs whose stop would pull are released; free legs that hit a
- * stop follow the impact law (events.c) and lock when they come to rest; then a restart. */
+/* At an end-stop event: the contacts there (contacts.h), then a restart. */
 static f3r_status handle_stop_event(f3r_sim* s, f3r_error* err) {
-  const f3r_model* m = s->model;
   const double* y = N_VGetArrayPointer(s->y);
-  double q[F3R_MAX_Q], v[F3R_MAX_Q], v_after[F3R_MAX_Q], lag[3];
-  f3r_status st = f3r_state_to_full(m, s->settings.formulation, y, q, v);
+  double q[F3R_MAX_Q], v[F3R_MAX_Q], lag[3];
+  f3r_status st = f3r_state_to_full(s->model, s->settings.formulation, y, q, v);
   if (st != F3R_OK)
     return f3r_error_set(err, st, "end stop at t = %.9g: the loops do not close", s->t);
-  int roots[F3R_NROOTS], locked[3], lock[3], legs_hit = 0;
-  memcpy(roots, s->stepper.root_info, sizeof roots);
-  for (int i = 0; i < 3; ++i) {
-    locked[i] = s->locked[i];
-    if (locked[i] && (roots[2 * i] || roots[2 * i + 1])) locked[i] = 0; /* released */
-    if (s->locked[i]) roots[2 * i] = roots[2 * i + 1] = 0;
-  }
-  st = f3r_event_impact(m, s->t, roots, q, v, &s->impact_window, v_after, &s->last_impact,
-                        &legs_hit, lock, s->impact_work, err);
-  if (st != F3R_OK) return st;
-  if (!legs_hit) memcpy(v_after, v, sizeof v_after);
-  s->impacts += legs_hit;
-  if (legs_hit) s->impact_loss += s->last_impact.kinetic_before - s->last_impact.kinetic_after;
-  for (int i = 0; i < 3; ++i)
-    if (lock[i]) locked[i] = lock[i];
-  set_locks(s, locked);
-  st = consistent(s, q, v_after, lag_states(s, lag), y[s->ny - 1], err);
+  st = consistent(s, q, v, lag_states(s, lag), y[s->ny - 1], s->stepper.root_info, err);
   if (st == F3R_OK) st = s->ops->restart(&s->stepper, s->y, s->yp, s->t, err);
   return st;
+}
+
+/* The run's guard on the end stops: an error where a stroke of the state passes a stop. */
+static f3r_status check_strokes(const f3r_sim* s, double t, f3r_error* err) {
+  if (!s->model->end_stops) return F3R_OK;
+  double q[F3R_MAX_Q], v[F3R_MAX_Q];
+  if (f3r_state_to_full(s->model, s->settings.formulation, N_VGetArrayPointer(s->y), q, v) !=
+      F3R_OK)
+    return F3R_OK; /* a state that does not close fails elsewhere, with its own message */
+  return f3r_contacts_check_strokes(s->model, q, t, err);
 }
 
 /* Integrates to t_out without crossing a breakpoint of the scripted inputs: at each one it stops
@@ -388,6 +392,10 @@ f3r_status f3r_sim_advance(f3r_sim* s, double t_out, f3r_error* err) {
       s->t = t_reached;
       return st;
     }
+    if ((st = check_strokes(s, t_reached, err)) != F3R_OK) {
+      s->t = t_reached;
+      return st;
+    }
     if (event) {
       s->t = t_reached;
       const int collapsed = f3r_event_collapsed_leg(s->stepper.root_info);
@@ -406,7 +414,7 @@ f3r_status f3r_sim_advance(f3r_sim* s, double t_out, f3r_error* err) {
       double q[F3R_MAX_Q], v[F3R_MAX_Q];
       st = f3r_state_to_full(m, s->settings.formulation, y, q, v);
       double lag[3];
-      if (st == F3R_OK) st = consistent(s, q, v, lag_states(s, lag), y[s->ny - 1], err);
+      if (st == F3R_OK) st = consistent(s, q, v, lag_states(s, lag), y[s->ny - 1], NULL, err);
       if (st == F3R_OK) st = s->ops->restart(&s->stepper, s->y, s->yp, s->t, err);
       if (st != F3R_OK) return st;
     }
@@ -486,5 +494,6 @@ const f3r_outputs* f3r_sim_outputs(f3r_sim* s) {
 }
 
 int f3r_energy_guard_tripped(double energy_balance_error, double largest_energy) {
-  return largest_energy > 0.0 && energy_balance_error > F3R_ENERGY_GUARD * largest_energy;
+  return largest_energy > 0.0 && energy_balance_error > F3R_ENERGY_GUARD * largest_energy &&
+         energy_balance_error > F3R_ENERGY_GUARD_FLOOR;
 }
