@@ -144,4 +144,123 @@ TEST(EndStops, AnExplicitIntegratorHoldsTheSameWrench) {
   ExpectWrenchHeld("minimal, ERK", "solver: {integrator: erk}\n");
 }
 
+// --- several legs in contact at once ------------------------------------------------------------
+
+// Every leg locked in run r: its stroke on its stop to 1e-9 m.
+void ExpectLockedOnStops(const StopRun& run, const f3r_outputs* o, const char* when) {
+  const f3r_geometry g = f3r_model_geometry(run.model.get());
+  for (int i = 0; i < 3; ++i) {
+    if (!o->stop_locked[i]) continue;
+    EXPECT_NEAR(o->q[i], o->stop_locked[i] < 0 ? g.stroke_min : g.stroke_max, 1e-9)
+        << when << ": leg " << i + 1;
+  }
+}
+
+// Legs 1 and 2 pushed out, leg 3 free and unloaded: at rest leg 3 carries nothing, so the platform
+// is balanced only if legs 1 and 2 carry nothing either: each stop takes its leg's push.
+TEST(EndStops, TwoLegsHeldAtOnceEachStopTakesItsPush) {
+  StopRun run(StopModel(0.0, 0.2));
+  run.held[0] = 40.0;
+  run.held[1] = 70.0;
+  double deepest = -1.0;
+  const f3r_outputs* o = run.HoldTo(6.0, &deepest);
+  std::printf("measured: two legs held: stop forces %.9g %.9g %.9g N, energy balance %.1e J\n",
+              o->stop_force[0], o->stop_force[1], o->stop_force[2], o->energy_balance_error);
+  EXPECT_EQ(o->stop_locked[0], 1);
+  EXPECT_EQ(o->stop_locked[1], 1);
+  EXPECT_EQ(o->stop_locked[2], 0);
+  EXPECT_NEAR(o->stop_force[0], -40.0, 1e-6);
+  EXPECT_NEAR(o->stop_force[1], -70.0, 1e-6);
+  ExpectLockedOnStops(run, o, "two held");
+  EXPECT_LT(deepest, 1e-9);
+  EXPECT_LT(o->energy_balance_error, 1e-5);
+}
+
+// Leg 1 held at its stop while leg 2 is driven into its own again and again (restitution 0.5):
+// no impact of leg 2 lifts leg 1 off, and leg 1's stop ends taking its push.
+TEST(EndStops, AHeldLegStaysWhileItsNeighbourImpacts) {
+  StopRun run(StopModel(0.0, 0.2));
+  run.held[0] = 50.0;
+  const f3r_outputs* o = run.HoldTo(2.0);
+  ASSERT_EQ(o->stop_locked[0], 1);
+  double deepest = -1.0;
+  const long before = o->impacts;
+  for (int k = 0; k < 4; ++k) {  // leg 2 out into its stop, then back in
+    run.held[1] = 80.0;
+    o = run.HoldTo(2.0 + 0.5 * k + 0.25, &deepest);
+    EXPECT_EQ(o->stop_locked[0], 1) << "push " << k;
+    ExpectLockedOnStops(run, o, "neighbour pushed");
+    run.held[1] = -30.0;
+    o = run.HoldTo(2.0 + 0.5 * k + 0.5, &deepest);
+    EXPECT_EQ(o->stop_locked[0], 1) << "pull " << k;
+    ExpectLockedOnStops(run, o, "neighbour pulled");
+  }
+  EXPECT_GT(o->impacts, before + 4);  // leg 2 hit its stop each time
+  run.held[1] = 0.0;
+  o = run.HoldTo(8.0, &deepest);
+  std::printf("measured: held leg beside an impacting one: %ld impacts, stop force %.9g N, "
+              "energy balance %.1e J, deepest %.1e m\n",
+              o->impacts, o->stop_force[0], o->energy_balance_error, deepest);
+  EXPECT_NEAR(o->stop_force[0], -50.0, 1e-6);
+  EXPECT_LT(deepest, 1e-9);
+  EXPECT_LT(o->energy_balance_error, 1e-4);
+}
+
+// Leg 1 pulled off its stop at the instant leg 2 is pushed into its own: one releases, the other
+// locks, and each stop then takes what statics says.
+TEST(EndStops, AReleaseWhileAnotherLegLocks) {
+  StopRun run(StopModel(0.0, 0.2));
+  run.held[0] = 60.0;
+  const f3r_outputs* o = run.HoldTo(2.0);
+  ASSERT_EQ(o->stop_locked[0], 1);
+  run.held[0] = -10.0;
+  run.held[1] = 60.0;
+  double deepest = -1.0;
+  o = run.HoldTo(2.05, &deepest);
+  EXPECT_EQ(o->stop_locked[0], 0);
+  o = run.HoldTo(6.0, &deepest);
+  std::printf("measured: release and lock: locks %d %d %d, stop forces %.9g %.9g %.9g N\n",
+              o->stop_locked[0], o->stop_locked[1], o->stop_locked[2], o->stop_force[0],
+              o->stop_force[1], o->stop_force[2]);
+  EXPECT_EQ(o->stop_locked[1], 1);
+  EXPECT_NEAR(o->stop_force[1], -60.0, 1e-6);
+  // leg 1, pulled inwards, rests on its lower stop (nothing else holds it)
+  EXPECT_EQ(o->stop_locked[0], -1);
+  EXPECT_NEAR(o->stop_force[0], 10.0, 1e-6);
+  ExpectLockedOnStops(run, o, "after the exchange");
+  EXPECT_LT(deepest, 1e-9);
+  EXPECT_LT(o->energy_balance_error, 1e-4);
+}
+
+// A platform wrench that turns from plateau to plateau moves the contacts from stop to stop; at
+// rest on each plateau the stop forces balance the wrench, and a leg left free is one that statics
+// leaves unloaded (the platform turned until the wrench's line meets the other two legs').
+TEST(EndStops, AWrenchMovesTheContactsFromLegToLeg) {
+  StopRun run(StopModel(0.11, 0.13));
+  const double wrenches[3][3] = {{20.0, 10.0, 1.0}, {-25.0, 5.0, -0.5}, {5.0, -30.0, 0.8}};
+  double deepest = -1.0;
+  int sides_changed = 0, previous[3] = {0, 0, 0};
+  for (int k = 0; k < 3; ++k) {
+    for (int c = 0; c < 3; ++c) run.held[F3R_Q_X + c] = wrenches[k][c];
+    const f3r_outputs* o = run.HoldTo(4.0 * (k + 1), &deepest);
+    const Eigen::Vector3d T = EquilibriumLegForces(run.model.get(), o->q, wrenches[k]);
+    std::printf("measured: wrench %d: locks %d %d %d, stop forces %.9g %.9g %.9g N, statics "
+                "%.9g %.9g %.9g N\n",
+                k + 1, o->stop_locked[0], o->stop_locked[1], o->stop_locked[2], o->stop_force[0],
+                o->stop_force[1], o->stop_force[2], T[0], T[1], T[2]);
+    for (int i = 0; i < 3; ++i) {
+      if (!o->stop_locked[i]) {
+        EXPECT_NEAR(T[i], 0.0, 1e-6 * T.norm()) << "leg " << i + 1;
+      }
+      EXPECT_NEAR(o->stop_force[i], T[i], 1e-6 * T.norm()) << "wrench " << k + 1;
+      sides_changed += k > 0 && o->stop_locked[i] != previous[i];
+      previous[i] = o->stop_locked[i];
+    }
+    ExpectLockedOnStops(run, o, "wrench");
+    EXPECT_LT(o->energy_balance_error, 1e-4);
+  }
+  EXPECT_GT(sides_changed, 0);  // the contacts moved
+  EXPECT_LT(deepest, 1e-9);
+}
+
 }  // namespace
