@@ -4,7 +4,7 @@
 // passes a stop by more than 1e-9 m, no locked leg leaves its stop by more than 1e-9 m, the run
 // never fails and the energy guard stays quiet. F3R_STOP_STRESS_CASES sets the number of seeds a
 // restitution and configuration (default 1), F3R_STOP_STRESS_SECONDS each one's length (default
-// 1 s): seconds in CI; bench/stop_stress runs the long version. The worst figures are printed.
+// 1 s): seconds in CI; F3R_STOP_STRESS_CASES=100 F3R_STOP_STRESS_SECONDS=2 is the long version. The worst figures are printed.
 #include <gtest/gtest.h>
 
 #include <algorithm>

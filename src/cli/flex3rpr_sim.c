@@ -310,6 +310,7 @@ static int run_outputs(const cli_options* o, const f3r_scene* scene, const f3r_m
       path[2 * k] = out->q[F3R_Q_X];
       path[2 * k + 1] = out->q[F3R_Q_Y];
     }
+    if (out->impacts && !r->impacts) r->first_impact = out->impacts == 1 ? out->last_impact.t : t;
     track_maxima(r, model, scene->beam_points, shapes, out);
   }
   if (csv) fflush(csv); /* the last rows' write belongs to the run's time too */
@@ -483,7 +484,17 @@ typedef struct {
   int accepted;     /* the run written */
   double check_cpu; /* s of CPU time of every run but the written one */
   char attempts[1024];
+  char stopped[256]; /* why escalation stopped before its count, or empty */
 } verification;
+
+/* An answer costs at most this many times its first configuration's run and check: an escalation
+ * that would pass it stops (the issue's impact scene ran for minutes chasing a path that does not
+ * converge). */
+#define ESCALATION_COST_LIMIT 10.0
+/* A configuration whose measured error is not below this fraction of the one before it has not
+ * converged: impacts are the usual cause (an impact's impulse excites every mode), and richer
+ * configurations would only cost more. */
+#define ESCALATION_SHRINK 0.5
 
 /* Whether a measured error meets the request, with the check's margin. */
 static int measured_meets(double measured, double request) {
@@ -502,11 +513,42 @@ static void note_attempt(verification* v, int attempt, const char* format, ...) 
   va_end(args);
 }
 
+/* Whether escalation stops after configuration `current` (attempt > 0: `previous` came before it):
+ * its measured error did not shrink, or the next configuration, run and checked, would pass
+ * ESCALATION_COST_LIMIT. Says why in v->stopped. */
+static int escalation_stops(verification* v, int attempt, int current, int previous) {
+  const config_run* run = &v->runs[current];
+  double spent = 0.0;
+  for (int k = 0; k < v->count; ++k) spent += v->runs[k].stats.cpu_total;
+  const double first = v->runs[0].stats.cpu_total + v->runs[v->count > 1 ? 1 : 0].stats.cpu_total;
+  /* the next configuration is this one's check (run again only for a CSV), and its own check
+   * about twice that (one more mode and a tenth of the tolerance: 1.5 to 2.5 times on the
+   * shipped scenes) */
+  const double next = 2.0 * v->runs[v->count - 1].stats.cpu_total;
+  const long impacts = run->stats.impacts;
+  char why[160] = "";
+  if (attempt > 0 && previous >= 0 && !(run->measured < ESCALATION_SHRINK * v->runs[previous].measured))
+    snprintf(why, sizeof why, "the measured error did not shrink (%.3g m, then %.3g m)",
+             v->runs[previous].measured, run->measured);
+  else if (spent + next > ESCALATION_COST_LIMIT * first)
+    snprintf(why, sizeof why,
+             "the next configuration would pass %g times the first one's cost (%.3g s so far)",
+             ESCALATION_COST_LIMIT, spent);
+  if (!why[0]) return 0;
+  int n = snprintf(v->stopped, sizeof v->stopped, "escalation stopped: %s", why);
+  if (impacts && n > 0 && (size_t)n < sizeof v->stopped)
+    snprintf(v->stopped + n, sizeof v->stopped - (size_t)n,
+             "; %ld end-stop impacts, the first at t = %.6g s: past an impact the path need not "
+             "converge in the mode count",
+             impacts, run->stats.first_impact);
+  return 1;
+}
+
 static int verify_runs(const cli_options* o, f3r_accuracy_choice* choice, verification* v) {
   const double request = v->runs[0].scene.accuracy;
   const int escalations = v->runs[0].scene.accuracy_escalations,
             count = (int)output_count(&v->runs[0].scene) + 1;
-  int current = 0, best = -1;
+  int current = 0, best = -1, previous = -1;
   v->count = 1;
   for (int attempt = 0;; ++attempt) {
     config_run* run = &v->runs[current];
@@ -530,6 +572,8 @@ static int verify_runs(const cli_options* o, f3r_accuracy_choice* choice, verifi
         (best < 0 || run->measured < v->runs[best].measured || isnan(v->runs[best].measured)))
       best = current;
     if (measured_meets(run->measured, request) || attempt == escalations) break;
+    if (escalation_stops(v, attempt, current, previous)) break;
+    previous = current;
     f3r_scene next;
     if (!f3r_accuracy_check_scene(&run->scene, 1, &next)) break; /* the scene fixes the rest */
     if (check && check->rc == 0 && !memcmp(&next, &check->scene, sizeof next) && !o->out_path) {
@@ -576,13 +620,15 @@ static void report_measurement(const cli_options* o, const f3r_accuracy_choice* 
           v->check_cpu, written->stats.cpu_total > 0 ? v->check_cpu / written->stats.cpu_total : 0,
           written->stats.cpu_total, v->count);
   fprintf(human, "configurations      %s\n", v->attempts);
+  if (v->stopped[0]) fprintf(human, "                    %s\n", v->stopped);
   if (!choice->request_met)
     fprintf(stderr,
             "flex3rpr_sim: %s: the accuracy request %g m is not met: measured %.3g m (it must be "
             "within %g of the request) after %d runs (%s); the path written is the one measured "
-            "closest%s\n",
+            "closest%s%s%s\n",
             o->scene_path, request, choice->measured_error, F3R_CHECK_MARGIN, v->count, v->attempts,
-            written->scene.accuracy_escalations ? "" : " (accuracy.escalations is 0)");
+            written->scene.accuracy_escalations ? "" : " (accuracy.escalations is 0)",
+            v->stopped[0] ? "; " : "", v->stopped);
 }
 
 /* A run for an accuracy request, measured (verify_runs): its CSV, summary and report. */

@@ -17,6 +17,8 @@ typedef struct {
   double wall_integrating, wall_outputs; /* its split, also wall time (flex3rpr_sim.c) */
   int end_stops;                         /* the scene's end stops are on */
   long impacts;                          /* end-stop impacts (lockings included) */
+  double first_impact;                   /* s: the first impact's time, at the output step where
+                                          * several came at once; 0 with none (impacts 0) */
   double max_stop_force[3];              /* largest |stop force| on each leg (N) */
   double final_stop_force[3];            /* the stop forces at the end (N; + pushes outwards) */
 } run_stats;

@@ -137,9 +137,9 @@ void f3r_summarise_modes(const choice_run* run, f3r_accuracy_choice* c) {
   if (run->chosen && run->impacts)
     f3r_accuracy_append(
         text, size,
-        "modes: end stops: impacts are outside the linear estimate, and the path need not "
-        "converge in the mode count; the most faithful model (%d modes)\n",
-        F3R_MAX_MODES);
+        "modes: end stops: impacts are outside the linear estimate, and past one the path need "
+        "not converge in the mode count; sized for the path between impacts (the measured run "
+        "says whether it converges)\n");
   else if (run->chosen && ms->at_rest)
     f3r_accuracy_append(
         text, size, "modes: nothing excites the scene (no inputs, initial rates or deflections)\n");
