@@ -81,13 +81,32 @@ static f3r_status project_onto_stops(const f3r_model* m, const int* side, double
   return F3R_OK;
 }
 
+/* Every leg in contact leaves its stop at F3R_RESTING_SPEED or more, at its rate in `rates` (nq
+ * velocities), or rests on it: v (whose jump it is) becomes that, impulse[i] the impulse on leg i
+ * (N s, along rho_i). */
+static f3r_status settle(const f3r_model* m, const double* q, const int* side, const double* rates,
+                         double* v, double* impulse, double* work) {
+  int legs[3], count = 0;
+  double leg_rates[3], p[3], after[F3R_MAX_Q];
+  for (int i = 0; i < 3; ++i) {
+    if (!side[i]) continue;
+    const double leaving = -side[i] * rates[F3R_Q_RHO + i];
+    leg_rates[count] = leaving >= F3R_RESTING_SPEED ? rates[F3R_Q_RHO + i] : 0.0;
+    legs[count++] = i;
+  }
+  if (!count) return F3R_OK;
+  if (f3r_impact(m, q, v, legs, count, leg_rates, after, p, work) != F3R_OK)
+    return F3R_ERR_SINGULAR;
+  memcpy(v, after, (size_t)m->nq * sizeof(double));
+  for (int c = 0; c < count; ++c) impulse[legs[c]] = p[c];
+  return F3R_OK;
+}
+
 /* The impact over the legs in contact (side[i] != 0; normal n_i = -side_i, into the stroke):
- * target[i] the least rate into the stroke after it, the complementarity problem's. Then every
- * leg in contact either leaves its stop at F3R_RESTING_SPEED or more, at the rate that problem
- * gave it, or rests on it: a leg that the impulses of its neighbours lift off slower falls back
- * at once, and each return would be another impact (a Zeno sequence, which the rest ends; the
- * forces then decide which legs stay, hold()). v becomes the rates after it, impulse[i] the
- * impulse on leg i (N s, along rho_i). */
+ * target[i] the least rate into the stroke after it, the complementarity problem's. Then it
+ * settles: a leg that the impulses of its neighbours lift off slower than F3R_RESTING_SPEED falls
+ * back at once, and each return would be another impact (a Zeno sequence, which the rest ends;
+ * the forces then decide which legs stay, hold()). */
 static f3r_status impact(const f3r_model* m, const double* q, const int* side,
                          const double* target, double* v, double* impulse, double* work) {
   unsigned contact = 0, pressing = 0;
@@ -118,18 +137,7 @@ static f3r_status impact(const f3r_model* m, const double* q, const int* side,
     if (valid) break;
   }
   if (k == tries) return F3R_ERR_SINGULAR; /* no active set: the contacts are inconsistent */
-  int legs[3], count = 0;
-  double rates[3], p[3];
-  for (int i = 0; i < 3; ++i) {
-    if (!side[i]) continue;
-    const double leaving = -side[i] * after[F3R_Q_RHO + i];
-    rates[count] = leaving >= F3R_RESTING_SPEED ? after[F3R_Q_RHO + i] : 0.0;
-    legs[count++] = i;
-  }
-  if (f3r_impact(m, q, v, legs, count, rates, after, p, work) != F3R_OK) return F3R_ERR_SINGULAR;
-  memcpy(v, after, (size_t)m->nq * sizeof(double));
-  for (int c = 0; c < count; ++c) impulse[legs[c]] = p[c];
-  return F3R_OK;
+  return settle(m, q, side, after, v, impulse, work);
 }
 
 /* Which of the legs at rest on a stop (mask resting) stay locked: their stop forces push, and
@@ -195,8 +203,9 @@ static f3r_status contact_sides(const f3r_model* m, double t, const int* root_in
 f3r_status f3r_contacts_resolve(const f3r_model* m, double t, const double* held,
                                 const double* lag, const int* root_info, double* q, double* v,
                                 int* locked, f3r_impact_window* window, f3r_impact_record* record,
-                                int* legs_hit, double* work, f3r_error* err) {
+                                int* legs_hit, double* energy_lost, double* work, f3r_error* err) {
   *legs_hit = 0;
+  *energy_lost = 0.0;
   if (!m->end_stops) return F3R_OK;
   int side[3];
   unsigned releasing;
@@ -209,10 +218,11 @@ f3r_status f3r_contacts_resolve(const f3r_model* m, double t, const double* held
   if (project_onto_stops(m, side, q, v) != F3R_OK)
     return f3r_error_set(err, F3R_ERR_SINGULAR, "end stop at t = %.9g: the legs cannot reach "
                          "their stops (the loop closure has no solution)", t);
-  /* the impact: each approaching leg's least rate after it */
+  /* the impact: each approaching free leg's least rate after it (a locked leg moves by the
+   * integrator's error alone, 1e-10 m/s, which the settling removes) */
   int approaching = 0, first = -1;
   for (int i = 0; i < 3; ++i)
-    if (side[i] && -side[i] * v[F3R_Q_RHO + i] < -RATE_SLACK)
+    if (side[i] && !locked[i] && -side[i] * v[F3R_Q_RHO + i] < -RATE_SLACK)
       approaching += 1, first = first < 0 ? i : first;
   double target[3] = {0.0, 0.0, 0.0}, impulse[3] = {0.0, 0.0, 0.0}, v_before[F3R_MAX_Q];
   memcpy(v_before, v, (size_t)m->nq * sizeof(double));
@@ -236,7 +246,13 @@ f3r_status f3r_contacts_resolve(const f3r_model* m, double t, const double* held
     record->kinetic_after = f3r_kinetic_energy(m, q, v);
     memcpy(record->q, q, sizeof record->q);
     *legs_hit = approaching;
+  } else {
+    double rates[F3R_MAX_Q];
+    memcpy(rates, v, (size_t)m->nq * sizeof(double));
+    if (settle(m, q, side, rates, v, impulse, work) != F3R_OK)
+      return f3r_error_set(err, F3R_ERR_SINGULAR, "end stop at t = %.9g: singular contact", t);
   }
+  *energy_lost = f3r_kinetic_energy(m, q, v_before) - f3r_kinetic_energy(m, q, v);
   unsigned resting = 0;
   for (int i = 0; i < 3; ++i)
     if (side[i] && -side[i] * v[F3R_Q_RHO + i] <= RATE_SLACK) resting |= 1u << i;

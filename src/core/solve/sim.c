@@ -25,6 +25,8 @@ struct f3r_sim {
   f3r_workspace* out_ws; /* scratch for outputs, so outputs never disturb the residual's */
   double held[F3R_MAX_Q];
   double t;            /* time of the current state */
+  double t_restart;    /* the last restart's time, where the outputs take the forces' right limit
+                        * as the state did */
   double energy0;      /* T + V at t = 0 (W = 0 there) */
   double* impact_work; /* f3r_impact_work_size */
   long impacts;
@@ -88,13 +90,15 @@ static f3r_status consistent_once(f3r_sim* s, const double* q, const double* v, 
 static f3r_status consistent(f3r_sim* s, double* q, double* v, const double* lag, double work,
                              const int* roots, f3r_error* err) {
   int locked[3], legs_hit = 0;
+  double lost = 0.0;
   memcpy(locked, s->locked, sizeof locked);
   f3r_status st = f3r_contacts_resolve(s->model, s->t, s->held, lag, roots, q, v, locked,
-                                       &s->impact_window, &s->last_impact, &legs_hit,
+                                       &s->impact_window, &s->last_impact, &legs_hit, &lost,
                                        s->impact_work, err);
   if (st != F3R_OK) return st;
   s->impacts += legs_hit;
-  if (legs_hit) s->impact_loss += s->last_impact.kinetic_before - s->last_impact.kinetic_after;
+  s->impact_loss += lost;
+  s->t_restart = s->t;
   set_locks(s, locked);
   return consistent_once(s, q, v, lag, work, err);
 }
@@ -304,10 +308,11 @@ f3r_status f3r_sim_set_state(f3r_sim* s, const double pose[3], const double twis
   /* The new state's contacts: a leg set on its stop and pressed into it locks there, one set
    * moving into it rebounds. */
   int locks[3] = {0, 0, 0}, legs_hit = 0;
+  double lost = 0.0; /* the balance starts anew from the state after it */
   f3r_impact_window window = {0};
   f3r_impact_record record;
   if ((st = f3r_contacts_resolve(m, s->t, s->held, lag_states(s, lag), NULL, q, v, locks, &window,
-                                 &record, &legs_hit, s->impact_work, err)) != F3R_OK)
+                                 &record, &legs_hit, &lost, s->impact_work, err)) != F3R_OK)
     return st;
   int keep_locks[3];
   memcpy(keep_locks, s->locked, sizeof keep_locks);
@@ -438,13 +443,16 @@ const f3r_outputs* f3r_sim_outputs(f3r_sim* s) {
   f3r_data* d = &s->out_ws->data;
   o->t = s->t;
   if (f3r_state_to_full(m, s->settings.formulation, y, o->q, o->v) != F3R_OK) return o;
+  /* At a restart (a breakpoint's jump in the inputs, new forces) the state, its locks and its
+   * accelerations follow the forces after it: so do the outputs. */
+  const double t_forces = s->t <= s->t_restart ? nextafter(s->t, INFINITY) : s->t;
   if (s->stepper.yp_stale) { /* an explicit stepper's y' at the state: one right-hand side */
-    if (f3r_explicit_rhs(m, s->t, y, s->held, N_VGetArrayPointer(s->yp), s->out_ws) != F3R_OK)
+    if (f3r_explicit_rhs(m, t_forces, y, s->held, N_VGetArrayPointer(s->yp), s->out_ws) != F3R_OK)
       return o;
     s->stepper.yp_stale = 0;
   }
   double lag[3];
-  d->t = s->t, d->q = o->q, d->v = o->v, d->held = s->held, d->lag = lag_states(s, lag);
+  d->t = t_forces, d->q = o->q, d->v = o->v, d->held = s->held, d->lag = lag_states(s, lag);
   f3r_forward(m, d, F3R_FWD_POSITION | F3R_FWD_VELOCITY | F3R_FWD_FORCES | F3R_FWD_ENERGY);
   memcpy(o->forces, d->Q, (size_t)nq * sizeof(double));
   /* The actuators' share of Q on the leg joints: what the force stage applied for them (the lag
@@ -452,8 +460,9 @@ const f3r_outputs* f3r_sim_outputs(f3r_sim* s) {
   for (int i = 0; i < 3; ++i) {
     const int leg = F3R_FORCE_RHO + i, cylinder = F3R_FORCE_THETA + i;
     o->actuator[leg] =
-        m->n_lag ? lag[i] : s->held[leg] + f3r_input_value(&m->scene.inputs[leg], s->t);
-    o->actuator[cylinder] = s->held[cylinder] + f3r_input_value(&m->scene.inputs[cylinder], s->t);
+        m->n_lag ? lag[i] : s->held[leg] + f3r_input_value(&m->scene.inputs[leg], t_forces);
+    o->actuator[cylinder] =
+        s->held[cylinder] + f3r_input_value(&m->scene.inputs[cylinder], t_forces);
   }
   for (int j = 0; j < F3R_Q_LEG_JOINTS; ++j) o->passive[j] = d->Q[j] - o->actuator[j];
   /* the stops' reactions: reported apart, in neither forces nor passive, but in the balance of
