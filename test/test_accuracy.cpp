@@ -537,31 +537,33 @@ TEST(Accuracy, ALongRunHasItsSolverMeasured) {
 }
 
 // Impacts at the end stops are outside the estimate (a path with impacts need not converge in
-// the mode count, and they amplify the solver's error up to 1e5 times): the knob takes the most
-// faithful model and a tolerance for the budget over 1e5, and says so in the summary and the brief.
-TEST(Accuracy, ImpactsTakeTheMostFaithfulModelAndSayWhy) {
+// the mode count, and they amplify the solver's error up to 1e5 times): the knob sizes the modes
+// for the path between impacts, as without the stops (the most faithful model cost minutes and
+// no more faithfulness), takes a tolerance for the budget over 1e5, and says so in the summary
+// and the brief; the measured run says whether the path converges (flex3rpr_sim).
+TEST(Accuracy, ImpactsSizeTheModesBetweenImpactsAndSayWhy) {
   f3r_scene s = OpenScene("end_stop_impact.yaml");
   SceneTables owned{&s};
   f3r_error err{};
   ASSERT_TRUE(s.end_stops);
   s.duration = 0.05;
-  f3r_accuracy_choice c;
+  f3r_accuracy_choice c, without;
   ASSERT_EQ(f3r_accuracy_choose(&s, 1e-3, 0, &c, &err), F3R_OK) << err.message;
+  f3r_scene free = s;
+  free.end_stops = 0;
+  ASSERT_EQ(f3r_accuracy_choose(&free, 1e-3, 0, &without, &err), F3R_OK) << err.message;
   for (int i = 0; i < 3; ++i)
     if (s.links[i].model != F3R_LINK_RIGID) {
-      EXPECT_EQ(c.modes[i], F3R_MAX_MODES) << c.summary;
+      EXPECT_LT(c.modes[i], F3R_MAX_MODES) << c.summary;
+      EXPECT_GE(c.modes[i], 1) << c.summary;
     }
-  EXPECT_EQ(c.exact_kinematics, 1) << c.summary;
   EXPECT_LE(c.solver_error, 1e-3 / 1e5) << c.summary;
-  EXPECT_EQ(c.linear_evaluations, 1) << "only the extent's reference: " << c.summary;
+  EXPECT_NE(std::strstr(c.summary, "sized for the path between impacts"), nullptr) << c.summary;
   EXPECT_NE(std::strstr(c.summary, "impacts are outside the linear estimate"), nullptr)
       << c.summary;
   EXPECT_NE(std::strstr(c.brief, "without the impacts"), nullptr) << c.brief;
-  s.end_stops = 0;
-  ASSERT_EQ(f3r_accuracy_choose(&s, 1e-3, 0, &c, &err), F3R_OK) << err.message;
-  EXPECT_LT(c.modes[0], F3R_MAX_MODES) << c.summary;
-  EXPECT_EQ(std::strstr(c.summary, "impacts"), nullptr) << c.summary;
-  EXPECT_EQ(std::strstr(c.brief, "impacts"), nullptr) << c.brief;
+  EXPECT_EQ(std::strstr(without.summary, "impacts"), nullptr) << without.summary;
+  EXPECT_EQ(std::strstr(without.brief, "impacts"), nullptr) << without.brief;
 }
 
 // Paper simulation 3 leaves its initial pose far. With fixed-pinned links the linear estimate is

@@ -263,6 +263,30 @@ class Summary(unittest.TestCase):
             with open(csv) as f:
                 self.assertEqual(sum(1 for _ in f), 1 + 1 + 5000, "the header, t = 0 and every output")
 
+    def test_g2_a_path_past_impacts_is_not_chased(self):
+        """A 40 N push drives leg 1 into its stop (restitution 0.3) under a 180 Hz torque on
+        link 2, 0.1 s, at 1e-6 m with the modes chosen: the measured error stops shrinking from
+        one configuration to the next (4.6e-6, then 3.6e-6 m), so escalation stops there and the
+        run exits 3 naming the impacts and the first one's time, instead of running on for
+        minutes."""
+        with tempfile.TemporaryDirectory() as tmp:
+            path = os.path.join(tmp, "impacts.yaml")
+            with open(path, "w") as f:
+                f.write("links: {model: fixed_free, modes: auto, damping_ratio: 0.01}\n"
+                        "effects:\n"
+                        "  joint_friction: {prismatic: [5.0, 5.0, 5.0], revolute: [0.01, 0.01, 0.01]}\n"
+                        "  end_stops: {min: 0.0, max: 0.2, restitution: 0.3}\n"
+                        "initial: {platform_pose: [0.0, 0.0, 0.3]}\n"
+                        "inputs:\n  rho_1: {offset: 40}\n"
+                        "  theta_2: {amplitude: 0.5, frequency: 180}\n"
+                        "run: {duration: 0.1, output_step: 1e-3}\n")
+            summary, p = T.run_sim(ARGS.sim, path, "--accuracy", "1e-6")
+            self.assertEqual(p.returncode, 3, p.stderr)
+            self.assertFalse(summary["accuracy"]["request_met"])
+            self.assertLessEqual(summary["accuracy"]["configurations"], 4, p.stderr)
+            self.assertIn("escalation stopped: the measured error did not shrink", p.stderr)
+            self.assertRegex(p.stderr, r"\d+ end-stop impacts, the first at t = 0\.0\d+ s")
+
     def test_h_the_energy_guard(self):
         """Two configurations known to exit 0 with garbage trip the guard; a correct run does not."""
         for args in (["--erk", "--table", "ARKODE_VERNER_8_5_6", "--rtol", "1e-4"],
