@@ -103,6 +103,22 @@ static f3r_status consistent(f3r_sim* s, double* q, double* v, const double* lag
   return consistent_once(s, q, v, lag, work, err);
 }
 
+/* With end stops, why the closed q's strokes are beyond them (naming the pose and the leg), or
+ * 0. */
+static f3r_status stroke_error(const f3r_model* m, const double* q, f3r_error* err) {
+  if (!m->end_stops) return F3R_OK;
+  const double* P = q + F3R_Q_X;
+  for (int i = 0; i < 3; ++i) {
+    const double rho = q[F3R_Q_RHO + i];
+    if (rho < m->stroke_min || rho > m->stroke_max)
+      return f3r_error_set(err, F3R_ERR_ARGUMENT,
+                           "pose (%g, %g, %g) beyond the end stops: leg %d would need rho_%d = "
+                           "%.6g m, outside [%.6g, %.6g] m",
+                           P[0], P[1], P[2], i + 1, i + 1, rho, m->stroke_min, m->stroke_max);
+  }
+  return F3R_OK;
+}
+
 f3r_status f3r_sim_create(const f3r_model* model, const f3r_solver_settings* settings,
                           f3r_sim** out, f3r_error* err) {
   if (!model || !out) return f3r_error_set(err, F3R_ERR_ARGUMENT, "f3r_sim_create: NULL argument");
@@ -160,6 +176,7 @@ f3r_status f3r_sim_create(const f3r_model* model, const f3r_solver_settings* set
     st = f3r_error_set(err, F3R_ERR_SCENE, "initial.platform_pose: the legs cannot reach it");
     goto fail;
   }
+  if ((st = stroke_error(model, q, err)) != F3R_OK) goto fail;
   s->energy0 = f3r_kinetic_energy(model, q, v) + f3r_potential_energy(model, q);
   if ((st = consistent(s, q, v, NULL, 0.0, NULL, err)) != F3R_OK) goto fail;
   if ((st = s->ops->setup(stp, s->y, s->yp, 0.0, err)) != F3R_OK) goto fail;
@@ -263,16 +280,7 @@ static f3r_status closure_error(const f3r_model* m, double* q, f3r_error* err) {
                            "below the collapse guard %.2g l where a run stops",
                            P[0], P[1], P[2], i + 1, i + 1, len, F3R_COLLAPSE_LEG_FRACTION);
   }
-  if (m->end_stops)
-    for (int i = 0; i < 3; ++i) {
-      const double rho = q[F3R_Q_RHO + i];
-      if (rho < m->stroke_min || rho > m->stroke_max)
-        return f3r_error_set(err, F3R_ERR_ARGUMENT,
-                             "pose (%g, %g, %g) beyond the end stops: leg %d would need rho_%d = "
-                             "%.6g m, outside [%.6g, %.6g] m",
-                             P[0], P[1], P[2], i + 1, i + 1, rho, m->stroke_min, m->stroke_max);
-    }
-  return F3R_OK;
+  return stroke_error(m, q, err);
 }
 
 static f3r_status check_finite_values(const double* x, int count, const char* what,
