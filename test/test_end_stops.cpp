@@ -198,9 +198,10 @@ TEST(EndStops, AHeldLegStaysWhileItsNeighbourImpacts) {
   EXPECT_GT(o->impacts, before + 4);  // leg 2 hit its stop each time
   run.held[1] = 0.0;
   o = run.HoldTo(8.0, &deepest);
-  std::printf("measured: held leg beside an impacting one: %ld impacts, stop force %.9g N, "
-              "energy balance %.1e J, deepest %.1e m\n",
-              o->impacts, o->stop_force[0], o->energy_balance_error, deepest);
+  std::printf(
+      "measured: held leg beside an impacting one: %ld impacts, stop force %.9g N, "
+      "energy balance %.1e J, deepest %.1e m\n",
+      o->impacts, o->stop_force[0], o->energy_balance_error, deepest);
   EXPECT_NEAR(o->stop_force[0], -50.0, 1e-6);
   EXPECT_LT(deepest, 1e-9);
   EXPECT_LT(o->energy_balance_error, 1e-4);
@@ -244,10 +245,11 @@ TEST(EndStops, AWrenchMovesTheContactsFromLegToLeg) {
     for (int c = 0; c < 3; ++c) run.held[F3R_Q_X + c] = wrenches[k][c];
     const f3r_outputs* o = run.HoldTo(4.0 * (k + 1), &deepest);
     const Eigen::Vector3d T = EquilibriumLegForces(run.model.get(), o->q, wrenches[k]);
-    std::printf("measured: wrench %d: locks %d %d %d, stop forces %.9g %.9g %.9g N, statics "
-                "%.9g %.9g %.9g N\n",
-                k + 1, o->stop_locked[0], o->stop_locked[1], o->stop_locked[2], o->stop_force[0],
-                o->stop_force[1], o->stop_force[2], T[0], T[1], T[2]);
+    std::printf(
+        "measured: wrench %d: locks %d %d %d, stop forces %.9g %.9g %.9g N, statics "
+        "%.9g %.9g %.9g N\n",
+        k + 1, o->stop_locked[0], o->stop_locked[1], o->stop_locked[2], o->stop_force[0],
+        o->stop_force[1], o->stop_force[2], T[0], T[1], T[2]);
     for (int i = 0; i < 3; ++i) {
       if (!o->stop_locked[i]) {
         EXPECT_NEAR(T[i], 0.0, 1e-6 * T.norm()) << "leg " << i + 1;

@@ -58,8 +58,9 @@ struct Sequence {
     if (kind == 0) from = to;
     for (int i = 0; i < 3; ++i) {
       const double r = Uniform(0.0, 1.0);
-      to[i] = r < 0.35 ? Uniform(40.0, 120.0) : r < 0.7 ? -Uniform(40.0, 120.0)
-                                                         : Uniform(-20.0, 20.0);
+      to[i] = r < 0.35  ? Uniform(40.0, 120.0)
+              : r < 0.7 ? -Uniform(40.0, 120.0)
+                        : Uniform(-20.0, 20.0);
     }
     const bool wrench = Uniform(0.0, 1.0) < 0.4;
     to[F3R_Q_X] = wrench ? Uniform(-60.0, 60.0) : 0.0;
@@ -148,12 +149,12 @@ void Stress(const char* name, const std::string& solver) {
       "measured (%s): %d sequences of %g s: worst penetration %.2e m, worst locked drift %.2e m, "
       "worst energy balance %.1e of T+V, %ld impacts, %ld outputs with two or more legs "
       "locked\n",
-      name, 3 * cases, Duration(), worst.penetration, worst.locked_drift, worst.energy_ratio, worst.impacts,
-      worst.locked_outputs);
+      name, 3 * cases, Duration(), worst.penetration, worst.locked_drift, worst.energy_ratio,
+      worst.impacts, worst.locked_outputs);
   EXPECT_EQ(worst.failures, 0);
   EXPECT_LE(worst.penetration, kTolerance) << worst.where;
   EXPECT_LE(worst.locked_drift, kTolerance);
-  EXPECT_GT(worst.impacts, 0);  // the sequences reach the stops
+  EXPECT_GT(worst.impacts, 0);         // the sequences reach the stops
   EXPECT_GT(worst.locked_outputs, 0);  // and hold several legs at once
 }
 

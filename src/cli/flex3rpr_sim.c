@@ -527,7 +527,8 @@ static int escalation_stops(verification* v, int attempt, int current, int previ
   const double next = 2.0 * v->runs[v->count - 1].stats.cpu_total;
   const long impacts = run->stats.impacts;
   char why[160] = "";
-  if (attempt > 0 && previous >= 0 && !(run->measured < ESCALATION_SHRINK * v->runs[previous].measured))
+  if (attempt > 0 && previous >= 0 &&
+      !(run->measured < ESCALATION_SHRINK * v->runs[previous].measured))
     snprintf(why, sizeof why, "the measured error did not shrink (%.3g m, then %.3g m)",
              v->runs[previous].measured, run->measured);
   else if (spent + next > ESCALATION_COST_LIMIT * first)

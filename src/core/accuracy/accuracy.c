@@ -61,8 +61,8 @@ static f3r_status search_modes(choice_run* run, f3r_accuracy_choice* c, f3r_erro
      * scene with 281 impacts ran for minutes). The knob sizes the model for the path the linear
      * model sees, between impacts; the measured run then says whether the path converges
      * (docs/accuracy.md). */
-    st = f3r_mode_search_run(run->s, &run->ms, run->model_target, c->modes, &run->linear_error,
-                             err);
+    st =
+        f3r_mode_search_run(run->s, &run->ms, run->model_target, c->modes, &run->linear_error, err);
   } else if (st == F3R_OK && f3r_choice_plain_search_may_wait(run)) {
     /* Beyond its first part the search waits for the corrected one (compare_correction), the
      * least counts standing in until then. Far from the pose that part runs now, and where it

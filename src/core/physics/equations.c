@@ -169,8 +169,9 @@ size_t f3r_stop_forces_work_size(const f3r_model* m) {
   return n * n + 2 * n;
 }
 
-f3r_status f3r_data_contact_solve(const f3r_model* m, const f3r_data* d, const f3r_stop_locks* locks,
-                                 const double* Q, double* f, double* a, double* work) {
+f3r_status f3r_data_contact_solve(const f3r_model* m, const f3r_data* d,
+                                  const f3r_stop_locks* locks, const double* Q, double* f,
+                                  double* a, double* work) {
   int legs[3], count = 0;
   for (int i = 0; i < 3; ++i) {
     f[i] = 0.0;

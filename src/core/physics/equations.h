@@ -63,8 +63,9 @@ f3r_status f3r_data_stop_forces(const f3r_model* m, const f3r_data* d, const f3r
 size_t f3r_stop_forces_work_size(const f3r_model* m);
 /* The same solve, with the accelerations a (nq) under those forces too when a is not NULL (with
  * no leg locked: the accelerations of the free system). */
-f3r_status f3r_data_contact_solve(const f3r_model* m, const f3r_data* d, const f3r_stop_locks* locks,
-                                 const double* Q, double* f, double* a, double* work);
+f3r_status f3r_data_contact_solve(const f3r_model* m, const f3r_data* d,
+                                  const f3r_stop_locks* locks, const double* Q, double* f,
+                                  double* a, double* work);
 /* The stops stage: with legs locked (d->locks), their forces at d into d->stop_force, added to
  * d->Q and to the power d->power; zero and d unchanged when no leg is locked. */
 f3r_status f3r_stop_stage(const f3r_model* m, f3r_data* d);

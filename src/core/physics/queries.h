@@ -82,8 +82,7 @@ double f3r_potential_energy(const f3r_model* m, const double* q);
  * E the unit columns of rho_legs, so the loops stay closed (G dv = 0). v_out = v + dv,
  * impulse[count] the impulses (N s, along rho_i). work holds f3r_impact_work_size doubles. */
 f3r_status f3r_impact(const f3r_model* m, const double* q, const double* v, const int* legs,
-                      int count, const double* rates, double* v_out, double* impulse,
-                      double* work);
+                      int count, const double* rates, double* v_out, double* impulse, double* work);
 size_t f3r_impact_work_size(const f3r_model* m);
 
 /* --- end stops held as contact (equations.h) at (q, v) ----------------------------------------- */

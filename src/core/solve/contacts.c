@@ -107,8 +107,8 @@ static f3r_status settle(const f3r_model* m, const double* q, const int* side, c
  * settles: a leg that the impulses of its neighbours lift off slower than F3R_RESTING_SPEED falls
  * back at once, and each return would be another impact (a Zeno sequence, which the rest ends;
  * the forces then decide which legs stay, hold()). */
-static f3r_status impact(const f3r_model* m, const double* q, const int* side,
-                         const double* target, double* v, double* impulse, double* work) {
+static f3r_status impact(const f3r_model* m, const double* q, const int* side, const double* target,
+                         double* v, double* impulse, double* work) {
   unsigned contact = 0, pressing = 0;
   for (int i = 0; i < 3; ++i) {
     if (!side[i]) continue;
@@ -174,13 +174,13 @@ static f3r_status hold(const f3r_model* m, double t, const double* held, const d
 
 /* Step 1 of f3r_contacts_resolve: each leg's side in contact (0: none), the legs whose force root
  * fired (releasing) and those whose stop root fired (hit). */
-static f3r_status contact_sides(const f3r_model* m, double t, const int* root_info,
-                                const double* q, const int* locked, int* side,
-                                unsigned* releasing, f3r_error* err) {
+static f3r_status contact_sides(const f3r_model* m, double t, const int* root_info, const double* q,
+                                const int* locked, int* side, unsigned* releasing, f3r_error* err) {
   *releasing = 0;
   for (int i = 0; i < 3; ++i) {
     const double rho = q[F3R_Q_RHO + i];
-    const int min_root = root_info && root_info[2 * i], max_root = root_info && root_info[2 * i + 1];
+    const int min_root = root_info && root_info[2 * i],
+              max_root = root_info && root_info[2 * i + 1];
     side[i] = 0;
     if (locked[i]) {
       side[i] = locked[i];
@@ -200,10 +200,10 @@ static f3r_status contact_sides(const f3r_model* m, double t, const int* root_in
   return F3R_OK;
 }
 
-f3r_status f3r_contacts_resolve(const f3r_model* m, double t, const double* held,
-                                const double* lag, const int* root_info, double* q, double* v,
-                                int* locked, f3r_impact_window* window, f3r_impact_record* record,
-                                int* legs_hit, double* energy_lost, double* work, f3r_error* err) {
+f3r_status f3r_contacts_resolve(const f3r_model* m, double t, const double* held, const double* lag,
+                                const int* root_info, double* q, double* v, int* locked,
+                                f3r_impact_window* window, f3r_impact_record* record, int* legs_hit,
+                                double* energy_lost, double* work, f3r_error* err) {
   *legs_hit = 0;
   *energy_lost = 0.0;
   if (!m->end_stops) return F3R_OK;
@@ -216,8 +216,10 @@ f3r_status f3r_contacts_resolve(const f3r_model* m, double t, const double* held
     return F3R_OK;
   }
   if (project_onto_stops(m, side, q, v) != F3R_OK)
-    return f3r_error_set(err, F3R_ERR_SINGULAR, "end stop at t = %.9g: the legs cannot reach "
-                         "their stops (the loop closure has no solution)", t);
+    return f3r_error_set(err, F3R_ERR_SINGULAR,
+                         "end stop at t = %.9g: the legs cannot reach "
+                         "their stops (the loop closure has no solution)",
+                         t);
   /* the impact: each approaching free leg's least rate after it (a locked leg moves by the
    * integrator's error alone, 1e-10 m/s, which the settling removes) */
   int approaching = 0, first = -1;

@@ -34,10 +34,10 @@
  * Fills the impact's record and *legs_hit (the free legs that were approaching a stop; 0: no
  * impact), and *energy_lost (J, the kinetic energy the impact and the rest took). work holds
  * f3r_impact_work_size doubles. */
-f3r_status f3r_contacts_resolve(const f3r_model* m, double t, const double* held,
-                                const double* lag, const int* root_info, double* q, double* v,
-                                int* locked, f3r_impact_window* window, f3r_impact_record* record,
-                                int* legs_hit, double* energy_lost, double* work, f3r_error* err);
+f3r_status f3r_contacts_resolve(const f3r_model* m, double t, const double* held, const double* lag,
+                                const int* root_info, double* q, double* v, int* locked,
+                                f3r_impact_window* window, f3r_impact_record* record, int* legs_hit,
+                                double* energy_lost, double* work, f3r_error* err);
 
 /* F3R_ERR_SOLVER, naming the leg, when a stroke in q passes a stop by more than
  * F3R_STROKE_TOLERANCE at t; else F3R_OK. */

@@ -92,9 +92,9 @@ static f3r_status consistent(f3r_sim* s, double* q, double* v, const double* lag
   int locked[3], legs_hit = 0;
   double lost = 0.0;
   memcpy(locked, s->locked, sizeof locked);
-  f3r_status st = f3r_contacts_resolve(s->model, s->t, s->held, lag, roots, q, v, locked,
-                                       &s->impact_window, &s->last_impact, &legs_hit, &lost,
-                                       s->impact_work, err);
+  f3r_status st =
+      f3r_contacts_resolve(s->model, s->t, s->held, lag, roots, q, v, locked, &s->impact_window,
+                           &s->last_impact, &legs_hit, &lost, s->impact_work, err);
   if (st != F3R_OK) return st;
   s->impacts += legs_hit;
   s->impact_loss += lost;
