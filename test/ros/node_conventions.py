@@ -72,6 +72,10 @@ class Recorder:
                 into.append(m)
         return keep
 
+    def latest_tf_stamp(self):
+        with self.lock:
+            return self.tf[-1].transforms[0].header.stamp if self.tf else rospy.Time(0)
+
     def latest_status(self):
         with self.lock:
             return self.status[-1] if self.status else None
@@ -144,7 +148,10 @@ class NodeConventions(unittest.TestCase):
         self.assertEqual(self.rec.latest_status().rejected_commands, rejected, "'turned' is a tf2 frame")
         with self.rec.lock:
             odom = list(self.rec.odom[start:])
-            tf = {m.transforms[0].header.stamp: m for m in self.rec.tf[-len(odom) - 100:]}
+        # each subscriber has its own thread: under load /tf may trail ~odom, so wait for it to catch up
+        wait_for(lambda: self.rec.latest_tf_stamp() >= odom[-1].header.stamp, 120, "/tf up to the last ~odom")
+        with self.rec.lock:
+            tf = {m.transforms[0].header.stamp: m for m in self.rec.tf}
         moved = odom[-1].pose.pose.position
         self.assertGreater(moved.y, 1e-3)
         self.assertLess(abs(moved.x), 1e-3 * moved.y)
