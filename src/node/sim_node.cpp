@@ -313,6 +313,10 @@ void SimNode::IdlePaused(double now, RunLoop* loop) {
     info_.rejected_commands = inputs_->rejected();
     outputs_->PublishPaused(*f3r_sim_outputs(sim_.get()), info_);
     loop->last_paused_output = now;
+  } else if (inputs_->rejected() != info_.rejected_commands) {
+    // A command refused while paused shows on ~status at once, not half a second later.
+    info_.rejected_commands = inputs_->rejected();
+    outputs_->PublishStatusOnly(*f3r_sim_outputs(sim_.get()), info_);
   }
   ros::WallDuration(0.001).sleep();
 }

@@ -378,7 +378,7 @@ class NodeFlood(unittest.TestCase):
                             t.transform.translation.x, t.transform.translation.y,
                             2.0 * math.atan2(q.z, q.w))
         tf_sub = rospy.Subscriber("/tf", TFMessage, on_tf, queue_size=None)
-        time.sleep(0.3)
+        wait_for(lambda: tf_sub.get_num_connections() > 0, 60, "the /tf subscription")
 
         pause()
         reset()
