@@ -184,7 +184,8 @@ typedef struct {
                                  * _max or effects.end_stops.min, max), the URDF's limits */
   double restitution;            /* coefficient of restitution of the stops, default 0.5 */
 
-  /* initial state: platform pose (X_p, Y_p, phi_p) and its rate; deflections are in links[] */
+  /* initial state: platform pose (X_p, Y_p, phi_p) and its rate; deflections are in links[]
+   * (within the F3R_STATE_* ranges below) */
   double platform_pose0[3];
   double platform_velocity0[3];
 
@@ -210,6 +211,12 @@ typedef struct {
                              * default 3 */
   unsigned explicit_settings; /* F3R_EXPLICIT_* */
 
+  /* limits of a command from outside (a controller through the node, flex3rpr.Sim.step): a
+   * larger magnitude is refused (flex3rpr/session.h). Scripted inputs are the scene's own. */
+  double limit_force;       /* N, a leg force or a platform force component, default 1000 */
+  double limit_torque;      /* N m, a cylinder torque or the platform torque, default 100 */
+  double limit_modal_force; /* N, a modal force, default 1000 */
+
   /* run */
   double duration;    /* s, default 0.5 */
   double output_step; /* s, default 1e-4 */
@@ -217,6 +224,13 @@ typedef struct {
 
   f3r_sensors_scene sensors; /* all off by default */
 } f3r_scene;
+
+/* The ranges of a scene's initial state, which a state set later keeps too (session.h). */
+#define F3R_STATE_POSITION_LIMIT 1.0     /* m, |X_p| and |Y_p| */
+#define F3R_STATE_ANGLE_LIMIT 1e3        /* rad, |phi_p| */
+#define F3R_STATE_RATE_LIMIT 1e3         /* m/s and rad/s, each component of the platform's twist */
+#define F3R_STATE_MODAL_LIMIT 0.1        /* m, a modal coordinate */
+#define F3R_STATE_MODAL_RATE_LIMIT 100.0 /* m/s, a modal coordinate's rate */
 
 /* Table I, rigid links, home pose (P = O, phi_p = 0), no inputs, minimal on IDA at rtol 2e-7. */
 f3r_scene f3r_default_scene(void);

@@ -218,11 +218,17 @@ bool ReadSolverParams(const ros::NodeHandle& pnh, NodeParams* p, std::vector<Sce
   if (!integrator.empty())
     out->push_back({"integrator", "solver.integrator=" + Quoted(integrator)});
   if (!table.empty()) out->push_back({"table", "solver.table=" + Quoted(table)});
-  for (const char* name : {"rtol", "atol"}) {
+  // The solver's tolerances, and the command limits, whose home is the scene's limits section.
+  const std::pair<const char*, const char*> fields[] = {{"rtol", "solver.rtol"},
+                                                        {"atol", "solver.atol"},
+                                                        {"max_force", "limits.force"},
+                                                        {"max_torque", "limits.torque"},
+                                                        {"max_modal_force", "limits.modal_force"}};
+  for (const auto& [name, field] : fields) {
     double value = 0.0;
     if (!pnh.hasParam(name)) continue;
     if (!Read(pnh, name, 0.0, &value, error)) return false;
-    out->push_back({name, std::string("solver.") + name + "=" + Number(value)});
+    out->push_back({name, std::string(field) + "=" + Number(value)});
   }
   return true;
 }
@@ -308,13 +314,12 @@ bool ReadRunParams(const ros::NodeHandle& pnh, NodeParams* p, std::string* error
       Read(pnh, "queue_size", 10, &p->queue_size, error) &&
       Read(pnh, "command_queue_size", 1000, &p->command_queue_size, error) &&
       Read(pnh, "beam_marker_exaggeration", 1.0, &p->beam_marker_exaggeration, error) &&
-      Read(pnh, "max_force", p->limits.force, &p->limits.force, error) &&
-      Read(pnh, "max_torque", p->limits.torque, &p->limits.torque, error) &&
-      Read(pnh, "max_modal_force", p->limits.modal, &p->limits.modal, error) &&
       Read(pnh, "lockstep", false, &p->lockstep, error) &&
       Read(pnh, "lockstep_warn_after", 2.0, &p->lockstep_warn_after, error) &&
       ReadBasePose(pnh, &p->base_pose, error);
   if (!read) return false;
+  // the scene's limits section (with ~max_force, ~max_torque, ~max_modal_force over it)
+  p->limits = {p->scene.limit_force, p->scene.limit_torque, p->scene.limit_modal_force};
   if (p->duration < 0.0) p->duration = p->scene.duration;  // the scene's run.duration
   if (!Positive("publish_rate", p->publish_rate, error) ||
       !Positive("beam_points", p->beam_points, error) ||
@@ -327,9 +332,6 @@ bool ReadRunParams(const ros::NodeHandle& pnh, NodeParams* p, std::string* error
       !Positive("queue_size", p->queue_size, error) ||
       !Positive("command_queue_size", p->command_queue_size, error) ||
       !Positive("beam_marker_exaggeration", p->beam_marker_exaggeration, error) ||
-      !Positive("max_force", p->limits.force, error) ||
-      !Positive("max_torque", p->limits.torque, error) ||
-      !Positive("max_modal_force", p->limits.modal, error) ||
       !Positive("lockstep_warn_after", p->lockstep_warn_after, error))
     return false;
   if (p->beam_points < 2 || p->beam_points > 101) {

@@ -12,6 +12,7 @@
 
 namespace flex3rpr {
 
+// The scene's limits section (limits.force, .torque, .modal_force; scene.h).
 struct CommandLimits {
   double force = 1000.0;  // N, per leg force and per platform force component
   double torque = 100.0;  // N m, per cylinder torque and platform torque

@@ -39,6 +39,9 @@ f3r_scene f3r_default_scene(void) {
   s.atol = 2e-9;
   s.accuracy_verify = 1;
   s.accuracy_escalations = 3;
+  s.limit_force = 1000.0;
+  s.limit_torque = 100.0;
+  s.limit_modal_force = 1000.0;
   s.duration = 0.5;
   s.output_step = 1e-4;
   s.beam_points = 11;
@@ -420,8 +423,10 @@ static f3r_status validate_link(const f3r_scene* s, int i, f3r_error* err) {
   if (st != F3R_OK) return st;
   const int functions = f3r_link_scene_functions(L);
   for (int j = 0; j < F3R_MAX_MODES; ++j) {
-    CHECK_RANGE_AT(L->eta0[j], -0.1, 0.1, "links[%d].initial_deflection[%d]", i, j);
-    CHECK_RANGE_AT(L->eta_rate0[j], -100.0, 100.0, "links[%d].initial_rate[%d]", i, j);
+    CHECK_RANGE_AT(L->eta0[j], -F3R_STATE_MODAL_LIMIT, F3R_STATE_MODAL_LIMIT,
+                   "links[%d].initial_deflection[%d]", i, j);
+    CHECK_RANGE_AT(L->eta_rate0[j], -F3R_STATE_MODAL_RATE_LIMIT, F3R_STATE_MODAL_RATE_LIMIT,
+                   "links[%d].initial_rate[%d]", i, j);
     const int open = L->modes == F3R_MODES_AUTO || (L->modes == 0 && L->model != F3R_LINK_RIGID);
     if (!open && j >= functions && (L->eta0[j] != 0.0 || L->eta_rate0[j] != 0.0)) {
       char list[64];
@@ -466,9 +471,10 @@ static f3r_status validate_effects_and_pose(const f3r_scene* s, f3r_error* err) 
   CHECK_RANGE("effects.payload.mass", s->payload_mass, 0.0, 1e3);
   CHECK_RANGE("effects.payload.inertia", s->payload_inertia, 0.0, 1e3);
   for (int k = 0; k < 3; ++k) {
-    CHECK_RANGE_AT(s->platform_pose0[k], k < 2 ? -1.0 : -1e3, k < 2 ? 1.0 : 1e3,
-                   "initial.platform_pose[%d]", k);
-    CHECK_RANGE_AT(s->platform_velocity0[k], -1e3, 1e3, "initial.platform_velocity[%d]", k);
+    const double limit = k < 2 ? F3R_STATE_POSITION_LIMIT : F3R_STATE_ANGLE_LIMIT;
+    CHECK_RANGE_AT(s->platform_pose0[k], -limit, limit, "initial.platform_pose[%d]", k);
+    CHECK_RANGE_AT(s->platform_velocity0[k], -F3R_STATE_RATE_LIMIT, F3R_STATE_RATE_LIMIT,
+                   "initial.platform_velocity[%d]", k);
   }
   return F3R_OK;
 }
@@ -523,6 +529,9 @@ static f3r_status validate_solver_and_run(const f3r_scene* s, f3r_error* err) {
   CHECK_RANGE("solver.max_step", s->max_step, 0.0, 1e3);
   if (s->max_order < 1 || s->max_order > 5)
     return f3r_scene_error(err, "solver.max_order", NULL, "%d is out of range 1..5", s->max_order);
+  CHECK_RANGE("limits.force", s->limit_force, 1e-6, 1e9);
+  CHECK_RANGE("limits.torque", s->limit_torque, 1e-6, 1e9);
+  CHECK_RANGE("limits.modal_force", s->limit_modal_force, 1e-6, 1e9);
   CHECK_RANGE("run.duration", s->duration, 0.0, 1e6);
   CHECK_RANGE("run.output_step", s->output_step, 1e-7, 1e3);
   if ((double)s->beam_points < 2 || s->beam_points > 101)

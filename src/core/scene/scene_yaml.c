@@ -363,6 +363,14 @@ static f3r_status read_initial(loader* L, const yaml_node_t* map) {
   return f3r_yaml_numbers(L, map, "initial", f, 2);
 }
 
+static f3r_status read_limits(loader* L, const yaml_node_t* map) {
+  f3r_scene* s = L->scene;
+  const number_field f[] = {F3R_NUMBER("force", &s->limit_force),
+                            F3R_NUMBER("torque", &s->limit_torque),
+                            F3R_NUMBER("modal_force", &s->limit_modal_force)};
+  return f3r_yaml_numbers(L, map, "limits", f, 3);
+}
+
 static f3r_status read_run(loader* L, const yaml_node_t* map) {
   f3r_scene* s = L->scene;
   const number_field f[] = {F3R_NUMBER("duration", &s->duration),
@@ -430,10 +438,11 @@ static const struct {
   const char* name;
   f3r_status (*read)(loader* L, const yaml_node_t* node);
 } sections[] = {
-    {"geometry", read_geometry}, {"platform", read_platform}, {"link", read_link_material},
-    {"cylinder", read_cylinder}, {"links", read_links},       {"effects", read_effects},
-    {"initial", read_initial},   {"inputs", read_inputs},     {"solver", read_solver},
-    {"accuracy", read_accuracy}, {"run", read_run},           {"sensors", f3r_yaml_read_sensors}};
+    {"geometry", read_geometry},       {"platform", read_platform}, {"link", read_link_material},
+    {"cylinder", read_cylinder},       {"links", read_links},       {"effects", read_effects},
+    {"initial", read_initial},         {"inputs", read_inputs},     {"solver", read_solver},
+    {"accuracy", read_accuracy},       {"limits", read_limits},     {"run", read_run},
+    {"sensors", f3r_yaml_read_sensors}};
 
 static f3r_status read_root(loader* L, const yaml_node_t* root) {
   f3r_status st = f3r_yaml_mapping(L, root, "scene");
