@@ -59,6 +59,11 @@ void f3r_sensors_destroy(f3r_sensors* sensors);
 /* Forgets every sample (as at t = 0 before the first update). */
 void f3r_sensors_reset(f3r_sensors* sensors);
 
+/* Makes `to` (created for the same model and sensors) read as `from` does: its samples, delay
+ * lines and readings, so that a session can put its sensors back after a failed step. The noise
+ * is a function of the sample number, so nothing else needs keeping. */
+void f3r_sensors_copy(f3r_sensors* to, const f3r_sensors* from);
+
 /* 1 when any sensor is enabled. */
 int f3r_sensors_any(const f3r_sensors_scene* config);
 

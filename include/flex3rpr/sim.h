@@ -115,6 +115,16 @@ f3r_status f3r_sim_set_state(f3r_sim* sim, const double pose[3], const double tw
 /* Integrates to t_out (> current time). On failure the last good state is kept. */
 f3r_status f3r_sim_advance(f3r_sim* sim, double t_out, f3r_error* err);
 
+/* A run's state as f3r_sim_save found it: time, state vector, held forces, the legs locked at
+ * their stops, the impacts and the energy balance's reference. f3r_sim_restore puts it back and
+ * restarts the integrator there, so that a caller can undo a step that failed (a session's step
+ * leaves the run as it was). Allocated once for its run; saving and restoring allocate nothing. */
+typedef struct f3r_sim_snapshot f3r_sim_snapshot;
+f3r_status f3r_sim_snapshot_create(const f3r_sim* sim, f3r_sim_snapshot** snapshot, f3r_error* err);
+void f3r_sim_snapshot_destroy(f3r_sim_snapshot* snapshot);
+void f3r_sim_save(const f3r_sim* sim, f3r_sim_snapshot* snapshot);
+f3r_status f3r_sim_restore(f3r_sim* sim, const f3r_sim_snapshot* snapshot, f3r_error* err);
+
 double f3r_sim_time(const f3r_sim* sim);
 const f3r_model* f3r_sim_model(const f3r_sim* sim);
 f3r_formulation f3r_sim_formulation(const f3r_sim* sim);

@@ -84,6 +84,12 @@ void f3r_sensors_reset(f3r_sensors* s) {
   s->last_t = -INFINITY;
 }
 
+void f3r_sensors_copy(f3r_sensors* to, const f3r_sensors* from) {
+  double* work = to->work; /* scratch, its own */
+  *to = *from;
+  to->work = work;
+}
+
 const f3r_sensor_reading* f3r_sensors_reading(const f3r_sensors* s, int kind) {
   return kind >= 0 && kind < F3R_SENSOR_KINDS ? &s->reading[kind] : NULL;
 }

@@ -435,6 +435,66 @@ f3r_status f3r_sim_advance(f3r_sim* s, double t_out, f3r_error* err) {
   return F3R_OK;
 }
 
+/* What f3r_sim_restore puts back: the fields of f3r_sim that a step, a force or an impact
+ * changes, and y, y' (ny each, in values). The integrator's own history is not kept: the restore
+ * restarts it, as new forces do. */
+struct f3r_sim_snapshot {
+  const f3r_sim* sim;
+  double t, t_restart, energy0, impact_loss;
+  double held[F3R_MAX_Q];
+  long impacts;
+  f3r_impact_record last_impact;
+  f3r_impact_window impact_window;
+  int locked[3];
+  int yp_stale;
+  double* values; /* y then y' */
+};
+
+f3r_status f3r_sim_snapshot_create(const f3r_sim* s, f3r_sim_snapshot** out, f3r_error* err) {
+  f3r_sim_snapshot* snap = calloc(1, sizeof *snap);
+  if (snap) snap->values = calloc(2 * (size_t)s->ny, sizeof(double));
+  if (!snap || !snap->values) {
+    f3r_sim_snapshot_destroy(snap);
+    return f3r_error_set(err, F3R_ERR_MEMORY, "no memory for a snapshot of the run");
+  }
+  snap->sim = s;
+  f3r_sim_save(s, snap);
+  *out = snap;
+  return F3R_OK;
+}
+
+void f3r_sim_snapshot_destroy(f3r_sim_snapshot* snap) {
+  if (!snap) return;
+  free(snap->values);
+  free(snap);
+}
+
+void f3r_sim_save(const f3r_sim* s, f3r_sim_snapshot* snap) {
+  snap->t = s->t, snap->t_restart = s->t_restart, snap->energy0 = s->energy0;
+  snap->impact_loss = s->impact_loss, snap->impacts = s->impacts;
+  snap->last_impact = s->last_impact, snap->impact_window = s->impact_window;
+  memcpy(snap->held, s->held, sizeof snap->held);
+  memcpy(snap->locked, s->locked, sizeof snap->locked);
+  snap->yp_stale = s->stepper.yp_stale;
+  memcpy(snap->values, N_VGetArrayPointer(s->y), (size_t)s->ny * sizeof(double));
+  memcpy(snap->values + s->ny, N_VGetArrayPointer(s->yp), (size_t)s->ny * sizeof(double));
+}
+
+f3r_status f3r_sim_restore(f3r_sim* s, const f3r_sim_snapshot* snap, f3r_error* err) {
+  if (snap->sim != s)
+    return f3r_error_set(err, F3R_ERR_ARGUMENT, "f3r_sim_restore: a snapshot of another run");
+  s->t = snap->t, s->t_restart = snap->t_restart, s->energy0 = snap->energy0;
+  s->impact_loss = snap->impact_loss, s->impacts = snap->impacts;
+  s->last_impact = snap->last_impact, s->impact_window = snap->impact_window;
+  memcpy(s->held, snap->held, sizeof s->held);
+  set_locks(s, snap->locked);
+  memcpy(N_VGetArrayPointer(s->y), snap->values, (size_t)s->ny * sizeof(double));
+  memcpy(N_VGetArrayPointer(s->yp), snap->values + s->ny, (size_t)s->ny * sizeof(double));
+  const f3r_status st = s->ops->restart(&s->stepper, s->y, s->yp, s->t, err);
+  s->stepper.yp_stale = snap->yp_stale;
+  return st;
+}
+
 double f3r_sim_time(const f3r_sim* s) { return s->t; }
 const f3r_stepper* f3r_sim_stepper(const f3r_sim* s) { return &s->stepper; }
 const f3r_model* f3r_sim_model(const f3r_sim* s) { return s->model; }
