@@ -4,6 +4,7 @@
 #include <memory>
 
 #include "flex3rpr/linear.h"
+#include "flex3rpr/session.h"
 #include "sim_node.hpp"
 
 namespace flex3rpr {
@@ -76,11 +77,19 @@ void SimNode::SetStateCall(const SetState::Request& req, SetState::Response* res
       return;
     }
   }
+  // the session's checks (flex3rpr/session.h), flex3rpr.Sim.set_state's: the ranges of a
+  // scene's initial state
+  const double* modal = req.modal.empty() ? nullptr : req.modal.data();
+  const double* modal_rate = req.modal_rate.empty() ? nullptr : req.modal_rate.data();
+  const int count = modal || modal_rate ? static_cast<int>(nmodal) : 0;
   f3r_error err{};
-  if (f3r_sim_set_state(sim_.get(), req.platform_pose.data(), req.platform_twist.data(),
-                        req.modal.empty() ? nullptr : req.modal.data(),
-                        req.modal_rate.empty() ? nullptr : req.modal_rate.data(), &err) != F3R_OK) {
-    res->message = std::string(err.message) + "; nothing changed";
+  if (f3r_session_check_state(model_.get(), req.platform_pose.data(), req.platform_twist.data(),
+                              modal, modal_rate, count, &err) != F3R_OK ||
+      f3r_sim_set_state(sim_.get(), req.platform_pose.data(), req.platform_twist.data(), modal,
+                        modal_rate, &err) != F3R_OK) {
+    res->message = err.message;
+    if (res->message.find("nothing changed") == std::string::npos)
+      res->message += "; nothing changed";
     return;
   }
   const f3r_outputs& out = *f3r_sim_outputs(sim_.get());

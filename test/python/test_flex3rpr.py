@@ -77,7 +77,7 @@ def test_keyword_overrides_and_yaml_strings_are_the_scene_fields():
     a = flex3rpr.Sim(REST, links__modes=3)
     b = flex3rpr.Sim("links: {model: fixed_free, modes: 3, damping_ratio: 0.01}\n"
                      "effects:\n  joint_friction: {prismatic: [5.0, 5.0, 5.0], "
-                     "revolute: [0.01, 0.01, 0.01]}\n")
+                     "revolute: [0.01, 0.01, 0.01]}\n  end_stops: {}\n")
     assert a.modes == b.modes == [3, 3, 3]
     for k in range(20):
         sa = a.step([5.0 * np.sin(k), 1.0, -2.0, 0.0, 0.0, 0.0]).vector.copy()

@@ -139,13 +139,21 @@ class Lockstep(unittest.TestCase):
                 res = self.set_state(**bad)
                 self.assertFalse(res.success, bad)
                 self.assertIn("nothing changed", res.message)
+                self.assertEqual(res.message.count("nothing changed"), 1, res.message)
+                if bad["platform_pose"][2] == 1e6:
+                    self.assertIn("pose[2] is 1e+06: out of range -1000..1000 rad", res.message)
+                if len(bad.get("modal", [])) == 9:
+                    self.assertIn("modal[0] is 1: out of range -0.1..0.1", res.message)
             res = self.step(command=EffortCommand(leg_force=[1.0, 0.0, 0.0]), periods=5)
             self.assertTrue(res.success, res.message)
             return res
 
         bad = [dict(platform_pose=[2.0, 0.0, 0.0], platform_twist=twist),   # out of reach
                dict(platform_pose=[0.0, float("nan"), 0.0], platform_twist=twist),
-               dict(platform_pose=pose, platform_twist=twist, modal=[0.001])]  # wrong length
+               dict(platform_pose=pose, platform_twist=twist, modal=[0.001]),  # wrong length
+               # the session's ranges, flex3rpr.Sim.set_state's (flex3rpr/session.h)
+               dict(platform_pose=[0.0, 0.0, 1e6], platform_twist=twist),
+               dict(platform_pose=pose, platform_twist=twist, modal=[1.0] + [0.0] * 8)]
         with_errors, without = run(bad), run([])
         self.assertEqual(state(with_errors.joint_state), state(without.joint_state))
         self.assertEqual(list(with_errors.modal), list(without.modal))

@@ -267,8 +267,9 @@ class NodeStartup(unittest.TestCase):
 
 
     def run_pushed(self, name, *params):
-        """A node on rest.yaml with leg 1 pushed outwards (3 N, held) until it pauses with an
-        error or has run 3 s; returns its ~status messages, joint_states and output."""
+        """A node on idle_rigid.yaml (no end stops in the file) with leg 1 pushed outwards (3 N,
+        held) until it pauses with an error or has run 3 s; returns its ~status messages,
+        joint_states and output."""
         from flex3rpr.msg import EffortCommand, SimStatus
         from sensor_msgs.msg import JointState
         seen, joints = [], []
@@ -277,6 +278,7 @@ class NodeStartup(unittest.TestCase):
         pub = rospy.Publisher("/%s/command" % name, EffortCommand, queue_size=10)
         proc = subprocess.Popen(["stdbuf", "-oL", "rosrun", "flex3rpr", "flex3rpr_node", "__name:=" + name,
                                  "joint_states:=/joint_states_" + name, "_realtime_factor:=0.0",
+                                 "_scene:=" + PKG + "/test/scenes/idle_rigid.yaml",
                                  "_publish_rate:=100.0", "_paused:=true", *params],
                                 stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
         try:
