@@ -8,10 +8,10 @@
 Needs no ROS. The generated messages (flex3rpr.msg, flex3rpr.srv) share the name when the catkin
 workspace is sourced. docs/python.md has the whole interface.
 """
-from ._core import Error, SceneError
-from .sim import Sim, State
+from ._core import ArgumentError, Error, SceneError
+from .sim import Sim, State, scene_path
 from .rollouts import rollouts, study
 from .env import Flex3rprEnv, tracking_vibration_reward
 
-__all__ = ["Error", "SceneError", "Sim", "State", "rollouts", "study", "Flex3rprEnv",
+__all__ = ["ArgumentError", "Error", "SceneError", "Sim", "State", "scene_path", "rollouts", "study", "Flex3rprEnv",
            "tracking_vibration_reward"]

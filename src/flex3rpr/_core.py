@@ -25,6 +25,15 @@ class SceneError(Error, ValueError):
     """A scene the core refused: the message names the file, the field and the allowed range."""
 
 
+class ArgumentError(Error, ValueError):
+    """A command, a period or a state the core refused (the session's checks, the same as the
+    node's): the message names the value and the allowed range; nothing changed."""
+
+
+def error_class(kind):
+    return {"scene": SceneError, "argument": ArgumentError}.get(kind, Error)
+
+
 def _candidates():
     env = os.environ.get("F3R_LIBRARY")
     if env:
@@ -64,10 +73,13 @@ _signatures = {
     "f3r_py_columns": (ctypes.c_int, [_p]),
     "f3r_py_column_name": (ctypes.c_int, [_p, ctypes.c_int, ctypes.c_char_p]),
     "f3r_py_row": (None, [_p, _d]),
-    "f3r_py_extras": (None, [_p, _d]),
-    "f3r_py_step": (ctypes.c_int, [_p, _d, ctypes.c_long, ctypes.c_double, _d]),
+    "f3r_py_extras": (ctypes.c_int, [_p, _d]),
+    "f3r_py_extra_group": (ctypes.c_char_p, [ctypes.c_int, ctypes.POINTER(ctypes.c_int)]),
+    "f3r_py_check_step": (ctypes.c_int, [_p, ctypes.c_double, ctypes.c_double]),
+    "f3r_py_measurement": (ctypes.c_int, [_p, _d, ctypes.POINTER(ctypes.c_int)]),
+    "f3r_py_step": (ctypes.c_int, [_p, _d, ctypes.c_int, ctypes.c_double, ctypes.c_double, _d]),
     "f3r_py_reset": (ctypes.c_int, [_p]),
-    "f3r_py_set_state": (ctypes.c_int, [_p, _d, _d, _d, _d]),
+    "f3r_py_set_state": (ctypes.c_int, [_p, _d, _d, _d, _d, ctypes.c_int]),
     "f3r_py_run": (ctypes.c_int, [_p, ctypes.c_double, _d, ctypes.POINTER(ctypes.c_long)]),
     "f3r_py_linearise": (ctypes.c_int, [_p, ctypes.POINTER(_p)]),
     "f3r_py_linear_destroy": (None, [_p]),
@@ -80,6 +92,16 @@ for _name, (_restype, _argtypes) in _signatures.items():
     _f = getattr(lib, _name)
     _f.restype = _restype
     _f.argtypes = _argtypes
+
+
+def extra_groups():
+    """The extras' groups as the C side exports them: [(name, count), ...] in their order."""
+    groups, count = [], ctypes.c_int(0)
+    while True:
+        name = lib.f3r_py_extra_group(len(groups), ctypes.byref(count))
+        if name is None:
+            return groups
+        groups.append((name.decode(), count.value))
 
 
 class StateSpace(ctypes.Structure):
@@ -97,4 +119,4 @@ def check(status, handle):
     if status != 0:
         message = lib.f3r_py_message(handle).decode()
         kind = STATUS_NAMES.get(status, "error")
-        raise (SceneError if kind == "scene" else Error)(message, kind)
+        raise error_class(kind)(message, kind)

@@ -4,7 +4,7 @@ needs no Gymnasium; where Gymnasium is installed it is registered as "Flex3rpr-v
 import numpy as np
 
 from ._core import Error
-from .sim import Sim
+from .sim import Sim, scene_path
 
 
 def tracking_vibration_reward(state, target, action, weights=(1e4, 1e6, 1e-6)):
@@ -30,14 +30,22 @@ class Flex3rprEnv:
     leaves `limit` (m from the target), and is truncated after `horizon` periods.
 
     target: the platform pose (x, y, phi) to track; start: the pose reset() starts from (its
-    jitter in m and rad with the seed: start_noise)."""
+    jitter in m and rad with the seed: start_noise). The default scene is the package's
+    rest_turned.yaml, found from any directory: the platform turned 0.3 rad off the singular
+    home pose, with end stops.
+
+    Spaces: an action is clipped to +-action_limit (N and N m; 200 by default) before it is
+    applied, and action_space says so; observation_space is unbounded. After an episode has
+    terminated or been truncated, step() raises RuntimeError until reset()."""
 
     metadata = {"render_modes": []}
 
-    def __init__(self, scene="config/scenes/rest.yaml", target=(0.01, 0.0, 0.0), horizon=500,
+    def __init__(self, scene=None, target=(0.01, 0.0, 0.0), horizon=500,
                  period=1e-3, reward=tracking_vibration_reward, start=None, start_noise=0.0,
                  limit=0.05, action_limit=200.0, overrides=None):
-        self.sim = Sim(scene, overrides=overrides, period=period)
+        self.sim = Sim(scene_path("rest_turned.yaml") if scene is None else scene,
+                       overrides=overrides, period=period)
+        self._ended = False
         self.target = np.asarray(target, dtype=float)
         self.horizon, self.reward_fn, self.limit = int(horizon), reward, float(limit)
         self.start = None if start is None else np.asarray(start, dtype=float)
@@ -71,12 +79,16 @@ class Flex3rprEnv:
             self.rng = np.random.default_rng(seed)
         self.sim.reset()
         self.k = 0
+        self._ended = False
         if self.start is not None or self.start_noise > 0.0:
             base = self.sim.state.pose.copy() if self.start is None else self.start
             self.sim.set_state(base + self.start_noise * self.rng.standard_normal(3))
         return self._observe(self.sim.state), {"t": self.sim.t}
 
     def step(self, action):
+        if self._ended:
+            raise RuntimeError("Flex3rprEnv.step: the episode has ended (terminated or truncated); "
+                               "call reset()")
         action = np.clip(np.asarray(action, dtype=float), -self.action_limit, self.action_limit)
         info = {"reason": ""}
         try:
@@ -84,6 +96,7 @@ class Flex3rprEnv:
         except Error as e:
             state = self.sim.state
             info["reason"] = "physics: " + str(e)
+            self._ended = True
             return self._observe(state), self.reward_fn(state, self.target, action), True, \
                 False, info
         self.k += 1
@@ -95,6 +108,7 @@ class Flex3rprEnv:
         if truncated:
             info["reason"] = "horizon: %d periods" % self.horizon
         info["t"] = state.t
+        self._ended = terminated or truncated
         return self._observe(state), reward, terminated, truncated, info
 
     def close(self):

@@ -24,10 +24,15 @@ from .sim import Sim
 
 
 def _one_run(job):
+    """One run's rows (the CSV's columns, then the scene's sensors' columns, as the CLI writes
+    them), its status and its column names."""
     scene, overrides, periods, commands, policy, index, period = job
     sim = Sim(scene, overrides=overrides, period=period)
-    rows = np.empty((periods + 1, len(sim.columns)))
-    rows[0] = sim.state.vector
+    width = len(sim.columns)
+    columns = sim.columns + sim.sensor_names
+    rows = np.empty((periods + 1, len(columns)))
+    rows[0, :width] = sim.state.vector
+    rows[0, width:] = sim.sensors
     status = ""
     for k in range(periods):
         try:
@@ -39,8 +44,9 @@ def _one_run(job):
             rows[k + 1:] = np.nan
             status = str(e)
             break
-        rows[k + 1] = state.vector
-    return rows, status, sim.columns
+        rows[k + 1, :width] = state.vector
+        rows[k + 1, width:] = sim.sensors
+    return rows, status, columns
 
 
 _JOBS = []  # the runs of the rollouts() in progress, inherited by the forked workers
@@ -75,7 +81,8 @@ def rollouts(scene, policy=None, n=1, periods=1000, commands=None, overrides=Non
     """Runs n simulations of `scene` for `periods` periods of `period` s each, across
     `processes` processes (default: every core), and returns a dict: each CSV column as an
     array (runs, periods + 1), "status" (one message a run, "" when it ran to the end; a run
-    stopped by its physics has NaN after that) and "runs" (the run indices, for a part).
+    stopped by its physics has NaN after that) and "runs" (the run indices, for a part). A scene
+    with sensors adds their columns (enc_rho_1, strain_1, accel_x, ...), as the CLI's CSV does.
 
     policy(state, k, run) -> command is called at every period (state: the State after period
     k - 1; run: the run's index); or commands (n x periods x 6 or nq, or periods x 6 for all)

@@ -4,11 +4,12 @@ import ctypes
 import json
 import os
 import tempfile
+import warnings
 
 import numpy as np
 
 from . import _core
-from ._core import Error, lib
+from ._core import lib
 
 _DOUBLE_P = ctypes.POINTER(ctypes.c_double)
 
@@ -42,6 +43,28 @@ def _override_text(field, value):
     elif isinstance(value, float):
         value = repr(value)
     return "%s=%s" % (field, value)
+
+
+def scene_path(name):
+    """The path of a scene the package ships (config/scenes/NAME), from any directory: in the
+    checkout or a devel space (beside src/), or in an install space (share/flex3rpr)."""
+    here = os.path.dirname(os.path.realpath(__file__))
+    roots = [os.path.dirname(os.path.dirname(here)),  # src/flex3rpr -> the checkout
+             os.path.join(os.path.dirname(os.path.dirname(os.path.dirname(os.path.dirname(here)))),
+                          "share", "flex3rpr")]  # lib/python3/dist-packages/flex3rpr -> prefix
+    for root in roots:
+        path = os.path.join(root, "config", "scenes", name)
+        if os.path.isfile(path):
+            return path
+    raise FileNotFoundError("flex3rpr: the package's scene %s is not in %s"
+                            % (name, " or ".join(os.path.join(r, "config", "scenes") for r in roots)))
+
+
+def _describe(value):
+    if isinstance(value, np.ndarray):
+        return "%s array of shape %s%s" % (value.dtype, value.shape,
+                                           "" if value.flags.c_contiguous else ", not contiguous")
+    return type(value).__name__
 
 
 class State:
@@ -121,9 +144,13 @@ class Sim:
             if label:
                 message = message.replace(path, label)
             kind = _core.STATUS_NAMES.get(status, "error")
-            raise (_core.SceneError if kind == "scene" else Error)(message, kind)
+            raise _core.error_class(kind)(message, kind)
         self.scene = label or path
-        self.period = float(period)
+        try:
+            self.period = float(period)
+        except (TypeError, ValueError):
+            self.period = float("nan")
+        _core.check(lib.f3r_py_check_step(handle, 1.0, self.period), handle)
         self.nq = lib.f3r_py_nq(handle)
         self.modes = [lib.f3r_py_modes(handle, i) for i in range(3)]
         name = ctypes.create_string_buffer(_core.OUTPUT_NAME)
@@ -134,7 +161,8 @@ class Sim:
         self.column_index = {n: k for k, n in enumerate(self.columns)}
         self._row = np.zeros(len(self.columns))
         self._held = np.zeros(self.nq)
-        self._extras = np.zeros(21)
+        self._extra_groups = _core.extra_groups()
+        self._extras = np.zeros(sum(n for _, n in self._extra_groups))
         lib.f3r_py_row(handle, _ptr(self._row))
         sensor_names = (["enc_rho_1", "enc_rho_2", "enc_rho_3", "enc_theta_1", "enc_theta_2",
                          "enc_theta_3"], ["strain_1", "strain_2", "strain_3"],
@@ -177,29 +205,41 @@ class Sim:
                 raise ValueError("command: %d values, expected 6 (leg forces, cylinder torques) "
                                  "or %d (every generalized force); nothing changed"
                                  % (value.size, self.nq))
-        bad = np.flatnonzero(~np.isfinite(held))
-        if bad.size:
-            raise ValueError("command: force[%d] is %g, not finite; nothing changed"
-                             % (bad[0], held[bad[0]]))
-        return held
+        return held  # finiteness and the scene's limits are the core's to check (step)
 
     def step(self, command=None, periods=1):
-        """Holds `command` (see forces(); None: zero) for `periods` periods of `period` s, as
-        the node's ~step_with_command, and returns the State at the end. Its vector is the
-        simulation's own buffer, overwritten by the next step: copy it to keep it."""
+        """Holds `command` (see forces(); None: zero) for `periods` (a whole number) periods of
+        `period` s, as the node's ~step_with_command, and returns the State at the end (its
+        own copy). The core checks the command: a value that is not finite or beyond the
+        scene's `limits` raises, naming it, and nothing changes; so does a step that fails."""
         held = self._held if command is None else self.forces(command)
         if command is None:
             held[:] = 0.0
-        status = lib.f3r_py_step(self._h, _ptr(held), int(periods), self.period, _ptr(self._row))
-        _core.check(status, self._h)
-        return State(self._row, self)
+        self._step(held, periods)
+        self._warn_if_unmet()
+        return State(self._row.copy(), self)
 
     def step_forces(self, held, periods=1):
-        """step() with the generalized forces (a float64 array of nq values) as they are: the
-        fast path of a controller loop, no checks beyond the core's (a NaN is refused there)."""
-        status = lib.f3r_py_step(self._h, _ptr(held), periods, self.period, _ptr(self._row))
-        _core.check(status, self._h)
+        """step() with the generalized forces as they are, for a controller loop's speed: a
+        C-contiguous float64 numpy array of nq values (anything else raises TypeError, nothing
+        changed), checked by the core as step()'s. Returns the outputs' vector, which the next
+        step overwrites (step() returns a State that stays)."""
+        if not (isinstance(held, np.ndarray) and held.dtype == np.float64 and held.ndim == 1
+                and held.flags.c_contiguous and held.size == self.nq):
+            raise TypeError("step_forces: a C-contiguous float64 numpy array of %d values expected, "
+                            "got %s; nothing changed" % (self.nq, _describe(held)))
+        self._step(held, periods)
         return self._row
+
+    def _step(self, held, periods):
+        try:
+            periods = float(periods)
+        except (TypeError, ValueError):
+            raise TypeError("periods: a whole number expected, got %r; nothing changed"
+                            % (periods,)) from None
+        status = lib.f3r_py_step(self._h, _ptr(held), held.size, periods, self.period,
+                                 _ptr(self._row))
+        _core.check(status, self._h)
 
     # --- state --------------------------------------------------------------------------------
     @property
@@ -226,34 +266,80 @@ class Sim:
         """What the columns leave out: actuator (6) and passive (6) efforts, stop_locked (3),
         stop_force (3), energy_balance_error, actuation_condition, impacts."""
         lib.f3r_py_extras(self._h, _ptr(self._extras))
-        e = self._extras
-        return {"actuator": e[0:6].copy(), "passive": e[6:12].copy(),
-                "stop_locked": e[12:15].astype(int), "stop_force": e[15:18].copy(),
-                "energy_balance_error": float(e[18]), "actuation_condition": float(e[19]),
-                "impacts": int(e[20])}
+        out, start = {}, 0
+        for name, count in self._extra_groups:  # the C side's table: names, counts, order
+            values = self._extras[start:start + count]
+            start += count
+            whole = name in ("stop_locked", "impacts")
+            if count == 1:
+                out[name] = int(values[0]) if whole else float(values[0])
+            else:
+                out[name] = values.astype(int) if whole else values.copy()
+        return out
 
     def set_state(self, pose, twist=(0.0, 0.0, 0.0), modal=None, modal_rate=None):
         """The platform pose (x, y, phi) and twist in the base frame and, optionally, the modal
         coordinates and rates; the legs follow through the loop closure. Time and held commands
         stay. An unreachable pose or a bad value raises, and nothing changes."""
-        n_modal = self.nq - 9
-        arrays = []
-        for name, value, size in (("pose", pose, 3), ("twist", twist, 3),
-                                  ("modal", modal, n_modal), ("modal_rate", modal_rate, n_modal)):
-            if value is None:
-                arrays.append(None)
-                continue
-            a = np.ascontiguousarray(value, dtype=float).ravel()
-            if a.size != size:
-                raise ValueError("%s: %d values, expected %d; nothing changed"
-                                 % (name, a.size, size))
-            arrays.append(a)
+        arrays = [np.ascontiguousarray(value, dtype=float).ravel() if value is not None else None
+                  for value in (pose, twist, modal, modal_rate)]
+        for name, a in zip(("pose", "twist"), arrays):  # the C side reads three values of each
+            if a.size != 3:
+                raise ValueError("%s: %d values, expected 3; nothing changed" % (name, a.size))
+        modal_sizes = {a.size for a in arrays[2:] if a is not None}
+        if len(modal_sizes) > 1:
+            raise ValueError("modal and modal_rate: %d and %d values; nothing changed"
+                             % (arrays[2].size, arrays[3].size))
+        # the core checks the modal count against the model, and every range
+        count = modal_sizes.pop() if modal_sizes else 0
         pointers = [None if a is None else _ptr(a) for a in arrays]
-        _core.check(lib.f3r_py_set_state(self._h, *pointers), self._h)
+        _core.check(lib.f3r_py_set_state(self._h, *pointers, count), self._h)
         lib.f3r_py_row(self._h, _ptr(self._row))
 
+    # --- the closed-loop measurement --------------------------------------------------------
+    def _measurement(self):
+        measured, met = ctypes.c_double(0.0), ctypes.c_int(0)
+        if not lib.f3r_py_measurement(self._h, ctypes.byref(measured), ctypes.byref(met)):
+            return None
+        return measured.value, bool(met.value), lib.f3r_py_message(self._h).decode()
+
+    @property
+    def measured_error_m(self):
+        """With an accuracy request (and the scene's accuracy.verify, on by default): the largest
+        end-effector distance (m) so far between this run and the check configuration, a richer
+        one stepped on the same commands, period by period (nan once the check could not follow:
+        measurement_note says why). None without a request."""
+        m = self._measurement()
+        return None if m is None else m[0]
+
+    @property
+    def request_met(self):
+        """True while measured_error_m is within 0.7 of the request (the check's margin, as the
+        CLI's); None without a request."""
+        m = self._measurement()
+        return None if m is None else m[1]
+
+    @property
+    def measurement_note(self):
+        m = self._measurement()
+        return "" if m is None else m[2]
+
+    def _warn_if_unmet(self):
+        """Warns once (until reset) when the measured error passes the request."""
+        if getattr(self, "_warned", False):
+            return
+        m = self._measurement()
+        if m is not None and not m[1]:
+            self._warned = True
+            request = self.accuracy["request"]
+            warnings.warn("flex3rpr: %s: the accuracy request %g m is not met: measured %.3g m "
+                          "against the check at t = %.6g s%s" % (
+                              self.scene, request, m[0], self.t, (": " + m[2]) if m[2] else ""),
+                          RuntimeWarning, stacklevel=3)
+
     def reset(self):
-        """Back to the scene's initial state at t = 0, commands zero."""
+        """Back to the scene's initial state at t = 0, commands zero (and the measurement)."""
+        self._warned = False
         _core.check(lib.f3r_py_reset(self._h), self._h)
         lib.f3r_py_row(self._h, _ptr(self._row))
 

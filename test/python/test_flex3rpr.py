@@ -19,6 +19,7 @@ SCENES = os.path.join(ROOT, "config", "scenes")
 CLI = os.environ.get("F3R_CLI", os.path.join(ROOT, "build", "ws", "devel", "lib", "flex3rpr",
                                              "flex3rpr_sim"))
 REST = os.path.join(SCENES, "rest.yaml")
+REST_TURNED = os.path.join(SCENES, "rest_turned.yaml")
 
 
 def cli_csv(scene, sets, workdir):
@@ -97,10 +98,41 @@ def test_a_bad_command_is_refused_and_changes_nothing():
         assert np.array_equal(a.state.vector, before)
     held = np.zeros(a.nq)
     held[0] = np.nan
-    with pytest.raises(flex3rpr.Error) as e:  # the fast path: the core refuses it
+    with pytest.raises(flex3rpr.ArgumentError) as e:  # the fast path: the core refuses it
         a.step_forces(held)
-    assert "not finite" in str(e.value)
+    assert "leg_force_1 is nan, not finite" in str(e.value)
     assert np.array_equal(a.state.vector, before)
+    # the session's checks, the node's: the scene's limits, whole periods, arrays as numpy has them
+    refusals = [
+        (lambda: a.step([5000.0, 0, 0, 0, 0, 0]), flex3rpr.ArgumentError,
+         "leg_force_1 is 5000, out of range -1000..1000 (the scene's limits.force)"),
+        (lambda: a.step([0, 0, 0, 0, 150.0, 0]), flex3rpr.ArgumentError,
+         "cylinder_torque_2 is 150, out of range -100..100 (the scene's limits.torque)"),
+        (lambda: a.step({"modal": [0, 0, 0, 2e3, 0, 0]}), flex3rpr.ArgumentError, "modal_force[3]"),
+        (lambda: a.step([1e12, 0, 0, 0, 0, 0]), flex3rpr.ArgumentError, "leg_force_1 is 1e+12"),
+        (lambda: a.step(None, periods=2.9), flex3rpr.ArgumentError, "periods is 2.9"),
+        (lambda: a.step(None, periods=-3), flex3rpr.ArgumentError, "periods is -3"),
+        (lambda: a.step(None, periods=0), flex3rpr.ArgumentError, "periods is 0"),
+        (lambda: a.step(None, periods="x"), TypeError, "periods"),
+        (lambda: a.step_forces(np.zeros(3)), TypeError, "of %d values expected" % a.nq),
+        (lambda: a.step_forces(np.zeros(a.nq, dtype=np.int64)), TypeError, "int64"),
+        (lambda: a.step_forces(np.zeros(2 * a.nq)[::2]), TypeError, "not contiguous"),
+        (lambda: a.step_forces(list(np.zeros(a.nq))), TypeError, "list"),
+        (lambda: a.set_state([2.0, 0, 0]), flex3rpr.ArgumentError, "pose[0] is 2: out of range -1..1"),
+        (lambda: a.set_state([0, 0, 1e6]), flex3rpr.ArgumentError, "pose[2] is 1e+06"),
+        (lambda: a.set_state([0, 0, 0], modal=[0, 0, 1.0, 0, 0, 0]), flex3rpr.ArgumentError,
+         "modal[2] is 1: out of range -0.1..0.1"),
+        (lambda: a.set_state([0, 0, 0], modal=[0, 0]), flex3rpr.ArgumentError,
+         "modal: 2 values, the model has 6"),
+        (lambda: a.set_state([0, 0, 0], [0, np.nan, 0]), flex3rpr.ArgumentError, "twist[1] is nan"),
+    ]
+    for call, kind, text in refusals:
+        with pytest.raises(kind) as e:
+            call()
+        assert text in str(e.value)
+        assert "nothing changed" in str(e.value)
+        assert np.array_equal(a.state.vector, before), text
+    assert a.t == b.t
     # and the simulation runs on as if nothing had been sent
     for k in range(10):
         assert np.array_equal(a.step([1.0 * k, 0, 0, 0, 0.01, 0]).vector.copy(),
@@ -118,8 +150,39 @@ def test_commands_in_every_form_and_periods_agree():
         sc = c.step_forces(held)
     assert np.array_equal(sa, sb.vector) and np.array_equal(sa, sc)
     assert sb.t == pytest.approx(0.007, abs=1e-15)
+    # every State step() returns stays as it was
+    states = [a.step([1.0, 0, 0, 0, 0, 0]) for _ in range(3)]
+    assert [round(s.t, 12) for s in states] == [0.008, 0.009, 0.01]
     assert np.array_equal(sb.pose, [sb.x_p, sb.y_p, sb.phi_p])
     assert sb["eta_1_1"] == sb.modal[0]
+
+
+def test_periods_are_checked_when_the_sim_is_made():
+    for period in (0, -1e-3, float("nan"), "x", 1e4):
+        with pytest.raises(flex3rpr.ArgumentError) as e:
+            flex3rpr.Sim(REST, period=period)
+        assert "period is" in str(e.value)
+
+
+def test_a_failed_step_leaves_the_sim_as_it_was():
+    """A leg pulled in at the force limit with no stops collapses: the step raises, and state,
+    extras, sensors and the next steps are those of a Sim that never took it."""
+    scene = os.path.join(ROOT, "test", "scenes", "sensors_fixed_free.yaml")  # no end stops
+    a, b = flex3rpr.Sim(scene), flex3rpr.Sim(scene)
+    for s in (a, b):
+        s.step([2.0, 0, 0, 0, 0.01, 0], periods=5)
+    before, extras, sensors = a.state.vector.copy(), a.extras, a.sensors
+    with pytest.raises(flex3rpr.Error) as e:
+        a.step([-1000.0, 0, 0, 0, 0, 0], periods=500)
+    assert "collapsed" in str(e.value)
+    assert np.array_equal(a.state.vector, before) and np.array_equal(a.sensors, sensors)
+    after = a.extras
+    for key, value in extras.items():
+        assert np.array_equal(after[key], value), key
+    for k in range(5):
+        assert np.array_equal(a.step([0.5 * k + 0.1, 0, 0, 0, 0, 0]).vector,
+                              b.step([0.5 * k + 0.1, 0, 0, 0, 0, 0]).vector)
+        assert np.array_equal(a.sensors, b.sensors)
 
 
 def test_state_set_state_and_reset():
@@ -220,6 +283,10 @@ def test_the_environment_has_gymnasiums_shape():
         if terminated or truncated:
             break
     assert truncated and steps == 20 and info["reason"].startswith("horizon")
+    with pytest.raises(RuntimeError):  # the episode has ended: reset() first
+        env.step(np.zeros(6))
+    env.reset()
+    env.step(np.zeros(6))
     env = flex3rpr.Flex3rprEnv(scene=REST, limit=1e-3, horizon=10000)
     env.reset(seed=0)
     for _ in range(5000):
@@ -227,6 +294,18 @@ def test_the_environment_has_gymnasiums_shape():
         if terminated:
             break
     assert terminated and info["reason"].startswith("limit")
+
+
+def test_the_default_environment_works_from_any_directory(tmp_path, monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    env = flex3rpr.Flex3rprEnv()
+    env.reset(seed=1)
+    assert env.sim.state.phi_p == pytest.approx(0.3)  # rest_turned.yaml: off the singular home
+    assert env.sim.extras["actuation_condition"] < 1e3
+    assert env.action_limit == 200.0
+    if env.action_space is not None:
+        assert env.action_space.high[0] == 200.0
+    assert flex3rpr.scene_path("rest.yaml").endswith(os.path.join("config", "scenes", "rest.yaml"))
 
 
 @pytest.mark.parametrize("example", ["pd_grid_search.py", "lqr_scipy.py", "monte_carlo.py"])
@@ -256,6 +335,11 @@ def test_the_scenes_sensors_are_read_as_the_cli_writes_them(tmp_path):
     env = flex3rpr.Flex3rprEnv(scene=scene, horizon=5)
     obs, _ = env.reset(seed=1)
     assert env.observation_names == a.sensor_names and len(obs) == 12
+    # rollouts keep the sensors' columns, the readings a Sim stepped alone gives
+    out = flex3rpr.rollouts(scene, commands=np.tile([20.0, 0, 0, 0, 0, 0], (30, 1)), n=1,
+                            periods=30, processes=1)
+    for c, name in enumerate(a.sensor_names):
+        assert np.array_equal(out[name][0, 1:], readings[:, c]), name
 
 
 def test_rollouts_split_over_gnu_parallel_merge_into_the_whole(tmp_path):
@@ -280,3 +364,43 @@ def test_rollouts_split_over_gnu_parallel_merge_into_the_whole(tmp_path):
                               periods=20, overrides=spec["overrides"], processes=1)
     assert list(merged["runs"]) == [0, 1, 2]
     assert np.array_equal(merged["x_p"], whole["x_p"])
+
+
+def test_a_closed_loop_measures_its_accuracy_as_it_runs():
+    """With an accuracy request the Sim steps the check configuration on the same commands and
+    reports the largest end-effector distance from it; the run itself is the unmeasured one's."""
+    measured = flex3rpr.Sim(REST_TURNED, accuracy=1e-5)
+    plain = flex3rpr.Sim(REST_TURNED, accuracy=1e-5, overrides={"accuracy.verify": False})
+    assert plain.measured_error_m is None and plain.request_met is None
+    assert flex3rpr.Sim(REST_TURNED).measured_error_m is None  # no request, no check
+    assert measured.measured_error_m == 0.0 and measured.request_met
+    errors = []
+    target = np.array([0.126, 0.126, 0.126])
+    for k in range(150):  # a step PD on the strokes towards a new target, a naive controller
+        rho = measured.state.q[:3]
+        rate = measured.state.v[:3]
+        u = np.zeros(6)
+        u[:3] = 400.0 * (target + (0.01 if k >= 20 else 0.0) - rho) - 20.0 * rate
+        a, b = measured.step(u), plain.step(u)
+        assert np.array_equal(a.vector, b.vector), "the check must not change the run"
+        errors.append(measured.measured_error_m)
+    assert all(np.isfinite(errors)) and errors[-1] > 0.0
+    assert all(y >= x for x, y in zip(errors, errors[1:])), "the largest distance so far"
+    assert measured.request_met == (errors[-1] <= 0.7 * 1e-5)
+    # a modal state the richer basis cannot take ends the measurement, saying so
+    measured.set_state(measured.state.pose, modal=np.full(measured.nq - 9, 1e-5))
+    assert np.isnan(measured.measured_error_m) and "modal state" in measured.measurement_note
+    measured.reset()
+    assert measured.measured_error_m == 0.0 and measured.measurement_note == ""
+
+
+def test_an_unmet_request_warns_once():
+    sim = flex3rpr.Sim(REST_TURNED, accuracy=1e-9, overrides={"links.modes": 1})
+    with pytest.warns(RuntimeWarning, match="not met: measured"):
+        for k in range(40):
+            sim.step([50.0 if k < 10 else 0.0, 0, 0, 0, 0, 0])
+    assert sim.request_met is False and sim.measured_error_m > 0.7e-9
+    import warnings
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")  # latched: no second warning until reset
+        sim.step([0.0] * 6)
