@@ -1,4 +1,4 @@
-// The CSV's number formatting (src/cli/csv_number.c) against snprintf's "%.*g": the same bytes
+// The CSV's number formatting (src/core/base/csv_number.c) against snprintf's "%.*g": the same bytes
 // for every double and precision tried, the fast path's hard cases (rounding ties, powers of ten
 // and their neighbours, values outside its exact powers) included.
 #include <gtest/gtest.h>
@@ -11,7 +11,7 @@
 #include <random>
 #include <string>
 
-#include "csv_number.h"
+#include "flex3rpr/csv_number.h"
 
 namespace {
 

@@ -13,7 +13,7 @@
 
 #include "flex3rpr/linear.h"
 #include "flex3rpr/modal.h"
-#include "linear_export.h"
+#include "flex3rpr/linear_export.h"
 #include "test_support.h"
 
 #include <fstream>
@@ -300,7 +300,7 @@ TEST(StateSpace, StepResponseAgreesWithTheSimulationToFirstOrder) {
   RecordProperty("step_error_ratio", std::to_string(ratio));
 }
 
-// --- the CLI's export (src/cli/linear_export.c) --------------------------------------------------
+// --- the export (src/core/accuracy/linear_export.c) ----------------------------------------------
 
 std::vector<unsigned char> ReadBytes(const std::string& path) {
   std::ifstream in(path, std::ios::binary);
@@ -314,7 +314,7 @@ TEST(StateSpaceExport, MatFileIsMatlabLevel4ByteForByte) {
   auto ss = MakeStateSpace(m.get());
   const std::string path = "/tmp/f3r_ss_" + std::to_string(getpid()) + ".mat";
   char why[512] = "";
-  ASSERT_EQ(f3r_cli_write_mat(ss.get(), path.c_str(), why, sizeof why), 0) << why;
+  ASSERT_EQ(f3r_linear_write_mat(ss.get(), path.c_str(), why, sizeof why), 0) << why;
   const std::vector<unsigned char> bytes = ReadBytes(path);
   std::remove(path.c_str());
   size_t at = 0;
@@ -380,16 +380,16 @@ TEST(StateSpaceExport, MatFileIsMatlabLevel4ByteForByte) {
 // The JSON beside it: the same numbers to the bit (17 digits round-trip), matrices as rows.
 TEST(StateSpaceExport, JsonHoldsTheSameAsRows) {
   char out[64];
-  ASSERT_EQ(f3r_cli_json_path("dir/model.mat", out, sizeof out), 0);
+  ASSERT_EQ(f3r_linear_json_path("dir/model.mat", out, sizeof out), 0);
   EXPECT_STREQ(out, "dir/model.json");
-  ASSERT_EQ(f3r_cli_json_path("model", out, sizeof out), 0);
+  ASSERT_EQ(f3r_linear_json_path("model", out, sizeof out), 0);
   EXPECT_STREQ(out, "model.json");
-  EXPECT_EQ(f3r_cli_json_path("a_rather_long_name.mat", out, 8), -1);
+  EXPECT_EQ(f3r_linear_json_path("a_rather_long_name.mat", out, 8), -1);
   auto m = MakeModel(FlexibleScene());
   auto ss = MakeStateSpace(m.get());
   const std::string path = "/tmp/f3r_ss_" + std::to_string(getpid()) + ".json";
   char why[512] = "";
-  ASSERT_EQ(f3r_cli_write_json(ss.get(), path.c_str(), why, sizeof why), 0) << why;
+  ASSERT_EQ(f3r_linear_write_json(ss.get(), path.c_str(), why, sizeof why), 0) << why;
   std::ifstream in(path);
   std::stringstream text;
   text << in.rdbuf();

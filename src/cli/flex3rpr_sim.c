@@ -23,7 +23,7 @@
 #include "flex3rpr/beam_modes.h"
 #include "flex3rpr/sim.h"
 #include "cli_options.h"
-#include "csv_number.h"
+#include "flex3rpr/csv_number.h"
 #include "sensor_columns.h"
 #include "model_reports.h"
 #include "flex3rpr/output_columns.h"

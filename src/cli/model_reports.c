@@ -6,7 +6,7 @@
 
 #include "flex3rpr/linear.h"
 #include "flex3rpr/modal.h"
-#include "linear_export.h"
+#include "flex3rpr/linear_export.h"
 #include "model_reports.h"
 
 /* The model's geometry, masses and stroke as JSON: the URDF generator (scripts/make_urdf.py)
@@ -117,7 +117,7 @@ int f3r_cli_write_state_space(const f3r_model* m, const char* path) {
   f3r_state_space* ss = NULL;
   f3r_error err = {0};
   char json[4096], why[1024];
-  if (f3r_cli_json_path(path, json, sizeof json) != 0) {
+  if (f3r_linear_json_path(path, json, sizeof json) != 0) {
     fprintf(stderr, "flex3rpr_sim: --linearise: path too long: %s\n", path);
     return 1;
   }
@@ -126,8 +126,8 @@ int f3r_cli_write_state_space(const f3r_model* m, const char* path) {
     return 1;
   }
   int rc = 0;
-  if (f3r_cli_write_mat(ss, path, why, sizeof why) != 0 ||
-      f3r_cli_write_json(ss, json, why, sizeof why) != 0) {
+  if (f3r_linear_write_mat(ss, path, why, sizeof why) != 0 ||
+      f3r_linear_write_json(ss, json, why, sizeof why) != 0) {
     fprintf(stderr, "flex3rpr_sim: --linearise: %s\n", why);
     rc = 1;
   } else {

@@ -1,7 +1,7 @@
 /* The CLI's sensor columns (sensor_columns.h). */
 #include "sensor_columns.h"
 
-#include "csv_number.h"
+#include "flex3rpr/csv_number.h"
 
 static const char* const kNames[F3R_SENSOR_KINDS][F3R_SENSOR_MAX_CHANNELS] = {
     {"enc_rho_1", "enc_rho_2", "enc_rho_3", "enc_theta_1", "enc_theta_2", "enc_theta_3"},

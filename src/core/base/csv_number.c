@@ -8,7 +8,7 @@
  * when X < -4 or X >= precision, else %f style; trailing zeros and a bare point removed. What
  * does not fit 128 bits (at 15 digits, |x| below 1e-13 or above 1e41), subnormals, zeros and
  * non-finite values go to snprintf (test_csv_number compares the two). 30 ns a number. */
-#include "csv_number.h"
+#include "flex3rpr/csv_number.h"
 
 #include <stdint.h>
 #include <stdio.h>

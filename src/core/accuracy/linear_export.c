@@ -1,6 +1,6 @@
 /* MATLAB level-4 and JSON export of a state-space model (linear_export.h). The bytes are
  * composed explicitly little-endian, whatever the host. */
-#include "linear_export.h"
+#include "flex3rpr/linear_export.h"
 
 #include <errno.h>
 #include <stdint.h>
@@ -71,7 +71,7 @@ static int finish(FILE* f, int ok, const char* path, char* why, size_t size) {
   return 0;
 }
 
-int f3r_cli_write_mat(const f3r_state_space* ss, const char* path, char* why, size_t why_size) {
+int f3r_linear_write_mat(const f3r_state_space* ss, const char* path, char* why, size_t why_size) {
   FILE* f = fopen(path, "wb");
   if (!f) return failed(path, "create", errno, why, why_size);
   const int ok =
@@ -118,7 +118,7 @@ static void json_names(FILE* f, const char* name, const char (*names)[F3R_SS_NAM
   fprintf(f, "]%s\n", last ? "" : ",");
 }
 
-int f3r_cli_write_json(const f3r_state_space* ss, const char* path, char* why, size_t why_size) {
+int f3r_linear_write_json(const f3r_state_space* ss, const char* path, char* why, size_t why_size) {
   FILE* f = fopen(path, "w");
   if (!f) return failed(path, "create", errno, why, why_size);
   fprintf(f, "{\n  \"nx\": %d,\n  \"nu\": %d,\n  \"ny\": %d,\n", ss->nx, ss->nu, ss->ny);
@@ -135,7 +135,7 @@ int f3r_cli_write_json(const f3r_state_space* ss, const char* path, char* why, s
   return finish(f, !ferror(f), path, why, why_size);
 }
 
-int f3r_cli_json_path(const char* mat_path, char* out, size_t size) {
+int f3r_linear_json_path(const char* mat_path, char* out, size_t size) {
   size_t stem = strlen(mat_path);
   if (stem >= 4 && !strcmp(mat_path + stem - 4, ".mat")) stem -= 4;
   if (stem + 6 > size) return -1;
