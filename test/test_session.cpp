@@ -79,7 +79,7 @@ TEST(Session, OpensWithTheSceneLimitsAndNamesABadScene) {
   f3r_session* bad = nullptr;
   f3r_error err{};
   const char* sets[] = {"limits.force=-1"};
-  f3r_session_options options{0.0, sets, 1, 1};
+  f3r_session_options options{0.0, sets, 1, 1, 0};
   EXPECT_EQ(f3r_session_open(kSensorScene, &options, &bad, &err), F3R_ERR_SCENE);
   EXPECT_EQ(bad, nullptr);
   EXPECT_NE(std::string(err.message).find("limits.force"), std::string::npos) << err.message;
@@ -300,6 +300,116 @@ TEST(Session, AClosedLoopMeasuresItsDistanceFromTheCheck) {
   ASSERT_EQ(f3r_session_reset(s.get(), &err), F3R_OK);
   ASSERT_EQ(f3r_session_measurement(s.get(), &measured, &met, &lost), 1);
   EXPECT_EQ(measured, 0.0);
+}
+
+// A shell that measures apart (the node, on its own thread) drives the same check to the same
+// bits as a session that steps it itself; the session then neither steps nor reports it.
+TEST(Session, ACheckDrivenApartMeasuresTheSameBits) {
+  const std::string scene = ScenePath("rest_turned.yaml");
+  auto inline_session = Open(scene, {"accuracy.end_effector=1e-5"});
+  f3r_scene loaded = f3r_default_scene();
+  f3r_error err{};
+  const char* sets[] = {"accuracy.end_effector=1e-5"};
+  const f3r_scene_options source{0.0, sets, 1};
+  ASSERT_EQ(f3r_scene_load_with(scene.c_str(), &source, &loaded, &err), F3R_OK) << err.message;
+  f3r_session_options options{};
+  options.commanded = 1;
+  options.measure_apart = 1;
+  f3r_session* raw = nullptr;
+  ASSERT_EQ(f3r_session_open_scene(&loaded, &options, &raw, &err), F3R_OK) << err.message;
+  f3r_scene_free(&loaded);
+  SessionPtr apart(raw);
+  f3r_closed_loop_check* check = f3r_session_closed_loop_check(apart.get());
+  ASSERT_NE(check, nullptr);
+  EXPECT_EQ(f3r_session_closed_loop_check(inline_session.get()), nullptr);
+  double measured = -1.0;
+  int met = 0;
+  ASSERT_EQ(f3r_session_measurement(apart.get(), &measured, &met, nullptr), 0);
+  const int nq = f3r_model_nq(f3r_session_model(apart.get()));
+  for (int k = 1; k <= 40; ++k) {
+    // over the limit, as the node's summed topics may be: advance takes it, step would not
+    auto u = Forces(apart.get(), {{F3R_Q_RHO, k < 10 ? 1500.0 : 0.0}, {F3R_Q_RHO + 1, -20.0}});
+    ASSERT_EQ(f3r_session_advance(apart.get(), u.data(), nq, 1e-3, &err), F3R_OK) << err.message;
+    f3r_closed_loop_check_period(check, u.data(), k * 1e-3,
+                                 f3r_sim_outputs(f3r_session_sim(apart.get()))->q + F3R_Q_X);
+    if (k < 10) {
+      EXPECT_EQ(f3r_session_step(inline_session.get(), u.data(), nq, 1, 1e-3, &err),
+                F3R_ERR_ARGUMENT);
+      EXPECT_NE(std::string(err.message).find("leg_force_1"), std::string::npos) << err.message;
+    }
+    ASSERT_EQ(f3r_session_advance(inline_session.get(), u.data(), nq, 1e-3, &err), F3R_OK);
+    EXPECT_TRUE(SameBits(Snapshot(apart.get()), Snapshot(inline_session.get())));
+  }
+  const char* lost = nullptr;
+  ASSERT_EQ(f3r_session_measurement(inline_session.get(), &measured, &met, &lost), 1);
+  int apart_met = 0;
+  EXPECT_EQ(f3r_closed_loop_check_measured(check, &apart_met, &lost), measured);
+  EXPECT_GT(measured, 0.0);
+  EXPECT_EQ(apart_met, met);
+  EXPECT_EQ(f3r_closed_loop_check_request(check), 1e-5);
+  // reset and set_state leave an apart check to its shell
+  f3r_closed_loop_check_lose(check, "the run stopped");
+  EXPECT_TRUE(std::isnan(f3r_closed_loop_check_measured(check, nullptr, &lost)));
+  EXPECT_STREQ(lost, "the run stopped");
+  ASSERT_EQ(f3r_session_reset(apart.get(), &err), F3R_OK);
+  EXPECT_TRUE(std::isnan(f3r_closed_loop_check_measured(check, nullptr, nullptr)));
+  ASSERT_EQ(f3r_closed_loop_check_reset(check, &err), F3R_OK);
+  EXPECT_EQ(f3r_closed_loop_check_measured(check, nullptr, &lost), 0.0);
+  EXPECT_STREQ(lost, "");
+}
+
+// advance checks only the count and finiteness, naming them, and changes nothing on a refusal.
+TEST(Session, AdvanceRefusesWrongCountsAndValuesThatAreNotFinite) {
+  auto s = Open(kSensorScene);
+  const auto before = Snapshot(s.get());
+  f3r_error err{};
+  auto u = Forces(s.get());
+  const int nq = static_cast<int>(u.size());
+  EXPECT_EQ(f3r_session_advance(s.get(), u.data(), nq - 1, 1e-3, &err), F3R_ERR_ARGUMENT);
+  EXPECT_NE(std::string(err.message).find("expected"), std::string::npos) << err.message;
+  u[2] = std::numeric_limits<double>::infinity();
+  EXPECT_EQ(f3r_session_advance(s.get(), u.data(), nq, 1e-3, &err), F3R_ERR_ARGUMENT);
+  EXPECT_NE(std::string(err.message).find("forces[2]"), std::string::npos) << err.message;
+  u[2] = 0.0;
+  EXPECT_EQ(f3r_session_advance(s.get(), u.data(), nq, 0.0, &err), F3R_ERR_ARGUMENT);
+  EXPECT_TRUE(SameBits(before, Snapshot(s.get())));
+}
+
+// Commands from outside: the knob never says that nothing excites a scene at rest; it sizes the
+// model for the command limits, or for the excitation the scene states, and a larger
+// excitation never gets fewer modes.
+TEST(Session, ACommandedChoiceIsSizedForTheCommandsNotForRest) {
+  const std::string scene = ScenePath("rest_turned.yaml");
+  const char* open_modes = "links={model: fixed_free, damping_ratio: 0.01}";
+  auto limits = Open(scene, {open_modes, "accuracy.end_effector=1e-6", "accuracy.verify=false"});
+  auto stated = Open(scene, {open_modes, "accuracy.end_effector=1e-6", "accuracy.verify=false",
+                             "accuracy.excitation=20"});
+  f3r_session_options scripted{};
+  const char* sets[] = {open_modes, "accuracy.end_effector=1e-6", "accuracy.verify=false"};
+  scripted.overrides = sets;
+  scripted.override_count = 3;
+  f3r_session* raw = nullptr;
+  f3r_error err{};
+  ASSERT_EQ(f3r_session_open(scene.c_str(), &scripted, &raw, &err), F3R_OK) << err.message;
+  SessionPtr at_rest(raw);
+  const std::string said = f3r_session_choice(limits.get())->summary;
+  EXPECT_EQ(said.find("nothing excites"), std::string::npos) << said;
+  EXPECT_NE(said.find("leg-force steps of 1000 N"), std::string::npos) << said;
+  EXPECT_NE(std::string(f3r_session_choice(stated.get())->summary).find("steps of 20 N"),
+            std::string::npos);
+  EXPECT_NE(std::string(f3r_session_choice(at_rest.get())->summary).find("nothing excites"),
+            std::string::npos);
+  for (int i = 0; i < 3; ++i) {
+    const int big = f3r_session_choice(limits.get())->modes[i];
+    const int small = f3r_session_choice(stated.get())->modes[i];
+    const int rest = f3r_session_choice(at_rest.get())->modes[i];
+    EXPECT_GE(big, small) << "link " << i;
+    EXPECT_GE(small, rest) << "link " << i;
+    EXPECT_GT(big, rest) << "link " << i;
+  }
+  // the scene's own inputs stay its own: the excitation is the knob's alone
+  for (int k = 0; k < F3R_RIGID_FORCES; ++k)
+    EXPECT_EQ(f3r_session_scene(limits.get())->inputs[k].kind, F3R_INPUT_NONE);
 }
 
 }  // namespace

@@ -209,6 +209,9 @@ typedef struct {
                              * (f3r_accuracy_check_scene); 0: the error is only estimated */
   int accuracy_escalations;   /* richer configurations tried after a check that misses, 0..6,
                              * default 3 */
+  double accuracy_excitation; /* N: where commands come from outside (the node, Python's step),
+                             * the knob sizes the model for steps of this size on the leg forces;
+                             * 0 (default): limits.force */
   unsigned explicit_settings; /* F3R_EXPLICIT_* */
 
   /* limits of a command from outside (a controller through the node, flex3rpr.Sim.step): a

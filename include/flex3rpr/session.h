@@ -22,6 +22,7 @@
 #define FLEX3RPR_SESSION_H
 
 #include "flex3rpr/accuracy.h"
+#include "flex3rpr/closed_loop_check.h"
 #include "flex3rpr/scene.h"
 #include "flex3rpr/sensors.h"
 #include "flex3rpr/sim.h"
@@ -37,14 +38,22 @@ typedef struct {
   double accuracy;              /* > 0: an accuracy request (m), over the scene's own */
   const char* const* overrides; /* "FIELD=VALUE", as the CLI's --set, applied in order */
   int override_count;
-  int commanded; /* 1: commands come from outside and are held over periods (the node, Python's
-                  * step), which the knob's solver choice must allow for; 0: scripted only */
+  int commanded;     /* 1: commands come from outside and are held over periods (the node, Python's
+                  * step): the knob's solver relation is the commanded one, and its model is sized
+                  * for accuracy.excitation (accuracy.h); 0: scripted only */
+  int measure_apart; /* 1: the session creates the closed-loop check but never steps it: the
+                      * shell drives it (f3r_session_closed_loop_check), on a thread of its own
+                      * (the node) */
 } f3r_session_options;
 
 /* Opens scene_path (NULL options: none). On failure *session is NULL and err names the file, the
  * field and the allowed range. */
 f3r_status f3r_session_open(const char* scene_path, const f3r_session_options* options,
                             f3r_session** session, f3r_error* err);
+/* The same from a scene loaded already (copied; options' accuracy and overrides unused): a
+ * shell that loads with its own names for the overrides' sources (the node's parameters). */
+f3r_status f3r_session_open_scene(const f3r_scene* scene, const f3r_session_options* options,
+                                  f3r_session** session, f3r_error* err);
 void f3r_session_close(f3r_session* session);
 
 const f3r_scene* f3r_session_scene(const f3r_session* session);
@@ -56,10 +65,15 @@ const f3r_sensors* f3r_session_sensors(const f3r_session* session);
 /* Periods stepped since t = 0 (open or reset): period k ends at exactly k * period. */
 long f3r_session_periods(const f3r_session* session);
 
+/* With options.measure_apart, the check for the shell to drive (closed_loop_check.h); else NULL
+ * (the session steps its check itself, or has none). */
+struct f3r_closed_loop_check* f3r_session_closed_loop_check(f3r_session* session);
+
 /* The closed-loop measurement: 1 when the session measures (an accuracy request with
  * accuracy.verify), with *measured (m, the largest end-effector distance from the check so far
  * since t = 0; NaN once the check could not follow, *lost saying why) and *request_met
- * (measured within F3R_CHECK_MARGIN of the request); 0 when it does not measure. */
+ * (measured within F3R_CHECK_MARGIN of the request); 0 when it does not measure (or the shell
+ * measures apart). */
 int f3r_session_measurement(const f3r_session* session, double* measured, int* request_met,
                             const char** lost);
 
@@ -82,6 +96,13 @@ f3r_status f3r_session_check_step(double periods, double period, f3r_error* err)
 f3r_status f3r_session_step(f3r_session* session, const double* forces, int count, double periods,
                             double period, f3r_error* err);
 
+/* One period of forces a shell has checked piece by piece (the node sums its topics, each
+ * checked on arrival with f3r_session_check_forces, so the sum may reach the sum of their
+ * limits): only the count and finiteness are checked here. On any error the session is as it
+ * was before the call. */
+f3r_status f3r_session_advance(f3r_session* session, const double* forces, int count, double period,
+                               f3r_error* err);
+
 /* The platform pose (X_p, Y_p, phi_p) and twist in the base frame and the modal coordinates and
  * rates (modal_count values each: 0 gives zeros, else the model's nq - 9), as
  * f3r_sim_set_state, within the ranges of a scene's initial state (|X_p|, |Y_p| <= 1 m,
@@ -91,8 +112,7 @@ f3r_status f3r_session_set_state(f3r_session* session, const double pose[3], con
                                  const double* modal, const double* modal_rate, int modal_count,
                                  f3r_error* err);
 
-/* The checks of f3r_session_set_state alone, for a shell that holds its own simulation of the
- * model (the node, until it opens a session). */
+/* The checks of f3r_session_set_state alone. */
 f3r_status f3r_session_check_state(const f3r_model* model, const double pose[3],
                                    const double twist[3], const double* modal,
                                    const double* modal_rate, int modal_count, f3r_error* err);

@@ -11,6 +11,25 @@
 
 #include "accuracy_choice.h"
 
+/* Commands from outside are unknown when the knob chooses: it sizes the model for steps of
+ * accuracy.excitation (limits.force unless the scene states less) on the leg forces at t = 0,
+ * alternating in sign so that they move and turn the platform, on every leg the scene scripts
+ * nothing for. A scene at rest would otherwise say that nothing excites it, and choose the
+ * least model for any controller. The closed-loop measurement (session.h) then says whether
+ * the commands that came were within it. */
+static double add_command_excitation(f3r_scene* s) {
+  const double size = s->accuracy_excitation > 0.0 ? s->accuracy_excitation : s->limit_force;
+  int added = 0;
+  for (int i = 0; i < 3; ++i) {
+    f3r_input* in = &s->inputs[F3R_FORCE_RHO + i];
+    if (in->kind != F3R_INPUT_NONE) continue;
+    *in = (f3r_input){
+        .kind = F3R_INPUT_STEP, .t0 = 0.0, .before = 0.0, .after = i == 1 ? -size : size};
+    added = 1;
+  }
+  return added ? size : 0.0;
+}
+
 static void open_choice(const f3r_scene* scene, double request, int commanded, f3r_scene* s,
                         choice_run* run) {
   *run = (choice_run){.scene = scene, .s = s, .request = request};
@@ -26,6 +45,7 @@ static void open_choice(const f3r_scene* scene, double request, int commanded, f
   run->kind = commanded && run->any_flexible ? "commanded"
               : run->any_flexible            ? "flexible"
                                              : "rigid";
+  if (commanded && run->any_flexible) run->excitation = add_command_excitation(s);
   run->model_target = F3R_ACCURACY_MODEL_SHARE * request;
   /* Exact kinematics costs no measurable CPU time: runs with it on take 0.86 to 1.05 times the
    * steps of the same runs without it and, within the machine's noise, the same time (median 0.98

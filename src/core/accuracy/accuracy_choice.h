@@ -42,6 +42,7 @@ typedef struct {
   double request;
   double model_target; /* m: the model's share of the request */
   const char* kind;    /* the solver relations' kind: rigid, flexible or commanded */
+  double excitation;   /* N: the leg-force steps a commanded choice is sized for, or 0 */
   unsigned chosen;     /* the links whose mode counts the knob chooses */
   int any_flexible;
   int kinematics_open, kinematics_off, solver_open;

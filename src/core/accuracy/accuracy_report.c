@@ -134,6 +134,12 @@ void f3r_summarise_modes(const choice_run* run, f3r_accuracy_choice* c) {
                           run->chosen >> i & 1 ? "" : ", as the scene sets");
   }
   summarise_basis(run, c);
+  if (run->chosen && run->excitation > 0.0)
+    f3r_accuracy_append(text, size,
+                        "modes: commands come from outside: sized for leg-force steps of %g N "
+                        "(accuracy.excitation, else limits.force); the closed-loop measurement "
+                        "says whether the commands stayed within that\n",
+                        run->excitation);
   if (run->chosen && run->impacts)
     f3r_accuracy_append(
         text, size,

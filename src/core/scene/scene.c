@@ -525,6 +525,8 @@ static f3r_status validate_solver_and_run(const f3r_scene* s, f3r_error* err) {
   if (s->accuracy_escalations < 0 || s->accuracy_escalations > F3R_ACCURACY_MAX_ESCALATIONS)
     return f3r_scene_error(err, "accuracy.escalations", NULL, "%d is out of range 0..%d",
                            s->accuracy_escalations, F3R_ACCURACY_MAX_ESCALATIONS);
+  if (s->accuracy_excitation != 0.0)
+    CHECK_RANGE("accuracy.excitation", s->accuracy_excitation, 1e-6, 1e9);
   CHECK_RANGE("solver.atol", s->atol, 1e-16, 1e-1);
   CHECK_RANGE("solver.max_step", s->max_step, 0.0, 1e3);
   if (s->max_order < 1 || s->max_order > 5)

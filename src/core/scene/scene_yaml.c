@@ -426,9 +426,11 @@ static f3r_status read_accuracy(loader* L, const yaml_node_t* map) {
       st = f3r_yaml_bool(L, value, name, &s->accuracy_verify);
     else if (!strcmp(key, "escalations"))
       st = f3r_yaml_int(L, value, name, &s->accuracy_escalations);
+    else if (!strcmp(key, "excitation"))
+      st = f3r_yaml_number(L, value, name, &s->accuracy_excitation);
     else
-      st =
-          f3r_yaml_fail(L, value, name, "unknown key (allowed: end_effector, verify, escalations)");
+      st = f3r_yaml_fail(L, value, name,
+                         "unknown key (allowed: end_effector, verify, escalations, excitation)");
   }
   return st;
 }

@@ -5,30 +5,20 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "flex3rpr/closed_loop_check.h"
 #include "flex3rpr/session.h"
-
-/* The closed-loop measurement: the check configuration (f3r_accuracy_check_scene) stepped on
- * the same commands, period by period, and the largest end-effector distance between the two at
- * the periods' ends. */
-typedef struct {
-  f3r_scene scene; /* a view sharing the session scene's tables */
-  f3r_model* model;
-  f3r_sim* sim;
-  f3r_sim_snapshot* saved;
-  double held[F3R_MAX_Q];          /* the command in the check's layout */
-  double measured, measured_saved; /* m; NaN once the check could not follow */
-  char lost[256];                  /* why it could not, or empty */
-} closed_loop_check;
 
 struct f3r_session {
   f3r_scene scene; /* owns its input tables */
   f3r_model* model;
   f3r_sim* sim;
   f3r_accuracy_choice choice;
-  f3r_sensors* sensors;       /* NULL when the scene enables none */
-  f3r_sensors* sensors_saved; /* their copy before a step, put back if it fails */
-  f3r_sim_snapshot* saved;    /* the run before a step, put back if it fails */
-  closed_loop_check* check;   /* NULL without an accuracy request or with accuracy.verify off */
+  f3r_sensors* sensors;         /* NULL when the scene enables none */
+  f3r_sensors* sensors_saved;   /* their copy before a step, put back if it fails */
+  f3r_sim_snapshot* saved;      /* the run before a step, put back if it fails */
+  f3r_closed_loop_check* check; /* NULL without an accuracy request or with accuracy.verify
+                                 * off */
+  int measure_apart;            /* the shell drives the check (options.measure_apart) */
   long periods;
 };
 
@@ -44,25 +34,7 @@ static f3r_status create_sim(f3r_session* s, f3r_error* err) {
 /* The check of a scene with an accuracy request (and accuracy.verify on). */
 static f3r_status create_check(f3r_session* s, f3r_error* err) {
   if (!(s->scene.accuracy > 0.0 && s->scene.accuracy_verify)) return F3R_OK;
-  closed_loop_check* c = calloc(1, sizeof *c);
-  if (!c) return f3r_error_set(err, F3R_ERR_MEMORY, "no memory for the accuracy check");
-  s->check = c;
-  f3r_accuracy_check_scene(&s->scene, 0, &c->scene);
-  f3r_solver_settings settings = f3r_solver_settings_from_scene(&c->scene);
-  settings.stop_at_outputs = 1;
-  f3r_status st = f3r_model_create(&c->scene, &c->model, err);
-  if (st == F3R_OK) st = f3r_sim_create(c->model, &settings, &c->sim, err);
-  if (st == F3R_OK) st = f3r_sim_snapshot_create(c->sim, &c->saved, err);
-  if (st != F3R_OK) return f3r_error_set(err, st, "the accuracy check: %s", err->message);
-  return F3R_OK;
-}
-
-static void destroy_check(closed_loop_check* c) {
-  if (!c) return;
-  f3r_sim_snapshot_destroy(c->saved);
-  f3r_sim_destroy(c->sim);
-  f3r_model_destroy(c->model);
-  free(c);
+  return f3r_closed_loop_check_create(&s->scene, s->model, &s->check, err);
 }
 
 static f3r_status create_sensors(f3r_session* s, f3r_error* err) {
@@ -70,6 +42,18 @@ static f3r_status create_sensors(f3r_session* s, f3r_error* err) {
   f3r_status st = f3r_sensors_create(s->model, &s->scene.sensors, &s->sensors, err);
   if (st == F3R_OK) st = f3r_sensors_create(s->model, &s->scene.sensors, &s->sensors_saved, err);
   if (st == F3R_OK) st = f3r_sensors_update(s->sensors, f3r_sim_outputs(s->sim), err);
+  return st;
+}
+
+/* What open does after the load: the knob's choice, the model, the simulation, the sensors and
+ * the check, on s->scene. */
+static f3r_status open_loaded(f3r_session* s, const f3r_session_options* options, f3r_error* err) {
+  s->measure_apart = options->measure_apart;
+  f3r_status st = f3r_accuracy_resolve(&s->scene, options->commanded, &s->choice, err);
+  if (st == F3R_OK) st = f3r_model_create(&s->scene, &s->model, err);
+  if (st == F3R_OK) st = create_sim(s, err);
+  if (st == F3R_OK) st = create_sensors(s, err);
+  if (st == F3R_OK) st = create_check(s, err);
   return st;
 }
 
@@ -83,11 +67,25 @@ f3r_status f3r_session_open(const char* scene_path, const f3r_session_options* o
   s->scene = f3r_default_scene();
   const f3r_scene_options source = {options->accuracy, options->overrides, options->override_count};
   f3r_status st = f3r_scene_load_with(scene_path, &source, &s->scene, err);
-  if (st == F3R_OK) st = f3r_accuracy_resolve(&s->scene, options->commanded, &s->choice, err);
-  if (st == F3R_OK) st = f3r_model_create(&s->scene, &s->model, err);
-  if (st == F3R_OK) st = create_sim(s, err);
-  if (st == F3R_OK) st = create_sensors(s, err);
-  if (st == F3R_OK) st = create_check(s, err);
+  if (st == F3R_OK) st = open_loaded(s, options, err);
+  if (st != F3R_OK) {
+    f3r_session_close(s);
+    return st;
+  }
+  *out = s;
+  return F3R_OK;
+}
+
+f3r_status f3r_session_open_scene(const f3r_scene* scene, const f3r_session_options* options,
+                                  f3r_session** out, f3r_error* err) {
+  *out = NULL;
+  const f3r_session_options none = {0};
+  if (!options) options = &none;
+  f3r_session* s = calloc(1, sizeof *s);
+  if (!s) return f3r_error_set(err, F3R_ERR_MEMORY, "no memory for a session");
+  s->scene = f3r_default_scene();
+  f3r_status st = f3r_scene_copy(&s->scene, scene, err);
+  if (st == F3R_OK) st = open_loaded(s, options, err);
   if (st != F3R_OK) {
     f3r_session_close(s);
     return st;
@@ -98,7 +96,7 @@ f3r_status f3r_session_open(const char* scene_path, const f3r_session_options* o
 
 void f3r_session_close(f3r_session* s) {
   if (!s) return;
-  destroy_check(s->check);
+  f3r_closed_loop_check_destroy(s->check);
   f3r_sensors_destroy(s->sensors_saved);
   f3r_sensors_destroy(s->sensors);
   f3r_sim_snapshot_destroy(s->saved);
@@ -114,13 +112,14 @@ const f3r_accuracy_choice* f3r_session_choice(const f3r_session* s) { return &s-
 f3r_sim* f3r_session_sim(f3r_session* s) { return s->sim; }
 const f3r_sensors* f3r_session_sensors(const f3r_session* s) { return s->sensors; }
 long f3r_session_periods(const f3r_session* s) { return s->periods; }
+f3r_closed_loop_check* f3r_session_closed_loop_check(f3r_session* s) {
+  return s->measure_apart ? s->check : NULL;
+}
 
 int f3r_session_measurement(const f3r_session* s, double* measured, int* request_met,
                             const char** lost) {
-  if (!s->check) return 0;
-  *measured = s->check->measured;
-  *request_met = s->check->measured <= F3R_CHECK_MARGIN * s->scene.accuracy;
-  if (lost) *lost = s->check->lost;
+  if (!s->check || s->measure_apart) return 0;
+  *measured = f3r_closed_loop_check_measured(s->check, request_met, lost);
   return 1;
 }
 
@@ -181,56 +180,40 @@ f3r_status f3r_session_check_step(double periods, double period, f3r_error* err)
   return F3R_OK;
 }
 
-/* The command in the check's layout: the rigid forces as they are, each link's modal forces on
- * its first functions (the check's basis begins with the run's modes), zero beyond. */
-static void check_forces(const f3r_session* s, const double* forces, double* held) {
-  memset(held, 0, F3R_MAX_Q * sizeof(double));
-  memcpy(held, forces, F3R_Q_MODAL * sizeof(double));
-  for (int i = 0; i < 3; ++i) {
-    const f3r_link_params* run = f3r_model_link(s->model, i);
-    const f3r_link_params* check = f3r_model_link(s->check->model, i);
-    const int n = run->modes < check->modes ? run->modes : check->modes;
-    for (int j = 0; j < n; ++j) held[check->eta_index + j] = forces[run->eta_index + j];
-  }
-}
-
-/* The check's period k, on the same command, and the distance of the end-effectors there. A
- * check that cannot follow ends the measurement (NaN, and why), never the run. */
-static void step_check(f3r_session* s, double t) {
-  closed_loop_check* c = s->check;
-  if (isnan(c->measured)) return;
-  f3r_error err = {0};
-  f3r_status st = f3r_sim_set_forces(c->sim, c->held, &err);
-  if (st == F3R_OK) st = f3r_sim_advance(c->sim, t, &err);
-  if (st != F3R_OK) {
-    c->measured = NAN;
-    snprintf(c->lost, sizeof c->lost, "the check stopped at t = %.9g s: %s", t, err.message);
-    return;
-  }
-  const double* a = f3r_sim_outputs(s->sim)->q;
-  const double* b = f3r_sim_outputs(c->sim)->q;
-  c->measured = fmax(c->measured, hypot(a[F3R_Q_X] - b[F3R_Q_X], a[F3R_Q_Y] - b[F3R_Q_Y]));
-}
-
 /* Keeps what a failed step must put back. */
 static void save_step(f3r_session* s) {
   f3r_sim_save(s->sim, s->saved);
   if (s->sensors) f3r_sensors_copy(s->sensors_saved, s->sensors);
-  if (s->check) {
-    f3r_sim_save(s->check->sim, s->check->saved);
-    s->check->measured_saved = s->check->measured;
-  }
+  if (s->check && !s->measure_apart) f3r_closed_loop_check_save(s->check);
 }
 
 /* Puts the run, its sensors and its check back as they were before a failed step. */
 static void undo_step(f3r_session* s, long periods_before) {
   f3r_sim_restore(s->sim, s->saved, NULL); /* a restart at a state that ran before */
   if (s->sensors) f3r_sensors_copy(s->sensors, s->sensors_saved);
-  if (s->check) {
-    f3r_sim_restore(s->check->sim, s->check->saved, NULL);
-    s->check->measured = s->check->measured_saved;
-  }
+  if (s->check && !s->measure_apart) f3r_closed_loop_check_restore(s->check);
   s->periods = periods_before;
+}
+
+/* n periods of forces (checked), undone as a whole when one fails. */
+static f3r_status step_periods(f3r_session* s, const double* forces, long n, double period,
+                               f3r_error* err) {
+  const long periods_before = s->periods;
+  const int measure = s->check && !s->measure_apart;
+  save_step(s);
+  f3r_status st = F3R_OK;
+  for (long k = 0; k < n && st == F3R_OK; ++k) {
+    if ((st = f3r_sim_set_forces(s->sim, forces, err)) != F3R_OK) break;
+    ++s->periods;
+    const double t = (double)s->periods * period;
+    st = f3r_sim_advance(s->sim, t, err);
+    if (st == F3R_OK && measure)
+      f3r_closed_loop_check_period(s->check, forces, t, f3r_sim_outputs(s->sim)->q + F3R_Q_X);
+    if (st == F3R_OK && s->sensors)
+      st = f3r_sensors_update(s->sensors, f3r_sim_outputs(s->sim), err);
+  }
+  if (st != F3R_OK) undo_step(s, periods_before);
+  return st;
 }
 
 f3r_status f3r_session_step(f3r_session* s, const double* forces, int count, double periods,
@@ -238,20 +221,21 @@ f3r_status f3r_session_step(f3r_session* s, const double* forces, int count, dou
   f3r_status st = f3r_session_check_step(periods, period, err);
   if (st == F3R_OK) st = f3r_session_check_forces(s, forces, count, err);
   if (st != F3R_OK) return st;
-  const long periods_before = s->periods, n = (long)periods;
-  save_step(s);
-  if (s->check) check_forces(s, forces, s->check->held);
-  for (long k = 0; k < n && st == F3R_OK; ++k) {
-    if ((st = f3r_sim_set_forces(s->sim, forces, err)) != F3R_OK) break;
-    ++s->periods;
-    const double t = (double)s->periods * period;
-    st = f3r_sim_advance(s->sim, t, err);
-    if (st == F3R_OK && s->check) step_check(s, t);
-    if (st == F3R_OK && s->sensors)
-      st = f3r_sensors_update(s->sensors, f3r_sim_outputs(s->sim), err);
-  }
-  if (st != F3R_OK) undo_step(s, periods_before);
-  return st;
+  return step_periods(s, forces, (long)periods, period, err);
+}
+
+f3r_status f3r_session_advance(f3r_session* s, const double* forces, int count, double period,
+                               f3r_error* err) {
+  f3r_status st = f3r_session_check_step(1.0, period, err);
+  const int nq = f3r_model_nq(s->model);
+  if (st == F3R_OK && (!forces || count != nq))
+    st = f3r_error_set(err, F3R_ERR_ARGUMENT, "forces: %d values, expected %d; nothing changed",
+                       forces ? count : 0, nq);
+  for (int n = 0; st == F3R_OK && n < nq; ++n)
+    if (!isfinite(forces[n]))
+      st = f3r_error_set(err, F3R_ERR_ARGUMENT, "forces[%d] is %g, not finite; nothing changed", n,
+                         forces[n]);
+  return st == F3R_OK ? step_periods(s, forces, 1, period, err) : st;
 }
 
 /* Each value within +-limit, else an error naming it. */
@@ -296,29 +280,16 @@ f3r_status f3r_session_set_state(f3r_session* s, const double pose[3], const dou
       f3r_session_check_state(s->model, pose, twist, modal, modal_rate, modal_count, err);
   if (!modal_count) modal = modal_rate = NULL;
   if (st == F3R_OK) st = f3r_sim_set_state(s->sim, pose, twist, modal, modal_rate, err);
-  if (st != F3R_OK || !s->check || isnan(s->check->measured)) return st;
-  /* the check takes the pose and twist; a modal state in another basis it cannot take */
-  f3r_error check_err = {0};
-  if (modal) {
-    s->check->measured = NAN;
-    snprintf(s->check->lost, sizeof s->check->lost,
-             "a modal state was set, which the check's richer basis cannot take");
-  } else if (f3r_sim_set_state(s->check->sim, pose, twist, NULL, NULL, &check_err) != F3R_OK) {
-    s->check->measured = NAN;
-    snprintf(s->check->lost, sizeof s->check->lost, "the check could not take the state set: %s",
-             check_err.message);
-  }
-  return F3R_OK;
+  if (st == F3R_OK && s->check && !s->measure_apart)
+    f3r_closed_loop_check_set_state(s->check, pose, twist, modal != NULL);
+  return st;
 }
 
 f3r_status f3r_session_reset(f3r_session* s, f3r_error* err) {
   f3r_status st = f3r_sim_reset(s->sim, err);
   s->periods = 0;
-  if (st == F3R_OK && s->check) {
-    s->check->measured = 0.0;
-    s->check->lost[0] = '\0';
-    st = f3r_sim_reset(s->check->sim, err);
-  }
+  if (st == F3R_OK && s->check && !s->measure_apart)
+    st = f3r_closed_loop_check_reset(s->check, err);
   if (st == F3R_OK && s->sensors) {
     f3r_sensors_reset(s->sensors);
     st = f3r_sensors_update(s->sensors, f3r_sim_outputs(s->sim), err);
