@@ -26,7 +26,7 @@ struct Fixture : ::testing::Test {
   }
   void TearDown() override { f3r_model_destroy(model); }
   f3r_model* model = nullptr;
-  flex3rpr::CommandLimits limits;
+  const f3r_scene limits = f3r_default_scene();  // the scene's limits section: 1000 N, 100 N m
   std::vector<double> forces;
 };
 
@@ -46,15 +46,20 @@ TEST_F(Fixture, BadEffortCommandsNameTheFieldAndChangeNothing) {
   forces.assign(15, 42.0);
   flex3rpr::EffortCommand m;
   m.leg_force[1] = NAN;
-  EXPECT_EQ(flex3rpr::DecodeEffortCommand(m, *model, limits, &forces), "leg_force[1] is NaN");
+  EXPECT_EQ(flex3rpr::DecodeEffortCommand(m, *model, limits, &forces),
+            "leg_force_2 is nan, not finite");
   m.leg_force[1] = 0;
   m.cylinder_torque[2] = INFINITY;
   EXPECT_EQ(flex3rpr::DecodeEffortCommand(m, *model, limits, &forces),
-            "cylinder_torque[2] is infinite");
+            "cylinder_torque_3 is inf, not finite");
   m.cylinder_torque[2] = 0;
   m.platform[0] = 2e3;
   EXPECT_EQ(flex3rpr::DecodeEffortCommand(m, *model, limits, &forces),
-            "platform[0] = 2000 exceeds the limit 1000");
+            "platform_force_x is 2000, out of range -1000..1000 (the scene's limits.force)");
+  m.platform[0] = 0;
+  m.modal = {0, 0, 0, 0, 1e4, 0};
+  EXPECT_EQ(flex3rpr::DecodeEffortCommand(m, *model, limits, &forces),
+            "modal_force[4] is 10000, out of range -1000..1000 (the scene's limits.modal_force)");
   m.platform[0] = 0;
   m.modal = {1.0};
   EXPECT_EQ(flex3rpr::DecodeEffortCommand(m, *model, limits, &forces),
@@ -70,6 +75,9 @@ TEST_F(Fixture, EffortGroupFollowsTheJointGroupOrder) {
   m.data.pop_back();
   EXPECT_EQ(flex3rpr::DecodeEffortGroup(m, *model, limits, &forces),
             "data has 5 values, expected 6 (leg_force_1..3, cylinder_torque_1..3)");
+  m.data = {1, 2, 3, 4, 500, 6};
+  EXPECT_EQ(flex3rpr::DecodeEffortGroup(m, *model, limits, &forces),
+            "cylinder_torque_2 is 500, out of range -100..100 (the scene's limits.torque)");
 }
 
 TEST_F(Fixture, WrenchInATurnedFrameIsTurnedIntoTheBase) {

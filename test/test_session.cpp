@@ -84,6 +84,12 @@ TEST(Session, OpensWithTheSceneLimitsAndNamesABadScene) {
   EXPECT_EQ(bad, nullptr);
   EXPECT_NE(std::string(err.message).find("limits.force"), std::string::npos) << err.message;
   EXPECT_NE(std::string(err.message).find("1e-06..1e+09"), std::string::npos) << err.message;
+  const char* excitation[] = {"accuracy.excitation=-5"};
+  options.overrides = excitation;
+  EXPECT_EQ(f3r_session_open(kSensorScene, &options, &bad, &err), F3R_ERR_SCENE);
+  EXPECT_NE(std::string(err.message).find("accuracy.excitation: -5 is out of range 1e-06..1e+09"),
+            std::string::npos)
+      << err.message;
 }
 
 // Every refusal names the value and changes nothing, bit for bit.

@@ -53,6 +53,9 @@ typedef struct {
   double solver_error;      /* m, the measured relation's error at rtol */
   double extent;            /* m, largest distance of the linear end-effector path from its start */
   int pilot;                /* 1 when nonlinear pilot runs checked the estimate */
+  double excitation;        /* N: the leg-force steps a commanded choice was sized for (the scene's
+                             * accuracy.excitation or limits.force, halved while the pilot runs
+                             * could not follow them); 0 when the scene's own inputs decided */
   double pilot_ratio;       /* nonlinear over linear mode-count difference in the pilot window */
   int linear_evaluations;   /* linear models built and solved */
   double estimated_error;   /* m: model + kinematics + solver error; 0 when nothing was chosen */

@@ -84,6 +84,11 @@ int f3r_session_measurement(const f3r_session* session, double* measured, int* r
  * value ("leg_force_2", "platform_torque", "modal_force[4]"), what it is and the allowed range. */
 f3r_status f3r_session_check_forces(const f3r_session* session, const double* forces, int count,
                                     f3r_error* err);
+/* The same check on a scene's limits and a model's layout alone, its message the bare reason
+ * ("leg_force_2 is 1200, out of range -1000..1000 (the scene's limits.force)"): for the node's
+ * decoding of a message into forces, which must name the same values without a session. */
+f3r_status f3r_command_check(const f3r_scene* scene, const f3r_model* model, const double* forces,
+                             int count, f3r_error* err);
 
 /* F3R_OK for a step of `periods` (a whole number, 1..1e9) periods of `period` s (finite,
  * 1e-9..1e3 s); else F3R_ERR_ARGUMENT naming which. */

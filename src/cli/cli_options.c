@@ -112,8 +112,9 @@ static const option_field* find_option(const option_field* table, size_t n, cons
 static int collect_option(const char* a, const char* next, cli_options* o) {
   if (!strcmp(a, "--hold")) {
     hold_event* h = &o->holds[o->n_holds];
+    /* the value is checked with the command it makes (the session's rule: check_holds) */
     if (o->n_holds >= MAX_HOLDS || sscanf(next, "%lf:%d:%lf", &h->t, &h->index, &h->value) != 3 ||
-        !(h->t >= 0.0) || h->index < 0 || !isfinite(h->value)) {
+        !(h->t >= 0.0) || h->index < 0) {
       cli_fail("usage", "--hold needs T:INDEX:VALUE (T >= 0), got '%s'", next);
       return 0;
     }

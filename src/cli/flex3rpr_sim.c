@@ -21,6 +21,7 @@
 
 #include "flex3rpr/accuracy.h"
 #include "flex3rpr/beam_modes.h"
+#include "flex3rpr/session.h"
 #include "flex3rpr/sim.h"
 #include "cli_options.h"
 #include "flex3rpr/csv_number.h"
@@ -190,7 +191,9 @@ static int resolve_model(const cli_options* o, f3r_scene* scene, f3r_accuracy_ch
     return 0;
   }
   const double choose_start = cpu_seconds();
-  st = f3r_accuracy_resolve(scene, 0, choice, &err);
+  /* a --hold table is a controller's commands, held over output steps: the knob chooses as for
+   * one (the commanded relation, accuracy.excitation), as the node and Python do */
+  st = f3r_accuracy_resolve(scene, o->n_holds > 0, choice, &err);
   *choose_cpu = cpu_seconds() - choose_start;
   if (st == F3R_OK) st = f3r_model_create(scene, model, &err);
   if (st != F3R_OK) {
@@ -661,17 +664,45 @@ static int simulate_verified(const cli_options* o, f3r_scene* scene, f3r_model**
   return rc;
 }
 
+/* The --hold table as commands from outside: the command held after each hold, checked by the
+ * session's rule (flex3rpr/session.h) with the value named as every shell names it. 0 when one
+ * is refused (said). */
+static int check_holds(const cli_options* o, const f3r_scene* scene, const f3r_model* model) {
+  const int nq = f3r_model_nq(model);
+  f3r_error err = {0};
+  for (int h = 0; h < o->n_holds; ++h) {
+    const hold_event* e = &o->holds[h];
+    if (e->index >= nq) {
+      cli_fail("usage", "--hold %g:%d:%g: index %d is out of range 0..%d (nq = %d)", e->t, e->index,
+               e->value, e->index, nq - 1, nq);
+      return 0;
+    }
+    /* the command from e's time: each index at its latest hold by then (later in the list on
+     * a tie, as apply_holds applies them) */
+    double held[F3R_MAX_Q] = {0}, since[F3R_MAX_Q];
+    for (int n = 0; n < nq; ++n) since[n] = -1.0;
+    for (int k = 0; k < o->n_holds; ++k) {
+      const hold_event* x = &o->holds[k];
+      if (x->t <= e->t && x->t >= since[x->index]) {
+        held[x->index] = x->value;
+        since[x->index] = x->t;
+      }
+    }
+    if (f3r_command_check(scene, model, held, nq, &err) != F3R_OK) {
+      cli_fail(f3r_status_name(err.code), "--hold %g:%d:%g: %s", e->t, e->index, e->value,
+               err.message);
+      return 0;
+    }
+  }
+  return 1;
+}
+
 /* The simulation with its CSV and summary (and what it leaves in *report); returns the exit
  * code. With an accuracy request it is measured (simulate_verified) unless accuracy.verify is
  * off. */
 static int simulate(const cli_options* o, f3r_scene* scene, f3r_model** model,
                     f3r_accuracy_choice* choice, run_report* report) {
-  for (int h = 0; h < o->n_holds; ++h)
-    if (o->holds[h].index >= f3r_model_nq(*model)) {
-      cli_fail("usage", "--hold index %d is beyond nq = %d", o->holds[h].index,
-               f3r_model_nq(*model));
-      return 2;
-    }
+  if (!check_holds(o, scene, *model)) return 2;
   if (scene->accuracy > 0 && scene->accuracy_verify)
     return simulate_verified(o, scene, model, choice, report);
   const f3r_solver_settings settings = cli_settings(o, scene);

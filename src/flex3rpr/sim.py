@@ -191,7 +191,10 @@ class Sim:
                     raise ValueError("command: unknown field %r (leg_force, cylinder_torque, "
                                      "platform, modal); nothing changed" % key)
                 value = np.asarray(value, dtype=float).ravel()
-                if value.size != sizes[key]:
+                if key == "modal" and value.size not in (0, sizes[key]):  # the node's words
+                    raise ValueError("command: modal has %d values, expected 0 or %d; nothing "
+                                     "changed" % (value.size, sizes[key]))
+                if key != "modal" and value.size != sizes[key]:
                     raise ValueError("command: %s has %d values, expected %d; nothing changed"
                                      % (key, value.size, sizes[key]))
                 held[starts[key]:starts[key] + value.size] = value

@@ -4,6 +4,8 @@
 #include <iomanip>
 #include <sstream>
 
+#include "flex3rpr/session.h"
+
 namespace flex3rpr {
 
 namespace {
@@ -21,54 +23,48 @@ std::string Check(const std::string& field, double value, double limit) {
   return os.str();
 }
 
-std::string Indexed(const char* name, size_t i) {
-  return std::string(name) + "[" + std::to_string(i) + "]";
+// "" when forces pass the session's command check (flex3rpr/session.h), else its reason, which
+// names the value as every shell does ("leg_force_2", "platform_torque", "modal_force[3]").
+std::string CoreCheck(const std::vector<double>& forces, const f3r_model& model,
+                      const f3r_scene& scene) {
+  f3r_error err{};
+  return f3r_command_check(&scene, &model, forces.data(), static_cast<int>(forces.size()), &err) ==
+                 F3R_OK
+             ? std::string()
+             : std::string(err.message);
 }
 
 }  // namespace
 
 std::string DecodeEffortCommand(const EffortCommand& msg, const f3r_model& model,
-                                const CommandLimits& limits, std::vector<double>* forces) {
+                                const f3r_scene& scene, std::vector<double>* forces) {
   const size_t n_modal = static_cast<size_t>(f3r_model_nq(&model) - F3R_Q_MODAL);
   if (!msg.modal.empty() && msg.modal.size() != n_modal)
     return "modal has " + std::to_string(msg.modal.size()) + " values, expected 0 or " +
            std::to_string(n_modal);
+  std::vector<double> decoded(static_cast<size_t>(f3r_model_nq(&model)), 0.0);
   for (size_t i = 0; i < 3; ++i) {
-    std::string why = Check(Indexed("leg_force", i), msg.leg_force[i], limits.force);
-    if (why.empty())
-      why = Check(Indexed("cylinder_torque", i), msg.cylinder_torque[i], limits.torque);
-    if (why.empty())
-      why = Check(Indexed("platform", i), msg.platform[i], i < 2 ? limits.force : limits.torque);
-    if (!why.empty()) return why;
+    decoded[F3R_FORCE_RHO + i] = msg.leg_force[i];
+    decoded[F3R_FORCE_THETA + i] = msg.cylinder_torque[i];
+    decoded[F3R_FORCE_PLATFORM + i] = msg.platform[i];
   }
-  for (size_t k = 0; k < msg.modal.size(); ++k) {
-    const std::string why = Check(Indexed("modal", k), msg.modal[k], limits.modal);
-    if (!why.empty()) return why;
-  }
-  forces->assign(static_cast<size_t>(f3r_model_nq(&model)), 0.0);
-  for (size_t i = 0; i < 3; ++i) {
-    (*forces)[F3R_FORCE_RHO + i] = msg.leg_force[i];
-    (*forces)[F3R_FORCE_THETA + i] = msg.cylinder_torque[i];
-    (*forces)[F3R_FORCE_PLATFORM + i] = msg.platform[i];
-  }
-  for (size_t k = 0; k < msg.modal.size(); ++k) (*forces)[F3R_Q_MODAL + k] = msg.modal[k];
-  return "";
+  for (size_t k = 0; k < msg.modal.size(); ++k) decoded[F3R_Q_MODAL + k] = msg.modal[k];
+  const std::string why = CoreCheck(decoded, model, scene);
+  if (why.empty()) forces->swap(decoded);
+  return why;
 }
 
 std::string DecodeEffortGroup(const std_msgs::Float64MultiArray& msg, const f3r_model& model,
-                              const CommandLimits& limits, std::vector<double>* forces) {
+                              const f3r_scene& scene, std::vector<double>* forces) {
   if (msg.data.size() != F3R_Q_LEG_JOINTS)
     return "data has " + std::to_string(msg.data.size()) +
            " values, expected 6 (leg_force_1..3, cylinder_torque_1..3)";
-  for (size_t k = 0; k < F3R_Q_LEG_JOINTS; ++k) {
-    const std::string why =
-        Check(Indexed("data", k), msg.data[k], k < F3R_Q_THETA ? limits.force : limits.torque);
-    if (!why.empty()) return why;
-  }
-  forces->assign(static_cast<size_t>(f3r_model_nq(&model)), 0.0);
+  std::vector<double> decoded(static_cast<size_t>(f3r_model_nq(&model)), 0.0);
   for (size_t k = 0; k < F3R_Q_LEG_JOINTS; ++k)
-    (*forces)[F3R_Q_RHO + k] = msg.data[k];  // ros_control order is q's
-  return "";
+    decoded[F3R_Q_RHO + k] = msg.data[k];  // ros_control order is q's
+  const std::string why = CoreCheck(decoded, model, scene);
+  if (why.empty()) forces->swap(decoded);
+  return why;
 }
 
 Rotation YawRotation(double yaw) {
@@ -77,7 +73,7 @@ Rotation YawRotation(double yaw) {
 }
 
 std::string DecodeWrench(const geometry_msgs::WrenchStamped& msg, const Rotation& R,
-                         const CommandLimits& limits, const f3r_model& model,
+                         const f3r_scene& scene, const f3r_model& model,
                          std::vector<double>* forces) {
   const auto& f = msg.wrench.force;
   const auto& m = msg.wrench.torque;
@@ -86,7 +82,8 @@ std::string DecodeWrench(const geometry_msgs::WrenchStamped& msg, const Rotation
                                                 {"torque.y", m.y}, {"torque.z", m.z}};
   for (const auto& c : all) {
     const bool torque = c.first[0] == 't';
-    const std::string why = Check(c.first, c.second, torque ? limits.torque : limits.force);
+    const std::string why =
+        Check(c.first, c.second, torque ? scene.limit_torque : scene.limit_force);
     if (!why.empty()) return why;
   }
   const double fb[3] = {R[0] * f.x + R[1] * f.y + R[2] * f.z, R[3] * f.x + R[4] * f.y + R[5] * f.z,
@@ -106,14 +103,13 @@ std::string DecodeWrench(const geometry_msgs::WrenchStamped& msg, const Rotation
     return "out-of-plane components (force.z, torque.x, torque.y in the base frame) must be zero";
   // The limit holds for the force applied, in the base frame: turning can raise a component by
   // up to sqrt(2) (and overflow to Inf near DBL_MAX). Found by test/fuzz/fuzz_commands.
-  std::string why = Check("force.x turned into the base frame", fb[0], limits.force);
-  if (why.empty()) why = Check("force.y turned into the base frame", fb[1], limits.force);
-  if (why.empty()) why = Check("torque.z turned into the base frame", mb[2], limits.torque);
-  if (!why.empty()) return why;
-  forces->assign(static_cast<size_t>(f3r_model_nq(&model)), 0.0);
-  (*forces)[F3R_FORCE_PLATFORM] = fb[0];
-  (*forces)[F3R_FORCE_PLATFORM + 1] = fb[1];
-  (*forces)[F3R_FORCE_PLATFORM + 2] = mb[2];
+  std::vector<double> decoded(static_cast<size_t>(f3r_model_nq(&model)), 0.0);
+  decoded[F3R_FORCE_PLATFORM] = fb[0];
+  decoded[F3R_FORCE_PLATFORM + 1] = fb[1];
+  decoded[F3R_FORCE_PLATFORM + 2] = mb[2];
+  const std::string why = CoreCheck(decoded, model, scene);
+  if (!why.empty()) return why + " (the wrench turned into the base frame)";
+  forces->swap(decoded);
   return "";
 }
 

@@ -21,14 +21,14 @@ CommandInputs::CommandInputs(ros::NodeHandle& pnh, const f3r_model& model, const
   command_sub_ = pnh.subscribe<EffortCommand>(
       "command", kCommandQueue,
       [this](const EffortCommand::ConstPtr& m) {
-        Accept(kCommand, DecodeEffortCommand(*m, model_, params_.limits, &scratch_), scratch_,
+        Accept(kCommand, DecodeEffortCommand(*m, model_, params_.scene, &scratch_), scratch_,
                "~command", m->header.stamp);
       },
       ros::VoidConstPtr(), hints);
   group_sub_ = pnh.subscribe<std_msgs::Float64MultiArray>(
       "effort_group/command", kCommandQueue,
       [this](const std_msgs::Float64MultiArray::ConstPtr& m) {
-        Accept(kEffortGroup, DecodeEffortGroup(*m, model_, params_.limits, &scratch_), scratch_,
+        Accept(kEffortGroup, DecodeEffortGroup(*m, model_, params_.scene, &scratch_), scratch_,
                "~effort_group/command", ros::Time());
       },
       ros::VoidConstPtr(), hints);
@@ -37,7 +37,7 @@ CommandInputs::CommandInputs(ros::NodeHandle& pnh, const f3r_model& model, const
       [this](const geometry_msgs::WrenchStamped::ConstPtr& m) {
         Rotation to_base;
         std::string why = ResolveFrame(m->header.frame_id, &to_base);
-        if (why.empty()) why = DecodeWrench(*m, to_base, params_.limits, model_, &scratch_);
+        if (why.empty()) why = DecodeWrench(*m, to_base, params_.scene, model_, &scratch_);
         Accept(kWrench, why, scratch_, "~platform_wrench", m->header.stamp);
       },
       ros::VoidConstPtr(), hints);
@@ -129,7 +129,7 @@ int CommandInputs::publishers() const {
 
 std::string CommandInputs::HoldCommand(const EffortCommand& command) {
   std::vector<double> forces(total_.size(), 0.0);
-  const std::string why = DecodeEffortCommand(command, model_, params_.limits, &forces);
+  const std::string why = DecodeEffortCommand(command, model_, params_.scene, &forces);
   if (why.empty()) Hold(kCommand, forces);
   return why;
 }

@@ -12,6 +12,7 @@
 #include <vector>
 
 #include "command_decoding.hpp"
+#include "params.hpp"
 
 namespace flex3rpr {
 

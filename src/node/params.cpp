@@ -218,6 +218,12 @@ bool ReadSolverParams(const ros::NodeHandle& pnh, NodeParams* p, std::vector<Sce
   if (!integrator.empty())
     out->push_back({"integrator", "solver.integrator=" + Quoted(integrator)});
   if (!table.empty()) out->push_back({"table", "solver.table=" + Quoted(table)});
+  // ~verify: the closed-loop check of an accuracy request (the scene's accuracy.verify)
+  if (pnh.hasParam("verify")) {
+    bool verify = true;
+    if (!Read(pnh, "verify", true, &verify, error)) return false;
+    out->push_back({"verify", std::string("accuracy.verify=") + (verify ? "true" : "false")});
+  }
   // The solver's tolerances, and the command limits, whose home is the scene's limits section.
   const std::pair<const char*, const char*> fields[] = {{"rtol", "solver.rtol"},
                                                         {"atol", "solver.atol"},
@@ -281,16 +287,33 @@ bool LoadScene(const ros::NodeHandle& pnh, NodeParams* p, std::string* error) {
   return LoadOverridden(p, accuracy, overrides, error);
 }
 
-// Lets the accuracy knob fix what the (validated) scene left open, and derives the solver
-// settings.
+// Opens the session on the (validated) scene: the accuracy knob fixes what the scene left open
+// (commands are held from publish time to publish time, so its relation is the commanded one and
+// its model is sized for accuracy.excitation), and the closed-loop check, when the scene asks for
+// one, is left to the node's own thread. The node's scene becomes the resolved one.
 bool ResolveScene(NodeParams* p, std::string* error) {
   f3r_error err{};
-  // The accuracy knob (or modes: auto) fixes what the scene left open; commands are held from
-  // publish time to publish time, so its solver relation is the commanded one.
-  if (f3r_accuracy_resolve(&p->scene, 1, &p->accuracy, &err) != F3R_OK) {
-    *error = std::string("parameter ~accuracy: ") + err.message;
+  f3r_session_options options{};
+  options.commanded = 1;
+  options.measure_apart = 1;
+  if (f3r_session_open_scene(&p->scene, &options, &p->session, &err) != F3R_OK) {
+    // ~initial_pose when it set the pose the error is about (one the legs cannot reach, or
+    // beyond the end stops), else the scene
+    const std::string message = err.message;
+    const bool about_pose = message.find("initial.platform_pose") != std::string::npos ||
+                            message.find("pose (") != std::string::npos;
+    *error = (p->initial_pose_set && about_pose ? "parameter ~initial_pose" : p->scene_path) +
+             ": " + message;
     return false;
   }
+  f3r_scene resolved = f3r_default_scene();
+  if (f3r_scene_copy(&resolved, f3r_session_scene(p->session), &err) != F3R_OK) {
+    *error = err.message;
+    return false;
+  }
+  f3r_scene_free(&p->scene);
+  p->scene = resolved;
+  p->accuracy = *f3r_session_choice(p->session);
   p->settings = f3r_solver_settings_from_scene(&p->scene);
   p->settings.stop_at_outputs = 1;  // commands take effect exactly at publish times
   return true;
@@ -318,8 +341,6 @@ bool ReadRunParams(const ros::NodeHandle& pnh, NodeParams* p, std::string* error
       Read(pnh, "lockstep_warn_after", 2.0, &p->lockstep_warn_after, error) &&
       ReadBasePose(pnh, &p->base_pose, error);
   if (!read) return false;
-  // the scene's limits section (with ~max_force, ~max_torque, ~max_modal_force over it)
-  p->limits = {p->scene.limit_force, p->scene.limit_torque, p->scene.limit_modal_force};
   if (p->duration < 0.0) p->duration = p->scene.duration;  // the scene's run.duration
   if (!Positive("publish_rate", p->publish_rate, error) ||
       !Positive("beam_points", p->beam_points, error) ||

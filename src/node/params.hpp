@@ -8,16 +8,10 @@
 #include <vector>
 
 #include "flex3rpr/accuracy.h"
+#include "flex3rpr/session.h"
 #include "flex3rpr/sim.h"
 
 namespace flex3rpr {
-
-// The scene's limits section (limits.force, .torque, .modal_force; scene.h).
-struct CommandLimits {
-  double force = 1000.0;  // N, per leg force and per platform force component
-  double torque = 100.0;  // N m, per cylinder torque and platform torque
-  double modal = 1000.0;  // N, per modal force
-};
 
 // Every frame the node publishes: ~tf_prefix + name, except the world frame, which robots share.
 struct FrameNames {
@@ -34,16 +28,22 @@ struct NodeParams {
   NodeParams() = default;
   NodeParams(const NodeParams&) = delete;  // the scene owns its input tables
   NodeParams& operator=(const NodeParams&) = delete;
-  ~NodeParams() { f3r_scene_free(&scene); }
+  ~NodeParams() {
+    f3r_session_close(session);
+    f3r_scene_free(&scene);
+  }
 
   std::string scene_path;                 // ~scene, default: the package's rest.yaml
-  f3r_scene scene = f3r_default_scene();  // loaded and overridden
-  f3r_solver_settings settings;           // ~formulation, ~integrator, ~rtol, ~atol
-  f3r_accuracy_choice accuracy{};         // ~accuracy or the scene's: what the knob chose, and why
-  double publish_rate = 1000.0;           // Hz of simulated time
-  int beam_points = 11;                   // stations per link
-  double realtime_factor = 1.0;           // 1 paces to the wall clock, 0 runs as fast as possible
-  std::string tf_prefix;  // prepended to every frame but the world frame ("robot1/")
+  f3r_scene scene = f3r_default_scene();  // loaded, overridden and resolved (the session's)
+  // The scene opened for the run (flex3rpr/session.h): the knob's choice, the model, the
+  // simulation, the limits and the closed-loop check, as in every shell.
+  f3r_session* session = nullptr;
+  f3r_solver_settings settings;    // ~formulation, ~integrator, ~rtol, ~atol
+  f3r_accuracy_choice accuracy{};  // ~accuracy or the scene's: what the knob chose, and why
+  double publish_rate = 1000.0;    // Hz of simulated time
+  int beam_points = 11;            // stations per link
+  double realtime_factor = 1.0;    // 1 paces to the wall clock, 0 runs as fast as possible
+  std::string tf_prefix;           // prepended to every frame but the world frame ("robot1/")
   std::string world_frame = "world";
   std::string base_frame = "base";  // default: tf_prefix + "base"
   FrameNames frames;
@@ -67,7 +67,6 @@ struct NodeParams {
   std::array<double, 3> base_pose{};  // ~base_pose: x (m), y (m), yaw (rad) of base in world
   bool initial_pose_set = false;      // ~initial_pose given: the scene's initial.platform_pose
   std::array<double, 3> initial_pose{};  // what it says: x (m), y (m), phi (rad)
-  CommandLimits limits;
 };
 
 // The default scene shipped with the package.

@@ -24,15 +24,6 @@ static bool ReadFile(const std::string& path, std::string* text) {
   return true;
 }
 
-// Whom an error building the model or the simulation names: ~initial_pose when it set the pose
-// the error is about (a pose the legs cannot reach, or one beyond the end stops), else the
-// scene.
-std::string SimNode::PoseBlame(const std::string& message) const {
-  const bool about_pose = message.find("initial.platform_pose") != std::string::npos ||
-                          message.find("pose (") != std::string::npos;
-  return params_.initial_pose_set && about_pose ? "parameter ~initial_pose" : params_.scene_path;
-}
-
 // ~initial_pose as ~set_state would check it, on a simulation of its own: a pose the legs
 // reach only through the collapse guard, or beyond the end stops, would stop the first period.
 bool SimNode::CheckInitialPose() {
@@ -40,7 +31,7 @@ bool SimNode::CheckInitialPose() {
   f3r_sim* probe = nullptr;
   f3r_error err{};
   const double twist[3] = {0.0, 0.0, 0.0};
-  f3r_status st = f3r_sim_create(model_.get(), &params_.settings, &probe, &err);
+  f3r_status st = f3r_sim_create(model_, &params_.settings, &probe, &err);
   if (st == F3R_OK)
     st = f3r_sim_set_state(probe, params_.initial_pose.data(), twist, nullptr, nullptr, &err);
   f3r_sim_destroy(probe);
@@ -55,13 +46,9 @@ bool SimNode::Init() {
     ROS_ERROR("flex3rpr_node: %s", error.c_str());
     return false;
   }
-  f3r_model* model = nullptr;
-  f3r_error err{};
-  if (f3r_model_create(&params_.scene, &model, &err) != F3R_OK) {
-    ROS_ERROR("flex3rpr_node: %s: %s", PoseBlame(err.message).c_str(), err.message);
-    return false;
-  }
-  model_.reset(model);
+  session_ = params_.session;
+  model_ = f3r_session_model(session_);
+  sim_ = f3r_session_sim(session_);
   std::string urdf;
   const bool described = nh_.hasParam("robot_description");
   if (described && !nh_.getParam("robot_description", urdf)) {
@@ -83,12 +70,6 @@ bool SimNode::Init() {
     ROS_ERROR("flex3rpr_node: %s", mismatch.c_str());
     return false;
   }
-  f3r_sim* sim = nullptr;
-  if (f3r_sim_create(model_.get(), &params_.settings, &sim, &err) != F3R_OK) {
-    ROS_ERROR("flex3rpr_node: %s: %s", PoseBlame(err.message).c_str(), err.message);
-    return false;
-  }
-  sim_.reset(sim);
   if (!CheckInitialPose()) return false;
   inputs_.reset(new CommandInputs(pnh_, *model_, params_, &phi_p_));
   outputs_.reset(new StateOutputs(nh_, pnh_, *model_, params_));
@@ -97,7 +78,7 @@ bool SimNode::Init() {
   ROS_INFO(
       "flex3rpr_node: scene %s, nq %d, %s, rtol %g, publishing at %g Hz of simulated time, "
       "real-time factor %g, %s stamps%s, frames under %s",
-      params_.scene_path.c_str(), f3r_model_nq(model_.get()),
+      params_.scene_path.c_str(), f3r_model_nq(model_),
       f3r_formulation_name(params_.settings.formulation), params_.settings.rtol,
       params_.publish_rate, params_.realtime_factor,
       params_.sim_stamps ? "simulated" : "wall-clock", params_.publish_clock ? " with /clock" : "",
@@ -107,10 +88,17 @@ bool SimNode::Init() {
         "flex3rpr_node: lockstep: each publish period waits for its command, the next message on "
         "~command, ~effort_group/command or ~platform_wrench");
   if (params_.accuracy.summary[0]) ROS_INFO("flex3rpr_node: %s", params_.accuracy.summary);
-  if (params_.accuracy.request > 0.0)
+  verifier_.reset(
+      new ClosedLoopVerifier(f3r_session_closed_loop_check(session_), f3r_model_nq(model_)));
+  info_.verifying = verifier_->active();
+  if (verifier_->active())
     ROS_INFO(
-        "flex3rpr_node: the accuracy is estimated, not measured: the node runs what the knob "
-        "chose and cannot run a richer check ahead of itself (flex3rpr_sim measures it)");
+        "flex3rpr_node: ~verify: the check configuration steps on the same commands on a thread "
+        "of its own; ~status.measured_error_m is the largest end-effector distance so far");
+  else if (params_.accuracy.request > 0.0)
+    ROS_INFO(
+        "flex3rpr_node: the accuracy is estimated, not measured (~verify is false, or the "
+        "scene's accuracy.verify)");
   if (params_.accuracy.request > 0.0 && !params_.accuracy.request_met)
     ROS_WARN("flex3rpr_node: the accuracy request %g m is not met: estimated %.3g m (%s)",
              params_.accuracy.request, params_.accuracy.estimated_error, params_.accuracy.brief);
@@ -134,7 +122,7 @@ void SimNode::ReportPace() {
 }
 
 void SimNode::CheckStroke(const f3r_outputs& out) {
-  const f3r_geometry g = f3r_model_geometry(model_.get());
+  const f3r_geometry g = f3r_model_geometry(model_);
   const double lo = g.stroke_min, hi = g.stroke_max;
   for (int i = 0; i < 3; ++i) {
     const double rho = out.q[F3R_Q_RHO + i];
@@ -166,6 +154,7 @@ static ros::WallDuration SpinFor(double seconds) {
 // integration error is often the last output) goes out without /tf, which would otherwise repeat
 // a stamp (TF_REPEATED_DATA).
 void SimNode::PublishAt(const f3r_outputs& out) {
+  ReadMeasurement();
   std::string error;
   if (!sensors_->Update(out, &error))
     ROS_ERROR_THROTTLE(1.0, "flex3rpr_node: sensors: %s", error.c_str());
@@ -179,23 +168,23 @@ void SimNode::PublishAt(const f3r_outputs& out) {
 
 bool SimNode::Step(double period) {
   f3r_error err{};
-  const double t = f3r_sim_time(sim_.get());
-  const std::vector<double>& forces = inputs_->Total(t);
-  if (f3r_sim_set_forces(sim_.get(), forces.data(), &err) != F3R_OK) {
-    info_.last_error = err.message;
-    ROS_WARN_THROTTLE(1.0, "flex3rpr_node: forces not applied: %s", err.message);
-  }
-  ++periods_;
-  if (f3r_sim_advance(sim_.get(), periods_ * period, &err) != F3R_OK) {
+  const std::vector<double>& forces = inputs_->Total(f3r_sim_time(sim_));
+  // Each topic's command was checked on arrival (command_decoding.hpp); their sum may reach the
+  // sum of the limits, so the session checks only its count and finiteness here.
+  if (f3r_session_advance(session_, forces.data(), static_cast<int>(forces.size()), period, &err) !=
+      F3R_OK) {
     info_.last_error = err.message;
     ROS_ERROR(
-        "flex3rpr_node: integration stopped at t = %.6g s: %s; paused at the last good state "
-        "(~reset starts over, ~resume tries again)",
-        f3r_sim_time(sim_.get()), err.message);
-    periods_ = static_cast<long>(
-        std::floor(f3r_sim_time(sim_.get()) / period + 1e-9));  // stay on the grid
+        "flex3rpr_node: integration stopped in the period after t = %.6g s: %s; paused at the "
+        "last good state, that period's start (~reset starts over, ~resume tries again)",
+        f3r_sim_time(sim_), err.message);
     return false;
   }
+  periods_ = f3r_session_periods(session_);
+  // the period's end on the session's grid, as the session's own check takes it (the run's
+  // output time may differ from it by a rounding)
+  verifier_->Period(forces.data(), static_cast<double>(periods_) * period,
+                    f3r_sim_outputs(sim_)->q + F3R_Q_X);
   return true;
 }
 
@@ -205,10 +194,10 @@ bool SimNode::AdvancePeriod(double period) {
     control_.pending_steps = 0;
     info_.paused = true;
     info_.rejected_commands = inputs_->rejected();
-    PublishAt(*f3r_sim_outputs(sim_.get()));
+    PublishAt(*f3r_sim_outputs(sim_));
     return false;
   }
-  PublishPeriod(*f3r_sim_outputs(sim_.get()));
+  PublishPeriod(*f3r_sim_outputs(sim_));
   return true;
 }
 
@@ -217,6 +206,26 @@ void SimNode::PublishPeriod(const f3r_outputs& out) {
   CheckStroke(out);
   info_.rejected_commands = inputs_->rejected();
   PublishAt(out);
+}
+
+bool SimNode::ReadMeasurement() {
+  if (!verifier_->active()) return false;
+  const ClosedLoopVerifier::Result r = verifier_->Read();
+  const bool was_met = info_.request_met;
+  const bool changed = r.pending != info_.measurement_pending ||
+                       !(r.measured == info_.measured_error) || r.note != info_.measurement_note;
+  info_.measured_error = r.measured;
+  info_.request_met = r.request_met;
+  info_.measurement_note = r.note;
+  info_.measurement_pending = r.pending;
+  if (was_met && !r.request_met)
+    ROS_WARN(
+        "flex3rpr_node: ~verify: the accuracy request %g m is not met: %s (latched until "
+        "~reset)",
+        r.request,
+        r.note.empty() ? ("measured " + std::to_string(r.measured) + " m").c_str()
+                       : r.note.c_str());
+  return changed;
 }
 
 void SimNode::AwaitCommand(double wall_now) {
@@ -237,7 +246,7 @@ void SimNode::AwaitCommand(double wall_now) {
   const bool retry = wall_now - last_republish_ >= kRepublishSeconds &&
                      (!commands_taken_ || inputs_->last_taken_stamped());
   if (after_connection || retry) {
-    outputs_->Republish(*f3r_sim_outputs(sim_.get()), info_);
+    outputs_->Republish(*f3r_sim_outputs(sim_), info_);
     last_republish_ = wall_now;
     republish_at_ = -1.0;
   }
@@ -251,7 +260,7 @@ void SimNode::AwaitCommand(double wall_now) {
       "flex3rpr_node: lockstep: no command for the period at t = %.6g s for %.1f s; waiting (a "
       "controller answers every joint_states message with one message on ~command, "
       "~effort_group/command or ~platform_wrench)",
-      f3r_sim_time(sim_.get()), waited);
+      f3r_sim_time(sim_), waited);
 }
 
 // e.g. a recorder: nothing may be published before it listens. False after ~subscriber_timeout.
@@ -280,8 +289,9 @@ void SimNode::Restart(RunLoop* loop) {
   f3r_error err{};
   control_.reset_requested = false;
   inputs_->Clear();
-  if (f3r_sim_reset(sim_.get(), &err) != F3R_OK)
+  if (f3r_session_reset(session_, &err) != F3R_OK)
     ROS_ERROR("flex3rpr_node: reset failed: %s", err.message);
+  verifier_->Reset();
   periods_ = 0;
   loop->was_running = false;
   info_.last_error.clear();
@@ -290,16 +300,16 @@ void SimNode::Restart(RunLoop* loop) {
   commands_taken_ = false;
   last_published_t_ = -1.0;  // time starts over
   sensors_->Reset();
-  PublishAt(*f3r_sim_outputs(sim_.get()));
+  PublishAt(*f3r_sim_outputs(sim_));
 }
 
 void SimNode::PublishDiagnosticsWhenDue(double now, RunLoop* loop) {
   if (now - loop->last_diagnostics < kDiagnosticsSeconds) return;
   info_.rejected_commands = inputs_->rejected();
-  outputs_->PublishDiagnostics(*f3r_sim_outputs(sim_.get()), info_);
+  ReadMeasurement();
+  outputs_->PublishDiagnostics(*f3r_sim_outputs(sim_), info_);
   // A period that waits for its command publishes nothing else: say so on ~status too.
-  if (info_.waiting_for_command > 0.0)
-    outputs_->PublishStatusOnly(*f3r_sim_outputs(sim_.get()), info_);
+  if (info_.waiting_for_command > 0.0) outputs_->PublishStatusOnly(*f3r_sim_outputs(sim_), info_);
   loop->last_diagnostics = now;
 }
 
@@ -309,14 +319,16 @@ void SimNode::IdlePaused(double now, RunLoop* loop) {
   info_.behind = false;
   info_.lag = 0.0;
   // Not in lockstep: a controller answers every state it receives, and the state is latched.
+  const bool measured = ReadMeasurement();
   if (!params_.lockstep && now - loop->last_paused_output >= kPausedPublishSeconds) {
     info_.rejected_commands = inputs_->rejected();
-    outputs_->PublishPaused(*f3r_sim_outputs(sim_.get()), info_);
+    outputs_->PublishPaused(*f3r_sim_outputs(sim_), info_);
     loop->last_paused_output = now;
-  } else if (inputs_->rejected() != info_.rejected_commands) {
-    // A command refused while paused shows on ~status at once, not half a second later.
+  } else if (inputs_->rejected() != info_.rejected_commands || measured) {
+    // A command refused, or the check catching up, while paused shows on ~status at once, not
+    // half a second later.
     info_.rejected_commands = inputs_->rejected();
-    outputs_->PublishStatusOnly(*f3r_sim_outputs(sim_.get()), info_);
+    outputs_->PublishStatusOnly(*f3r_sim_outputs(sim_), info_);
   }
   ros::WallDuration(0.001).sleep();
 }
@@ -329,12 +341,12 @@ bool SimNode::RunPeriod(double period, double now, RunLoop* loop, int* exit_code
   command_publishers_ = inputs_->publishers();
   info_.waiting_for_command = 0.0;
   if (control_.pending_steps > 0) --control_.pending_steps;
-  if (!loop->was_running) pacer_->Start(now, f3r_sim_time(sim_.get()));
+  if (!loop->was_running) pacer_->Start(now, f3r_sim_time(sim_));
   loop->was_running = !control_.paused;
   if (!Step(period)) {
     if (params_.duration > 0.0) {  // a scripted run (a recording) ends instead of waiting
       *exit_code = 2;
-      PublishAt(*f3r_sim_outputs(sim_.get()));
+      PublishAt(*f3r_sim_outputs(sim_));
       return false;
     }
     control_.paused = true;
@@ -342,10 +354,10 @@ bool SimNode::RunPeriod(double period, double now, RunLoop* loop, int* exit_code
     info_.paused = true;
     loop->was_running = false;
     info_.rejected_commands = inputs_->rejected();
-    PublishAt(*f3r_sim_outputs(sim_.get()));
+    PublishAt(*f3r_sim_outputs(sim_));
     return true;
   }
-  const f3r_outputs& out = *f3r_sim_outputs(sim_.get());
+  const f3r_outputs& out = *f3r_sim_outputs(sim_);
   const double after = loop->Wall();
   if (loop->first_period_wall < 0.0) {
     loop->first_period_wall = after;
@@ -390,7 +402,7 @@ int SimNode::Run() {
   control_.paused = params_.start_paused;
   info_.paused = control_.paused;
   info_.requested_realtime_factor = params_.realtime_factor;
-  PublishAt(*f3r_sim_outputs(sim_.get()));
+  PublishAt(*f3r_sim_outputs(sim_));
   if (control_.paused)
     ROS_INFO("flex3rpr_node: paused at the start (~paused); ~resume or ~step runs it");
   int exit_code = 0;

@@ -6,6 +6,7 @@
 
 #include <memory>
 
+#include "closed_loop_verifier.hpp"
 #include "command_inputs.hpp"
 #include "pacer.hpp"
 #include "sensor_outputs.hpp"
@@ -14,13 +15,6 @@
 #include "state_outputs.hpp"
 
 namespace flex3rpr {
-
-struct ModelDeleter {
-  void operator()(f3r_model* m) const { f3r_model_destroy(m); }
-};
-struct SimDeleter {
-  void operator()(f3r_sim* s) const { f3r_sim_destroy(s); }
-};
 
 class SimNode {
  public:
@@ -51,9 +45,6 @@ class SimNode {
     double Wall() const { return ros::WallTime::now().toSec() - held; }
   };
 
-  // "parameter ~initial_pose" when an error building the model is about the pose it set;
-  // else the scene's path.
-  std::string PoseBlame(const std::string& message) const;
   // ~initial_pose, if given, checked as ~set_state checks a pose; false with a ROS_ERROR.
   bool CheckInitialPose();
   // Run's parts: waiting for ~wait_for_subscribers (false when they do not come), ~reset, the
@@ -71,6 +62,9 @@ class SimNode {
   void PublishAt(const f3r_outputs& out);
   // After each period: the stroke check and the outputs.
   void PublishPeriod(const f3r_outputs& out);
+  // ~verify's measurement into info_, with a warning when the request is first missed; true when
+  // it changed since the last read.
+  bool ReadMeasurement();
   // Lockstep: the present period has no command yet. Warns (throttled) and reports on ~status and
   // /diagnostics once it has waited ~lockstep_warn_after wall seconds.
   void AwaitCommand(double wall_now);
@@ -89,8 +83,9 @@ class SimNode {
 
   ros::NodeHandle nh_, pnh_;
   NodeParams params_;
-  std::unique_ptr<f3r_model, ModelDeleter> model_;
-  std::unique_ptr<f3r_sim, SimDeleter> sim_;
+  f3r_session* session_ = nullptr;  // params_.session: the model, the simulation, the check
+  const f3r_model* model_ = nullptr;
+  f3r_sim* sim_ = nullptr;
   std::unique_ptr<CommandInputs> inputs_;
   std::unique_ptr<StateOutputs> outputs_;
   std::unique_ptr<SensorOutputs> sensors_;  // the scene's sensors (sensor_outputs.hpp)
@@ -98,6 +93,8 @@ class SimNode {
   RunControl control_;
   RunInfo info_;
   std::unique_ptr<Pacer> pacer_;
+  // ~verify's thread; destroyed before params_ closes the session whose check it steps
+  std::unique_ptr<ClosedLoopVerifier> verifier_;
   double phi_p_ = 0.0;
   long periods_ = 0;
   double last_published_t_ = -1.0;   // simulated time of the last full Publish (with /tf)

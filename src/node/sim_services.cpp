@@ -1,5 +1,6 @@
 // The services that act on the simulation itself: ~step_with_command (call and return),
 // ~set_state and ~linearise. They run in the node's one thread, between periods.
+#include <algorithm>
 #include <cmath>
 #include <memory>
 
@@ -34,8 +35,10 @@ void SimNode::StepWithCommandCall(const StepWithCommand::Request& req,
         "~step_with_command in lockstep would make the order depend on timing";
     return;
   }
-  if (req.periods < 1) {
-    res->message = "periods: 0 must be at least 1";
+  const double period = 1.0 / params_.publish_rate;
+  f3r_error err{};
+  if (f3r_session_check_step(req.periods, period, &err) != F3R_OK) {
+    res->message = err.message;
     return;
   }
   const std::string why = inputs_->HoldCommand(req.command);
@@ -43,16 +46,18 @@ void SimNode::StepWithCommandCall(const StepWithCommand::Request& req,
     res->message = "command: " + why + "; nothing changed";
     return;
   }
-  const double period = 1.0 / params_.publish_rate;
   for (uint32_t k = 0; k < req.periods; ++k) {
     if (!AdvancePeriod(period)) {
-      res->message = "the integration stopped after " + std::to_string(k) + " of " +
-                     std::to_string(req.periods) + " periods: " + info_.last_error +
-                     "; paused there";
+      // the session's words, as Python's step says them: the failed period is undone; the
+      // periods before it were published, and stand
+      res->message = info_.last_error;
+      if (k > 0)
+        res->message += "; the first " + std::to_string(k) + " of " + std::to_string(req.periods) +
+                        " periods stand";
       break;
     }
   }
-  const f3r_outputs& out = *f3r_sim_outputs(sim_.get());
+  const f3r_outputs& out = *f3r_sim_outputs(sim_);
   res->success = res->message.empty();
   if (res->success) res->message = std::to_string(req.periods) + " periods";
   res->sim_time = out.t;
@@ -61,38 +66,32 @@ void SimNode::StepWithCommandCall(const StepWithCommand::Request& req,
     res->platform_pose[static_cast<size_t>(k)] = out.q[F3R_Q_X + k];
     res->platform_twist[static_cast<size_t>(k)] = out.v[F3R_Q_X + k];
   }
-  res->modal.assign(out.q + F3R_Q_MODAL, out.q + f3r_model_nq(model_.get()));
-  res->modal_rate.assign(out.v + F3R_Q_MODAL, out.v + f3r_model_nq(model_.get()));
+  res->modal.assign(out.q + F3R_Q_MODAL, out.q + f3r_model_nq(model_));
+  res->modal_rate.assign(out.v + F3R_Q_MODAL, out.v + f3r_model_nq(model_));
 }
 
 void SimNode::SetStateCall(const SetState::Request& req, SetState::Response* res) {
   res->success = false;
-  const size_t nmodal = static_cast<size_t>(f3r_model_nq(model_.get()) - F3R_Q_MODAL);
-  for (const auto* field : {&req.modal, &req.modal_rate}) {
-    if (!field->empty() && field->size() != nmodal) {
-      res->message = std::string(field == &req.modal ? "modal" : "modal_rate") + ": " +
-                     std::to_string(field->size()) + " values, the model has " +
-                     std::to_string(nmodal) +
-                     " modal coordinates (or leave it empty); nothing changed";
-      return;
-    }
+  // the session's checks and set (flex3rpr/session.h), as flex3rpr.Sim.set_state's: the
+  // modal count and the ranges of a scene's initial state, in the same words
+  if (!req.modal.empty() && !req.modal_rate.empty() && req.modal.size() != req.modal_rate.size()) {
+    res->message = "modal and modal_rate: " + std::to_string(req.modal.size()) + " and " +
+                   std::to_string(req.modal_rate.size()) + " values; nothing changed";
+    return;
   }
-  // the session's checks (flex3rpr/session.h), flex3rpr.Sim.set_state's: the ranges of a
-  // scene's initial state
   const double* modal = req.modal.empty() ? nullptr : req.modal.data();
   const double* modal_rate = req.modal_rate.empty() ? nullptr : req.modal_rate.data();
-  const int count = modal || modal_rate ? static_cast<int>(nmodal) : 0;
+  const int count = static_cast<int>(std::max(req.modal.size(), req.modal_rate.size()));
   f3r_error err{};
-  if (f3r_session_check_state(model_.get(), req.platform_pose.data(), req.platform_twist.data(),
-                              modal, modal_rate, count, &err) != F3R_OK ||
-      f3r_sim_set_state(sim_.get(), req.platform_pose.data(), req.platform_twist.data(), modal,
-                        modal_rate, &err) != F3R_OK) {
+  if (f3r_session_set_state(session_, req.platform_pose.data(), req.platform_twist.data(), modal,
+                            modal_rate, count, &err) != F3R_OK) {
     res->message = err.message;
     if (res->message.find("nothing changed") == std::string::npos)
       res->message += "; nothing changed";
     return;
   }
-  const f3r_outputs& out = *f3r_sim_outputs(sim_.get());
+  verifier_->SetState(req.platform_pose.data(), req.platform_twist.data(), count != 0);
+  const f3r_outputs& out = *f3r_sim_outputs(sim_);
   phi_p_ = out.q[F3R_Q_PHI];
   info_.last_error.clear();
   outputs_->RestartEnergy();
@@ -106,6 +105,9 @@ void SimNode::SetStateCall(const SetState::Request& req, SetState::Response* res
 
 namespace {
 
+struct ModelDeleter {
+  void operator()(f3r_model* m) const { f3r_model_destroy(m); }
+};
 struct StateSpaceDeleter {
   void operator()(f3r_state_space* ss) const { f3r_state_space_destroy(ss); }
 };
@@ -124,15 +126,15 @@ void SimNode::LineariseCall(Linearise::Response* res) {
   res->success = false;
   // The model of the present pose at rest: the node's scene (its mode counts as the model chose
   // them) with the present platform pose as its initial one, no velocity, no deflection.
-  const f3r_outputs& out = *f3r_sim_outputs(sim_.get());
+  const f3r_outputs& out = *f3r_sim_outputs(sim_);
   // A view of the model's scene (its tables stay the model's, scene.h), which the new model copies.
-  std::unique_ptr<f3r_scene> scene(new f3r_scene(*f3r_model_scene(model_.get())));
+  std::unique_ptr<f3r_scene> scene(new f3r_scene(*f3r_model_scene(model_)));
   for (int k = 0; k < 3; ++k) {
     scene->platform_pose0[k] = out.q[F3R_Q_X + k];
     scene->platform_velocity0[k] = 0.0;
   }
   for (int i = 0; i < 3; ++i) {
-    const f3r_link_params* lp = f3r_model_link(model_.get(), i);
+    const f3r_link_params* lp = f3r_model_link(model_, i);
     scene->links[i].modes = lp->modes - lp->static_shapes;  // the shapes follow static_correction
     for (int j = 0; j < F3R_MAX_MODES; ++j)
       scene->links[i].eta0[j] = scene->links[i].eta_rate0[j] = 0.0;

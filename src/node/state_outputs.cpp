@@ -301,6 +301,16 @@ void StateOutputs::PublishDiagnostics(const f3r_outputs& out, const RunInfo& inf
                   "integrator has likely gone unstable; the path is suspect",
                   F3R_ENERGY_GUARD, out.energy_balance_error, largest_energy_);
     d.message = text;
+  } else if (info.verifying && !info.request_met) {
+    d.level = diagnostic_msgs::DiagnosticStatus::WARN;
+    char text[400];
+    if (info.measurement_note.empty())
+      std::snprintf(text, sizeof text,
+                    "accuracy request %g m not met: measured %.3g m (latched until ~reset)",
+                    params_.accuracy.request, info.measured_error);
+    else
+      std::snprintf(text, sizeof text, "accuracy not measured: %s", info.measurement_note.c_str());
+    d.message = text;
   } else if (info.behind || !outside.empty()) {
     d.level = diagnostic_msgs::DiagnosticStatus::WARN;
     d.message =
@@ -332,8 +342,15 @@ void StateOutputs::PublishDiagnostics(const f3r_outputs& out, const RunInfo& inf
     d.values.push_back(value("estimated_error", params_.accuracy.estimated_error));
     diagnostic_msgs::KeyValue basis;
     basis.key = "error_basis";
-    basis.value = params_.accuracy.request > 0.0 ? "estimated" : "";
+    basis.value = params_.accuracy.request <= 0.0 ? "" : info.verifying ? "measured" : "estimated";
     d.values.push_back(basis);
+    if (info.verifying) {
+      d.values.push_back(value("measured_error_m", info.measured_error));
+      diagnostic_msgs::KeyValue met;
+      met.key = "request_met";
+      met.value = info.request_met ? "true" : "false";
+      d.values.push_back(met);
+    }
   }
   diagnostics_.header.stamp = Stamp(out.t);
   diagnostics_pub_.publish(diagnostics_);
@@ -411,7 +428,13 @@ void StateOutputs::PublishStatus(const f3r_outputs& out, const RunInfo& info) {
   status_.accuracy_choice = params_.accuracy.brief;
   status_.estimated_error = params_.accuracy.estimated_error;
   // the node runs what the knob chose and cannot run a richer check ahead of itself
-  status_.error_basis = params_.accuracy.request > 0.0 ? "estimated" : "";
+  status_.error_basis = params_.accuracy.request <= 0.0 ? ""
+                        : info.verifying                ? "measured"
+                                                        : "estimated";
+  status_.measured_error_m = info.verifying ? info.measured_error : 0.0;
+  status_.request_met = info.verifying ? info.request_met : params_.accuracy.request_met != 0;
+  status_.measurement_note = info.measurement_note;
+  status_.measurement_pending = info.measurement_pending;
   status_.energy_guard = energy_guard_;
   status_.header.stamp = Stamp(out.t);
   status_.sim_time = out.t;

@@ -35,6 +35,12 @@ struct RunInfo {
   double waiting_for_command = 0.0;  // lockstep: wall s the present period has waited for
                                      // its command, once past ~lockstep_warn_after; else 0
   std::string last_error;
+  // ~verify (closed_loop_verifier.hpp): the closed-loop measurement of the accuracy request
+  bool verifying = false;
+  double measured_error = 0.0;       // m, the largest end-effector distance so far; NaN once lost
+  bool request_met = true;           // measured within 0.7 of the request: false stays until ~reset
+  std::string measurement_note;      // why the measurement was lost, or ""
+  uint64_t measurement_pending = 0;  // periods handed to the check and not yet checked
 };
 
 class StateOutputs {

@@ -23,6 +23,7 @@
 typedef struct {
   f3r_session* session;
   char message[2048];
+  char choice_json[sizeof(((f3r_accuracy_choice*)0)->summary) * 2 + 1024]; /* f3r_py_choice */
 } f3r_py;
 
 static f3r_status fail(f3r_py* p, const f3r_error* err, f3r_status status) {
@@ -226,16 +227,18 @@ F3R_PY_EXPORT const char* f3r_py_choice(f3r_py* p) {
     text[n++] = *s;
   }
   text[n] = '\0';
-  snprintf(p->message, sizeof p->message,
-           "{\"request\": %.17g, \"modes\": [%d, %d, %d], \"static_correction\": [%d, %d, %d], "
+  snprintf(p->choice_json, sizeof p->choice_json,
+           "{\"request\": %.17g, \"excitation_N\": %.17g, \"modes\": [%d, %d, %d], "
+           "\"static_correction\": [%d, %d, %d], "
            "\"exact_kinematics\": %s, \"formulation\": \"%s\", \"integrator\": \"%s\", "
            "\"table\": \"%s\", \"rtol\": %.17g, \"atol\": %.17g, \"model_error\": %.17g, "
            "\"kinematics_error\": %.17g, \"solver_error\": %.17g, \"estimated_error\": %.17g, "
            "\"request_met\": %s, \"error_basis\": \"estimated\", \"summary\": \"%s\"}",
-           c->request, c->modes[0], c->modes[1], c->modes[2], c->static_correction[0],
-           c->static_correction[1], c->static_correction[2], c->exact_kinematics ? "true" : "false",
-           f3r_formulation_name(scene->formulation), f3r_integrator_name(scene->integrator),
-           scene->table, scene->rtol, scene->atol, c->model_error, c->kinematics_error,
-           c->solver_error, c->estimated_error, c->request_met ? "true" : "false", text);
-  return p->message;
+           c->request, c->excitation, c->modes[0], c->modes[1], c->modes[2],
+           c->static_correction[0], c->static_correction[1], c->static_correction[2],
+           c->exact_kinematics ? "true" : "false", f3r_formulation_name(scene->formulation),
+           f3r_integrator_name(scene->integrator), scene->table, scene->rtol, scene->atol,
+           c->model_error, c->kinematics_error, c->solver_error, c->estimated_error,
+           c->request_met ? "true" : "false", text);
+  return p->choice_json;
 }

@@ -30,7 +30,18 @@
 
 namespace {
 
-using flex3rpr::CommandLimits;
+// The scene's limits section (limits.force, .torque, .modal_force), as the harness draws them.
+struct CommandLimits {
+  double force = 1000.0, torque = 100.0, modal = 1000.0;
+};
+
+f3r_scene SceneWith(const CommandLimits& l) {
+  f3r_scene scene = f3r_default_scene();
+  scene.limit_force = l.force;
+  scene.limit_torque = l.torque;
+  scene.limit_modal_force = l.modal;
+  return scene;
+}
 
 [[noreturn]] void Fail(const char* what, const std::string& reason = "") {
   std::fprintf(stderr, "fuzz_commands: invariant broken: %s%s%s\n", what,
@@ -161,6 +172,7 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   limits.force = AnyLimit(p, limits.force);
   limits.torque = AnyLimit(p, limits.torque);
   limits.modal = AnyLimit(p, limits.modal);
+  const f3r_scene scene = SceneWith(limits);
 
   // What forces holds before the call: any length, any bits; it must survive a rejection.
   std::vector<double> forces(p.ConsumeIntegralInRange<size_t>(0, 80));
@@ -195,7 +207,7 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
       expect_ok = expect_ok && Allowed(m, limits.modal);
     }
     expect_ok = expect_ok && (len == 0 || len == n_modal);
-    why = flex3rpr::DecodeEffortCommand(msg, *model, limits, &forces);
+    why = flex3rpr::DecodeEffortCommand(msg, *model, scene, &forces);
     expected.assign(static_cast<size_t>(f3r_model_nq(model)), 0.0);
     for (size_t i = 0; i < 3; ++i) {
       expected[i] = msg.leg_force[i];
@@ -221,7 +233,7 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
       msg.layout.data_offset = p.ConsumeIntegral<uint32_t>();
     }
     expect_ok = expect_ok && len == 6;
-    why = flex3rpr::DecodeEffortGroup(msg, *model, limits, &forces);
+    why = flex3rpr::DecodeEffortGroup(msg, *model, scene, &forces);
     expected.assign(static_cast<size_t>(f3r_model_nq(model)), 0.0);
     for (size_t k = 0; k < 6 && k < len; ++k) expected[k] = msg.data[k];
   } else {
@@ -252,7 +264,7 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
                 Allowed(w.force.z, limits.force) && Allowed(w.torque.x, limits.torque) &&
                 Allowed(w.torque.y, limits.torque) && Allowed(w.torque.z, limits.torque) &&
                 w.force.z == 0.0 && w.torque.x == 0.0 && w.torque.y == 0.0;
-    why = flex3rpr::DecodeWrench(msg, flex3rpr::YawRotation(in_world ? 0.0 : phi_p), limits, *model,
+    why = flex3rpr::DecodeWrench(msg, flex3rpr::YawRotation(in_world ? 0.0 : phi_p), scene, *model,
                                  &forces);
     if (why.empty() && forces.size() == static_cast<size_t>(f3r_model_nq(model))) {
       if (in_world) {

@@ -113,9 +113,11 @@ class NodeStartup(unittest.TestCase):
         self.assertLessEqual(last.estimated_error, 1e-4)
         self.assertIn("accuracy 0.0001 m on the end-effector path", out)
         self.assertIn("estimated error", out)
-        # the node runs what the knob chose: its error is an estimate, and it says so
-        self.assertEqual(last.error_basis, "estimated")
-        self.assertIn("the accuracy is estimated, not measured", out)
+        # with a request the node measures the closed loop (~verify, on by default) on a thread
+        # of its own while it runs paced
+        self.assertEqual(last.error_basis, "measured")
+        self.assertIn("~verify: the check configuration steps on the same commands", out)
+        self.assertFalse(last.measured_error_m != last.measured_error_m, last.measurement_note)
         self.assertFalse(last.energy_guard)
 
     def test_g_the_energy_guard_warns(self):

@@ -301,6 +301,7 @@ f3r_status f3r_accuracy_choose(const f3r_scene* scene, double request, int comma
   f3r_scene s;
   choice_run run;
   open_choice(scene, request, commanded, &s, &run);
+  c->excitation = run.excitation;
   f3r_status st = search_modes(&run, c, err);
   if (st == F3R_OK) st = check_modes(&run, c, err);
   if (st == F3R_OK) st = f3r_choice_compare_bases(&run, c, err);
@@ -355,13 +356,35 @@ static f3r_status resolve_shape_mix(f3r_scene* scene, f3r_accuracy_choice* c, f3
   return F3R_OK;
 }
 
+/* Halvings of a commanded choice's excitation the knob tries when its pilot runs cannot follow
+ * it (steps at limits.force pull a leg of a scene without end stops into its collapse guard
+ * within the pilot's tenth of the run): 1000 N becomes at least 15.6 N. */
+#define EXCITATION_HALVINGS 6
+
+/* The choice for a scene with a request; a commanded one whose excitation the pilot runs cannot
+ * follow is sized for half of it, and so on, saying so. */
+static f3r_status choose_for_request(f3r_scene* scene, int commanded, f3r_accuracy_choice* c,
+                                     f3r_error* err) {
+  f3r_scene view = *scene; /* a view: the tables are scene's */
+  f3r_status st = f3r_accuracy_choose(&view, scene->accuracy, commanded, c, err);
+  char first[sizeof err->message] = "";
+  double first_excitation = c->excitation;
+  for (int k = 0; st != F3R_OK && c->excitation > 0.0 && k < EXCITATION_HALVINGS; ++k) {
+    if (!first[0]) snprintf(first, sizeof first, "%s", err->message);
+    view.accuracy_excitation = 0.5 * c->excitation;
+    st = f3r_accuracy_choose(&view, scene->accuracy, commanded, c, err);
+  }
+  if (st == F3R_OK && first[0])
+    f3r_accuracy_append(c->summary, sizeof c->summary,
+                        "\nexcitation: %g N steps stopped a pilot run (%.80s...): sized for %g N",
+                        first_excitation, first, c->excitation);
+  if (st == F3R_OK) f3r_accuracy_apply(c, scene);
+  return st;
+}
+
 static f3r_status resolve_modes(f3r_scene* scene, int commanded, f3r_accuracy_choice* c,
                                 f3r_error* err) {
-  if (scene->accuracy > 0.0) {
-    const f3r_status st = f3r_accuracy_choose(scene, scene->accuracy, commanded, c, err);
-    if (st == F3R_OK) f3r_accuracy_apply(c, scene);
-    return st;
-  }
+  if (scene->accuracy > 0.0) return choose_for_request(scene, commanded, c, err);
   unsigned chosen = 0;
   double tolerance = 0.0;
   for (int i = 0; i < 3; ++i)

@@ -147,26 +147,32 @@ static force_limit limit_of(const f3r_scene* scene, int n) {
   return f;
 }
 
-f3r_status f3r_session_check_forces(const f3r_session* s, const double* forces, int count,
-                                    f3r_error* err) {
-  const int nq = f3r_model_nq(s->model);
+f3r_status f3r_command_check(const f3r_scene* scene, const f3r_model* model, const double* forces,
+                             int count, f3r_error* err) {
+  const int nq = f3r_model_nq(model);
   if (!forces || count != nq)
-    return f3r_error_set(err, F3R_ERR_ARGUMENT,
-                         "command: %d values, expected %d (every generalized force); nothing "
-                         "changed",
+    return f3r_error_set(err, F3R_ERR_ARGUMENT, "%d values, expected %d (every generalized force)",
                          forces ? count : 0, nq);
   for (int n = 0; n < nq; ++n) {
-    const force_limit f = limit_of(&s->scene, n);
+    const force_limit f = limit_of(scene, n);
     if (!isfinite(forces[n]))
-      return f3r_error_set(err, F3R_ERR_ARGUMENT, "command: %s is %g, not finite; nothing changed",
-                           f.name, forces[n]);
+      return f3r_error_set(err, F3R_ERR_ARGUMENT, "%s is %g, not finite", f.name, forces[n]);
     if (fabs(forces[n]) > f.limit)
-      return f3r_error_set(err, F3R_ERR_ARGUMENT,
-                           "command: %s is %g, out of range %g..%g (the scene's %s); nothing "
-                           "changed",
+      return f3r_error_set(err, F3R_ERR_ARGUMENT, "%s is %g, out of range %g..%g (the scene's %s)",
                            f.name, forces[n], -f.limit, f.limit, f.field);
   }
   return F3R_OK;
+}
+
+f3r_status f3r_session_check_forces(const f3r_session* s, const double* forces, int count,
+                                    f3r_error* err) {
+  const f3r_status st = f3r_command_check(&s->scene, s->model, forces, count, err);
+  if (st != F3R_OK) {
+    char why[sizeof err->message];
+    snprintf(why, sizeof why, "%s", err->message);
+    f3r_error_set(err, st, "command: %s; nothing changed", why);
+  }
+  return st;
 }
 
 f3r_status f3r_session_check_step(double periods, double period, f3r_error* err) {
@@ -279,9 +285,14 @@ f3r_status f3r_session_set_state(f3r_session* s, const double pose[3], const dou
   f3r_status st =
       f3r_session_check_state(s->model, pose, twist, modal, modal_rate, modal_count, err);
   if (!modal_count) modal = modal_rate = NULL;
-  if (st == F3R_OK) st = f3r_sim_set_state(s->sim, pose, twist, modal, modal_rate, err);
+  if (st == F3R_OK &&
+      (st = f3r_sim_set_state(s->sim, pose, twist, modal, modal_rate, err)) != F3R_OK) {
+    char why[sizeof err->message];
+    snprintf(why, sizeof why, "%s", err->message);
+    f3r_error_set(err, st, "%s; nothing changed", why);
+  }
   if (st == F3R_OK && s->check && !s->measure_apart)
-    f3r_closed_loop_check_set_state(s->check, pose, twist, modal != NULL);
+    f3r_closed_loop_check_set_state(s->check, pose, twist, modal || modal_rate);
   return st;
 }
 
