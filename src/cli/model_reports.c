@@ -139,3 +139,21 @@ int f3r_cli_write_state_space(const f3r_model* m, const char* path) {
   f3r_state_space_destroy(ss);
   return rc;
 }
+
+/* --check and --geometry: the model only, before the accuracy knob's report. */
+int f3r_cli_describe_model(FILE* human, const cli_options* o, const f3r_model* model) {
+  if (o->check) /* the scene, its overrides and the model are valid: what a sweep checks first */
+    fprintf(human, "ok: %s, nq %d\n", o->scene_path, f3r_model_nq(model));
+  else
+    f3r_cli_print_geometry(model);
+  return 0;
+}
+
+/* The analyses that replace a simulation (--linear-path, --linearise, --modal): the exit code,
+ * or -1 when none was asked for. */
+int f3r_cli_analyse(const cli_options* o, const f3r_model* model) {
+  if (o->linear_path) return f3r_cli_write_linear_path(model, o->linear_path);
+  if (o->linearise_path) return f3r_cli_write_state_space(model, o->linearise_path);
+  if (o->modal || o->modal_csv) return f3r_cli_run_modal(model, o->modal_csv);
+  return -1;
+}

@@ -2,6 +2,9 @@
 #ifndef FLEX3RPR_CLI_MODEL_REPORTS_H
 #define FLEX3RPR_CLI_MODEL_REPORTS_H
 
+#include <stdio.h>
+
+#include "cli_options.h"
 #include "flex3rpr/model.h"
 
 /* --geometry: geometry, masses and stroke as JSON on stdout (scripts/make_urdf.py reads it). */
@@ -13,5 +16,11 @@ int f3r_cli_run_modal(const f3r_model* m, const char* csv_path);
 int f3r_cli_write_linear_path(const f3r_model* m, const char* path);
 /* --linearise FILE.mat: the state-space model, and FILE.json beside it. */
 int f3r_cli_write_state_space(const f3r_model* m, const char* path);
+
+/* --check and --geometry: the model only, before the accuracy knob's report; 0. */
+int f3r_cli_describe_model(FILE* human, const cli_options* o, const f3r_model* model);
+/* The analyses that replace a simulation (--linear-path, --linearise, --modal): the exit code,
+ * or -1 when none was asked for. */
+int f3r_cli_analyse(const cli_options* o, const f3r_model* model);
 
 #endif

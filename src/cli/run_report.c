@@ -3,6 +3,7 @@
 
 #include <math.h>
 #include <string.h>
+#include <time.h>
 
 #include <sundials/sundials_config.h>
 
@@ -204,4 +205,160 @@ int cli_write_summary(const char* path, const cli_options* o, const summary_part
     return rc ? rc : 1;
   }
   return rc;
+}
+
+/* Process CPU time in s, at nanosecond resolution (clock() has microsecond steps). A system
+ * call of about 0.5 us: read twice per run only. */
+double cli_cpu_seconds(void) {
+  struct timespec ts;
+  clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &ts);
+  return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
+}
+
+/* Monotonic time in s, read through the vDSO in about 20 ns: it splits the run into integration
+ * and outputs at every output step. With the process CPU clock there, its two system calls per
+ * output were half the "integration" time of a rigid run with 1 ms outputs. On an idle machine
+ * the split adds up to the CPU time (the summary prints both). */
+double cli_monotonic_seconds(void) {
+  struct timespec ts;
+  clock_gettime(CLOCK_MONOTONIC, &ts);
+  return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
+}
+
+/* The basis functions of every link at its beam_points stations (beam_points <= 101). */
+void cli_eval_mode_shapes(const f3r_model* model, int beam_points,
+                          double shapes[3][101][F3R_MAX_MODES]) {
+  for (int i = 0; i < 3; ++i) {
+    const f3r_link_params* lp = f3r_model_link(model, i);
+    for (int k = 0; k < beam_points; ++k)
+      for (int j = 0; j < lp->modes; ++j)
+        f3r_model_link_shape(model, i, j, (double)k / (beam_points - 1), &shapes[i][k][j], NULL);
+  }
+}
+
+void cli_track_maxima(run_stats* r, const f3r_model* model, int beam_points,
+                      double shapes[3][101][F3R_MAX_MODES], const f3r_outputs* out) {
+  r->max_constraint = fmax(r->max_constraint, out->constraint_residual);
+  r->max_energy_error = fmax(r->max_energy_error, out->energy_balance_error);
+  r->max_energy = fmax(r->max_energy, out->kinetic_energy + out->potential_energy);
+  r->end_stops = f3r_model_scene(model)->end_stops;
+  r->impacts = out->impacts;
+  for (int i = 0; i < 3; ++i) {
+    r->max_stop_force[i] = fmax(r->max_stop_force[i], fabs(out->stop_force[i]));
+    r->final_stop_force[i] = out->stop_force[i];
+  }
+  for (int i = 0; i < 3; ++i) {
+    const f3r_link_params* lp = f3r_model_link(model, i);
+    if (!lp->modes) continue;
+    r->max_tip = fmax(r->max_tip, fabs(out->tip_deflection[i]));
+    for (int k = 0; k < beam_points; ++k) {
+      double w = 0.0;
+      for (int j = 0; j < lp->modes; ++j) w += shapes[i][k][j] * out->q[lp->eta_index + j];
+      r->max_deflection = fmax(r->max_deflection, fabs(w));
+    }
+  }
+}
+
+void cli_print_summary(FILE* human, const cli_options* o, const f3r_scene* scene,
+                       const f3r_model* model, const f3r_outputs* out, const run_stats* r) {
+  fprintf(human, "scene               %s\n", o->scene_path);
+  fprintf(human, "formulation         %s, rtol %g, atol %g, %s\n",
+          f3r_formulation_name(scene->formulation), scene->rtol, scene->atol,
+          cli_integrator_text(o, scene));
+  if (scene->integrator != F3R_INTEGRATOR_IDA)
+    fprintf(human, "butcher table       %s\n", scene->table[0] ? scene->table : "default");
+  if (scene->integrator == F3R_INTEGRATOR_IDA)
+    fprintf(human, "max BDF order       %d\n", scene->max_order);
+  fprintf(human, "sundials            %s, %s\n", SUNDIALS_VERSION, F3R_SUNDIALS_BUILD);
+  char basis[3][96];
+  for (int i = 0; i < 3; ++i) f3r_model_link_basis_name(model, i, basis[i], sizeof basis[i]);
+  fprintf(human, "links               %s; %s; %s\n", basis[0], basis[1], basis[2]);
+  fprintf(human, "state dimension     %d (nq %d)\n", f3r_state_size(model, scene->formulation),
+          f3r_model_nq(model));
+  fprintf(human, "simulated time      %.6g s\n", out->t);
+  fprintf(human, "steps               %ld\n", out->stats.steps);
+  fprintf(human, "residual evals      %ld\n", out->stats.residual_evals);
+  fprintf(human, "jacobian evals      %ld\n", out->stats.jacobian_evals);
+  fprintf(human, "cpu time            %.6f s (process CPU clock, the whole run)\n", r->cpu_total);
+  fprintf(human,
+          "wall time           %.6f s (monotonic clock; integration %.6f s, computing outputs %.6f "
+          "s)\n",
+          r->wall_total, r->wall_integrating, r->wall_outputs);
+  const real_time_factors rtf = cli_real_time_factor(out->t, r);
+  fprintf(human,
+          "real-time factor    %.3g of cpu time (of wall time: %.3g integrating, %.3g with the "
+          "outputs)\n",
+          rtf.cpu, rtf.wall_integration, rtf.wall);
+  fprintf(human, "max constraint res  %.3e m\n", r->max_constraint);
+  fprintf(human, "energy balance err  %.3e J (%.3e of max T+V)\n", r->max_energy_error,
+          cli_energy_relative(r));
+  if (cli_energy_guard(r))
+    fprintf(stderr,
+            "flex3rpr_sim: warning: %s: the energy balance error reached %.3g of the largest "
+            "T + V (the guard is %g; correct runs stay below 2.6e-2): the integrator has likely "
+            "gone unstable and the path is suspect; try a tighter rtol, IDA at max BDF order 5, "
+            "or another Butcher table\n",
+            o->scene_path, cli_energy_relative(r), F3R_ENERGY_GUARD);
+  fprintf(human,
+          "max deflection      %.6e m (largest |w| at %d stations a link; at the tips %.6e m)\n",
+          r->max_deflection, scene->beam_points, r->max_tip);
+  fprintf(human, "final pose          x_p %.9f y_p %.9f phi_p %.9f\n", out->q[F3R_Q_X],
+          out->q[F3R_Q_Y], out->q[F3R_Q_PHI]);
+  if (r->end_stops)
+    fprintf(human,
+            "end stops           %ld impacts; stop forces at the end %.6g %.6g %.6g N (largest "
+            "%.6g %.6g %.6g N)\n",
+            r->impacts, r->final_stop_force[0], r->final_stop_force[1], r->final_stop_force[2],
+            r->max_stop_force[0], r->max_stop_force[1], r->max_stop_force[2]);
+  if (o->out_path) fprintf(human, "csv                 %s\n", o->out_path);
+}
+
+/* The final state and the counts of a run, for the JSON summary. */
+void cli_keep_report(const f3r_outputs* out, const run_stats* stats, run_report* report) {
+  report->ran = 1;
+  report->t = out->t;
+  report->x = out->q[F3R_Q_X];
+  report->y = out->q[F3R_Q_Y];
+  report->phi = out->q[F3R_Q_PHI];
+  report->steps = out->stats.steps;
+  report->residual_evals = out->stats.residual_evals;
+  report->jacobian_evals = out->stats.jacobian_evals;
+  report->stats = *stats;
+}
+
+void cli_report_choice(FILE* human, const cli_options* o, const f3r_scene* scene,
+                       const f3r_accuracy_choice* choice, double choose_cpu) {
+  if (choice->summary[0]) fprintf(human, "%s\n", choice->summary);
+  if (scene->accuracy > 0 && !scene->accuracy_verify && !choice->request_met)
+    fprintf(stderr,
+            "flex3rpr_sim: warning: %s: the accuracy request %g m is not met: estimated %.3g m "
+            "(see the summary)\n",
+            o->scene_path, scene->accuracy, choice->estimated_error);
+  if (scene->accuracy > 0)
+    fprintf(human, "choice cpu time     %.6f s (%d linear models)\n", choose_cpu,
+            choice->linear_evaluations);
+}
+
+/* The summary's lines on the measurement, and the warnings of a request not met. */
+void cli_report_measurement(FILE* human, const cli_options* o, const f3r_accuracy_choice* choice,
+                            const f3r_measured_run* v, const run_stats* written) {
+  const double request = v->scenes[0].accuracy;
+  fprintf(human,
+          "accuracy            measured %.3g m against a richer run (estimate %.3g m); "
+          "request %g m %s (measured, within %g of it)\n",
+          choice->measured_error, choice->estimated_error, request,
+          choice->request_met ? "met" : "NOT met", F3R_CHECK_MARGIN);
+  fprintf(human, "check cpu time      %.6f s (%.2f of the run's %.6f s; %d runs in all)\n",
+          v->check_cpu, written->cpu_total > 0 ? v->check_cpu / written->cpu_total : 0,
+          written->cpu_total, v->count);
+  fprintf(human, "configurations      %s\n", v->attempts);
+  if (v->stopped[0]) fprintf(human, "                    %s\n", v->stopped);
+  if (!choice->request_met)
+    fprintf(stderr,
+            "flex3rpr_sim: %s: the accuracy request %g m is not met: measured %.3g m (it must be "
+            "within %g of the request) after %d runs (%s); the path written is the one measured "
+            "closest%s%s%s\n",
+            o->scene_path, request, choice->measured_error, F3R_CHECK_MARGIN, v->count, v->attempts,
+            v->scenes[v->accepted].accuracy_escalations ? "" : " (accuracy.escalations is 0)",
+            v->stopped[0] ? "; " : "", v->stopped);
 }

@@ -6,7 +6,11 @@
 #include "cli_options.h"
 #include "flex3rpr/accuracy.h"
 #include "flex3rpr/model.h"
+#include "flex3rpr/measured_run.h"
 #include "flex3rpr/scene.h"
+#include "flex3rpr/sim.h"
+
+#include <stdio.h>
 
 /* What a run measures for its summary. */
 typedef struct {
@@ -59,5 +63,27 @@ double cli_energy_relative(const run_stats* r);
 int cli_energy_guard(const run_stats* r);
 /* The whole summary into path ("-": stdout); returns rc, or 1 when the file cannot be written. */
 int cli_write_summary(const char* path, const cli_options* o, const summary_parts* p, int rc);
+
+/* Process CPU time in s, at nanosecond resolution (clock() has microsecond steps). */
+double cli_cpu_seconds(void);
+/* Monotonic (wall) time in s, read through the vDSO in about 20 ns. */
+double cli_monotonic_seconds(void);
+/* The basis functions of every link at its beam_points stations (beam_points <= 101). */
+void cli_eval_mode_shapes(const f3r_model* model, int beam_points,
+                          double shapes[3][101][F3R_MAX_MODES]);
+/* The summary's maxima, after one output. */
+void cli_track_maxima(run_stats* r, const f3r_model* model, int beam_points,
+                      double shapes[3][101][F3R_MAX_MODES], const f3r_outputs* out);
+/* The human summary of a run into human. */
+void cli_print_summary(FILE* human, const cli_options* o, const f3r_scene* scene,
+                       const f3r_model* model, const f3r_outputs* out, const run_stats* r);
+/* The final state and the counts of a run, for the JSON summary. */
+void cli_keep_report(const f3r_outputs* out, const run_stats* stats, run_report* report);
+/* The accuracy knob's choice, and a warning where its estimate misses the request. */
+void cli_report_choice(FILE* human, const cli_options* o, const f3r_scene* scene,
+                       const f3r_accuracy_choice* choice, double choose_cpu);
+/* The measurement's lines, and the warning of a request not met. */
+void cli_report_measurement(FILE* human, const cli_options* o, const f3r_accuracy_choice* choice,
+                            const f3r_measured_run* v, const run_stats* written);
 
 #endif

@@ -7,7 +7,7 @@ set(public_scene scene.h)
 set(public_physics beam_modes.h model.h)
 set(public_solve sim.h output_columns.h sensors.h)
 set(public_accuracy accuracy.h linear.h modal.h linear_export.h)
-set(public_session session.h closed_loop_check.h)
+set(public_session session.h closed_loop_check.h measured_run.h)
 
 # rank_<header name> for every public and private header
 set(rank 0)
