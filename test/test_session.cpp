@@ -79,7 +79,7 @@ TEST(Session, OpensWithTheSceneLimitsAndNamesABadScene) {
   f3r_session* bad = nullptr;
   f3r_error err{};
   const char* sets[] = {"limits.force=-1"};
-  f3r_session_options options{0.0, sets, 1, 1, 0};
+  f3r_session_options options{0.0, sets, 1, 1, 0, 0};
   EXPECT_EQ(f3r_session_open(kSensorScene, &options, &bad, &err), F3R_ERR_SCENE);
   EXPECT_EQ(bad, nullptr);
   EXPECT_NE(std::string(err.message).find("limits.force"), std::string::npos) << err.message;

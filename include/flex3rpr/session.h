@@ -44,6 +44,10 @@ typedef struct {
   int measure_apart; /* 1: the session creates the closed-loop check but never steps it: the
                       * shell drives it (f3r_session_closed_loop_check), on a thread of its own
                       * (the node) */
+  int model_only;    /* 1: the scene, the knob's choice and the model only, no simulation, sensors
+                   * or check: for a shell that runs configurations of its own (the CLI's
+                   * measured run, measured_run.h); then only the accessors up to
+                   * f3r_session_choose_cpu may be called */
 } f3r_session_options;
 
 /* Opens scene_path (NULL options: none). On failure *session is NULL and err names the file, the
@@ -59,6 +63,8 @@ void f3r_session_close(f3r_session* session);
 const f3r_scene* f3r_session_scene(const f3r_session* session);
 const f3r_model* f3r_session_model(const f3r_session* session);
 const f3r_accuracy_choice* f3r_session_choice(const f3r_session* session);
+/* s of process CPU time the accuracy knob's choice took at open (0 without a choice to make). */
+double f3r_session_choose_cpu(const f3r_session* session);
 f3r_sim* f3r_session_sim(f3r_session* session);
 /* The scene's sensors, sampled at every period's end; NULL when the scene enables none. */
 const f3r_sensors* f3r_session_sensors(const f3r_session* session);

@@ -41,38 +41,34 @@ static FILE* human;
  * the closest measured): 1 is a failure, 2 a usage error. */
 #define F3R_EXIT_ACCURACY_NOT_MET 3
 
-/* The scene (file, options, overrides), what the accuracy knob chose for it in *choose_cpu s,
- * and its model. 0 with a message when any of them fails. */
-static int resolve_model(const cli_options* o, f3r_scene* scene, f3r_accuracy_choice* choice,
-                         double* choose_cpu, f3r_model** model) {
+/* The scene (file, options, overrides) opened as the core's session, as the node and Python
+ * open theirs: the load, the accuracy knob's choice and the model. NULL with a message when any
+ * of them fails. */
+static f3r_session* open_session(const cli_options* o) {
   f3r_error err = {0};
   override_list overrides;
+  f3r_session* session = NULL;
   /* Minimal is the default formulation, and an override would make it an explicit setting, which
    * the accuracy knob keeps: --erk and --dirk force it only when the scene does not load without
    * (a dae from the file or --formulation, which is explicit already). */
-  f3r_status st = F3R_ERR_SCENE;
-  for (int force = 0; force < 2 && st != F3R_OK; ++force) {
+  for (int force = 0; force < 2 && !session; ++force) {
     if (force && !o->integrator_erk && !o->integrator_dirk) break;
     cli_build_overrides(o, force, &overrides);
-    const f3r_scene_options source = {
-        .accuracy = o->accuracy, .overrides = overrides.all, .override_count = overrides.n_all};
-    st = f3r_scene_load_with(o->scene_path, &source, scene, &err);
+    /* a --hold table is a controller's commands, held over output steps: the knob chooses as for
+     * one (the commanded relation, accuracy.excitation), as the node and Python do */
+    const f3r_session_options options = {.accuracy = o->accuracy,
+                                         .overrides = overrides.all,
+                                         .override_count = overrides.n_all,
+                                         .commanded = o->n_holds > 0,
+                                         .model_only = 1};
+    if (f3r_session_open(o->scene_path, &options, &session, &err) == F3R_OK) return session;
+    if (err.code != F3R_ERR_SCENE) break; /* the load passed: the choice or the model failed */
   }
-  if (st != F3R_OK) {
+  if (err.code == F3R_ERR_SCENE)
     cli_report_load_error(o, &overrides, &err);
-    return 0;
-  }
-  const double choose_start = cli_cpu_seconds();
-  /* a --hold table is a controller's commands, held over output steps: the knob chooses as for
-   * one (the commanded relation, accuracy.excitation), as the node and Python do */
-  st = f3r_accuracy_resolve(scene, o->n_holds > 0, choice, &err);
-  *choose_cpu = cli_cpu_seconds() - choose_start;
-  if (st == F3R_OK) st = f3r_model_create(scene, model, &err);
-  if (st != F3R_OK) {
-    cli_fail(f3r_status_name(st), "%s: %s", o->scene_path, err.message);
-    return 0;
-  }
-  return 1;
+  else
+    cli_fail(f3r_status_name(err.code), "%s: %s", o->scene_path, err.message);
+  return NULL;
 }
 
 /* Outputs after t = 0 over the scene's duration. */
@@ -136,7 +132,8 @@ static int run_outputs(const cli_options* o, const f3r_scene* scene, const f3r_m
 /* One configuration's run as the CLI keeps it: its model, its CSV in memory (when it may be
  * written), what the summary prints and its last outputs. */
 typedef struct {
-  f3r_model* model;
+  const f3r_model* model; /* the session's for configuration 0, else own */
+  f3r_model* own;
   char* rows; /* the CSV, header included (open_memstream) */
   size_t rows_size;
   run_stats stats;
@@ -170,10 +167,11 @@ static f3r_status run_config(void* context, int k, const f3r_scene* scene, int k
   free(c->rows);
   c->rows = NULL;
   memset(&c->stats, 0, sizeof c->stats);
-  if (!c->model && f3r_model_create(scene, &c->model, &err) != F3R_OK) {
+  if (!c->model && f3r_model_create(scene, &c->own, &err) != F3R_OK) {
     cli_fail(f3r_status_name(err.code), "%s: the accuracy check: %s", o->scene_path, err.message);
     return err.code;
   }
+  if (!c->model) c->model = c->own;
   const f3r_solver_settings settings = cli_settings(o, scene);
   if (f3r_sim_create(c->model, &settings, &sim, &err) != F3R_OK) {
     cli_fail(f3r_status_name(err.code), "%s", err.message);
@@ -201,14 +199,13 @@ static f3r_status run_config(void* context, int k, const f3r_scene* scene, int k
 
 /* A run for an accuracy request, measured by the core's sequence (measured_run.h): its CSV,
  * summary and report; returns the exit code (3: the request was not met). */
-static int simulate_verified(const cli_options* o, f3r_scene* scene, f3r_model** model,
-                             f3r_accuracy_choice* choice, run_report* report) {
+static int simulate_verified(const cli_options* o, f3r_scene* scene, const f3r_model** model,
+                             f3r_model** owned, f3r_accuracy_choice* choice, run_report* report) {
   static config_runs all; /* large: the rows live on the heap, the runs here */
   static f3r_measured_run v;
   memset(&all, 0, sizeof all);
   all.o = o;
-  all.runs[0].model = *model; /* handed back below, or destroyed with the others */
-  *model = NULL;
+  all.runs[0].model = *model; /* the session's: the knob's choice */
   const f3r_config_runner runner = {&all, run_config};
   f3r_error err = {0};
   int rc = 1;
@@ -218,7 +215,7 @@ static int simulate_verified(const cli_options* o, f3r_scene* scene, f3r_model**
     rc = v.request_met ? 0 : F3R_EXIT_ACCURACY_NOT_MET;
   if (rc != 1) {
     cli_clear_failure(); /* a failed run that a richer one replaced is not the run's */
-    const config_run* written = &all.runs[v.accepted];
+    config_run* written = &all.runs[v.accepted];
     choice->measured_error = v.measured_error;
     choice->verified = !isnan(v.measured_error);
     choice->configurations = v.count;
@@ -231,14 +228,12 @@ static int simulate_verified(const cli_options* o, f3r_scene* scene, f3r_model**
     report->check_cpu = v.check_cpu;
     report->configurations = v.count;
     *scene = v.scenes[v.accepted];
-    *model = written->model;
-    all.runs[v.accepted].model = NULL;
-  } else {
-    *model = all.runs[0].model;
-    all.runs[0].model = NULL;
+    *model = written->model; /* the summary's: kept by main */
+    *owned = written->own;
+    written->own = NULL;
   }
   for (int k = 0; k < F3R_MEASURED_MAX_CONFIGS; ++k) {
-    f3r_model_destroy(all.runs[k].model);
+    f3r_model_destroy(all.runs[k].own);
     free(all.runs[k].rows);
   }
   return rc;
@@ -247,11 +242,11 @@ static int simulate_verified(const cli_options* o, f3r_scene* scene, f3r_model**
 /* The simulation with its CSV and summary (and what it leaves in *report); returns the exit
  * code. With an accuracy request it is measured (simulate_verified) unless accuracy.verify is
  * off. */
-static int simulate(const cli_options* o, f3r_scene* scene, f3r_model** model,
-                    f3r_accuracy_choice* choice, run_report* report) {
+static int simulate(const cli_options* o, f3r_scene* scene, const f3r_model** model,
+                    f3r_model** owned, f3r_accuracy_choice* choice, run_report* report) {
   if (!cli_check_holds(o, scene, *model)) return 2;
   if (scene->accuracy > 0 && scene->accuracy_verify)
-    return simulate_verified(o, scene, model, choice, report);
+    return simulate_verified(o, scene, model, owned, choice, report);
   const f3r_solver_settings settings = cli_settings(o, scene);
   f3r_error err = {0};
   f3r_sim* sim = NULL;
@@ -317,13 +312,18 @@ int main(int argc, char** argv) {
     return 2;
   }
   if (o.summary_json && !strcmp(o.summary_json, "-")) human = stderr;
-  f3r_scene scene = f3r_default_scene(); /* the loaded one owns tables: freed at the end */
+  f3r_scene scene = f3r_default_scene(); /* a view of the session's, or the default */
   f3r_accuracy_choice choice;
   run_report report = {0};
   summary_parts parts = {.scene = &scene, .run = &report};
-  f3r_model* model = NULL;
+  f3r_session* session = open_session(&o);
+  f3r_model* owned = NULL; /* the model written, where a richer configuration's */
   int rc = 1;
-  if (resolve_model(&o, &scene, &choice, &parts.choose_cpu, &model)) {
+  if (session) {
+    scene = *f3r_session_scene(session);
+    choice = *f3r_session_choice(session);
+    const f3r_model* model = f3r_session_model(session);
+    parts.choose_cpu = f3r_session_choose_cpu(session);
     parts.model = model;
     parts.choice = &choice;
     if (o.check || o.geometry) {
@@ -331,12 +331,12 @@ int main(int argc, char** argv) {
     } else {
       cli_report_choice(human, &o, &scene, &choice, parts.choose_cpu);
       rc = f3r_cli_analyse(&o, model);
-      if (rc < 0) rc = simulate(&o, &scene, &model, &choice, &report);
+      if (rc < 0) rc = simulate(&o, &scene, &model, &owned, &choice, &report);
       parts.model = model;
     }
   }
   if (o.summary_json) rc = cli_write_summary(o.summary_json, &o, &parts, rc);
-  f3r_model_destroy(model);
-  f3r_scene_free(&scene);
+  f3r_model_destroy(owned);
+  f3r_session_close(session);
   return rc;
 }

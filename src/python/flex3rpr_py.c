@@ -52,7 +52,7 @@ F3R_PY_EXPORT f3r_status f3r_py_create(const char* path, double accuracy, const 
   *out = p;
   if (!p) return F3R_ERR_MEMORY;
   f3r_error err = {0};
-  const f3r_session_options options = {accuracy, sets, n_sets, commanded, 0};
+  const f3r_session_options options = {accuracy, sets, n_sets, commanded, 0, 0};
   const f3r_status st = f3r_session_open(path, &options, &p->session, &err);
   return st == F3R_OK ? st : fail(p, &err, st);
 }

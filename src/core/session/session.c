@@ -4,6 +4,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <time.h>
 
 #include "flex3rpr/closed_loop_check.h"
 #include "flex3rpr/session.h"
@@ -19,6 +20,7 @@ struct f3r_session {
   f3r_closed_loop_check* check; /* NULL without an accuracy request or with accuracy.verify
                                  * off */
   int measure_apart;            /* the shell drives the check (options.measure_apart) */
+  double choose_cpu;            /* s: the knob's choice at open */
   long periods;
 };
 
@@ -45,12 +47,22 @@ static f3r_status create_sensors(f3r_session* s, f3r_error* err) {
   return st;
 }
 
+/* Process CPU time in s (the knob's cost, which a shell reports). */
+static double cpu_seconds(void) {
+  struct timespec ts;
+  clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &ts);
+  return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
+}
+
 /* What open does after the load: the knob's choice, the model, the simulation, the sensors and
  * the check, on s->scene. */
 static f3r_status open_loaded(f3r_session* s, const f3r_session_options* options, f3r_error* err) {
   s->measure_apart = options->measure_apart;
+  const double start = cpu_seconds();
   f3r_status st = f3r_accuracy_resolve(&s->scene, options->commanded, &s->choice, err);
+  s->choose_cpu = cpu_seconds() - start;
   if (st == F3R_OK) st = f3r_model_create(&s->scene, &s->model, err);
+  if (st != F3R_OK || options->model_only) return st;
   if (st == F3R_OK) st = create_sim(s, err);
   if (st == F3R_OK) st = create_sensors(s, err);
   if (st == F3R_OK) st = create_check(s, err);
@@ -109,6 +121,7 @@ void f3r_session_close(f3r_session* s) {
 const f3r_scene* f3r_session_scene(const f3r_session* s) { return &s->scene; }
 const f3r_model* f3r_session_model(const f3r_session* s) { return s->model; }
 const f3r_accuracy_choice* f3r_session_choice(const f3r_session* s) { return &s->choice; }
+double f3r_session_choose_cpu(const f3r_session* s) { return s->choose_cpu; }
 f3r_sim* f3r_session_sim(f3r_session* s) { return s->sim; }
 const f3r_sensors* f3r_session_sensors(const f3r_session* s) { return s->sensors; }
 long f3r_session_periods(const f3r_session* s) { return s->periods; }
