@@ -8,7 +8,8 @@ usage: test_docs.py [--junit FILE] [--root DIR]
      the repository (anchors into Markdown files are checked against their headings)
   b  every field the scene loader accepts (src/core/scene/scene_yaml.c, the input names of
      src/core/scene/scene.c) appears in docs/scenes.md
-  c  README.md has at most 200 lines and opens with the two set-up commands
+  c  README.md has at most 200 lines, opens with the two set-up commands, and its count of
+     invalid scenes is the corpus's
   d  no tracked file cites a path outside the repository (the shared folder beside it, its
      model notes)
 
@@ -203,6 +204,13 @@ class Readme(unittest.TestCase):
         block = [line for line in self.lines[first + 1:end] if line.strip()]
         self.assertEqual([line.split("#")[0].strip() for line in block], README_COMMANDS,
                          "README.md: the first code block is the two set-up commands")
+
+
+    def test_c3_the_invalid_scene_count_is_the_corpus(self):
+        corpus = [f for f in os.listdir(os.path.join(ROOT, "test", "invalid_scenes"))
+                  if f.endswith(".yaml")]
+        said = re.findall(r"(\d+) invalid ones", " ".join(self.lines))
+        self.assertEqual(said, [str(len(corpus))], "README.md: the invalid scenes' count")
 
 
 def suite_tests(suite):
