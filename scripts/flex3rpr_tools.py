@@ -97,15 +97,20 @@ def yaml_value(value):
 
 
 def write_junit(path, suite, cases):
-    """JUnit XML: cases are (classname, name, failure) with failure None or its text; a
+    """JUnit XML: cases are (classname, name, failure) with failure None or its text, or
+    (classname, name, None, skipped) with skipped the reason a case could not run here (a
+    <skipped> element: counted as neither passed nor failed, and listed by the CI's count). A
     failure's text goes in its message attribute (its last 2000 characters) and body."""
     failures = sum(1 for c in cases if c[2])
+    skipped = sum(1 for c in cases if len(c) > 3 and c[3])
     root = ET.Element("testsuite", name=suite, tests=str(len(cases)), errors="0", failures=str(failures),
-                      skipped="0")
-    for classname, name, failure in cases:
+                      skipped=str(skipped))
+    for classname, name, failure, *skip in cases:
         case = ET.SubElement(root, "testcase", classname=classname, name=name)
         if failure:
             ET.SubElement(case, "failure", message=failure[-2000:]).text = failure
+        elif skip and skip[0]:
+            ET.SubElement(case, "skipped", message=skip[0])
     os.makedirs(os.path.dirname(os.path.abspath(path)), exist_ok=True)
     ET.ElementTree(root).write(path, encoding="utf-8", xml_declaration=True)
     return failures
@@ -120,8 +125,9 @@ def run_unittest(test_case_classes, junit_path, suite_name):
     result = unittest.TextTestRunner(verbosity=2, stream=sys.stdout).run(suite)
     if junit_path:
         bad = {t.id(): text for t, text in result.failures + result.errors}
-        cases = [(f"{suite_name}.{test_id.split('.')[-2]}", test_id.split(".")[-1], bad.get(test_id))
-                 for test_id in ids]
+        skips = {t.id(): reason for t, reason in result.skipped}
+        cases = [(f"{suite_name}.{test_id.split('.')[-2]}", test_id.split(".")[-1], bad.get(test_id),
+                  skips.get(test_id)) for test_id in ids]
         # a failed setUpClass or tearDownClass belongs to no test
         cases += [(suite_name, test_id.split(" ")[0], text) for test_id, text in bad.items() if test_id not in ids]
         write_junit(junit_path, suite_name, cases)

@@ -1,5 +1,7 @@
 """Counts test cases in the JUnit XML files under one or more folders, each given with the exit
-code of the ctest run that wrote it; prints 'N passed, N failed' last. A failed case is printed
+code of the ctest run that wrote it; prints 'N passed, N failed' last. A skipped case (one that
+could not run here: catkin_tools missing, a shallow clone) is neither: each is listed as SKIPPED
+with its reason, and their count comes before the last line. A failed case is printed
 with the name of the folder it was found under (scripts/test gives each CI stage its own folder,
 so the last lines of a CI log name the stage that failed). Exits non-zero when any case failed,
 no case ran, or a ctest run failed.
@@ -28,6 +30,7 @@ def label(folder):
 
 
 passed = failed = 0
+skipped = []  # (where, why)
 shown = set()  # failure messages printed: each once
 for folder, ctest_rc in runs:
     failed_here = failed
@@ -53,11 +56,19 @@ for folder, ctest_rc in runs:
                     for line in lines:
                         print(f"    {line[:300]}")
                     shown.add(lines)
-            elif case.find("skipped") is None:
+            elif case.find("skipped") is not None:
+                skipped.append((f"[{label(folder)}] {xml.parent.name}/{xml.name}: "
+                                f"{case.get('classname')}.{case.get('name')}",
+                                case.find("skipped").get("message") or ""))
+            else:
                 passed += 1
     if ctest_rc != 0 and failed == failed_here:
         failed += 1
         print(f"FAILED [{label(folder)}] a run exited with {ctest_rc} but left no failed case: "
               f"a crash or a timeout (see its log under build/)")
+for where, why in skipped:
+    print(f"SKIPPED {where}: {why}")
+if skipped:
+    print(f"{stage + ': ' if stage else ''}{len(skipped)} skipped (neither passed nor failed)")
 print(f"{stage + ': ' if stage else ''}{passed} passed, {failed} failed")
 sys.exit(1 if failed or passed == 0 else 0)

@@ -12,6 +12,8 @@ usage: test_docs.py [--junit FILE] [--root DIR]
      invalid scenes is the corpus's
   d  no tracked file cites a path outside the repository (the shared folder beside it, its
      model notes)
+  e  every patch kept as an experiment (*.patch) names the commit it is pinned to on its first
+     line ("Pinned: COMMIT") and applies there (git apply --check on that commit's files)
 
 Exit 0 when all pass, 1 otherwise; --junit FILE writes JUnit XML as the other Python suites do.
 Needs only python3 and git (without git, every *.md outside build/ and .git/ is checked).
@@ -185,6 +187,39 @@ class Scenes(unittest.TestCase):
         self.assertEqual(missing, [], "docs/scenes.md does not name: %s" % ", ".join(missing))
 
 
+class Patches(unittest.TestCase):
+    def test_e_every_patch_applies_to_its_pinned_commit(self):
+        import shutil
+        import tempfile
+        patches = [f for f in tracked_files() if f.endswith(".patch")]
+        self.assertTrue(patches, "no patches found: the check would pass on nothing")
+        for name in patches:
+            path = os.path.join(ROOT, name)
+            with open(path, encoding="utf-8") as f:
+                first = f.readline().split()
+            self.assertEqual(len(first), 2, "%s: the first line is 'Pinned: COMMIT'" % name)
+            self.assertEqual(first[0], "Pinned:", "%s: the first line is 'Pinned: COMMIT'" % name)
+            known = subprocess.run(["git", "-C", ROOT, "cat-file", "-e", first[1] + "^{commit}"],
+                                   capture_output=True)
+            if known.returncode != 0:  # a shallow clone: say so, do not pass
+                self.skipTest("%s: commit %s is not in this clone (shallow?)" % (name, first[1]))
+            files = re.findall(r"^--- a/(\S+)$", open(path, encoding="utf-8").read(), re.M)
+            tmp = tempfile.mkdtemp()
+            try:
+                for f in files:
+                    text = subprocess.run(["git", "-C", ROOT, "show", "%s:%s" % (first[1], f)],
+                                          capture_output=True, check=True).stdout
+                    os.makedirs(os.path.dirname(os.path.join(tmp, f)), exist_ok=True)
+                    with open(os.path.join(tmp, f), "wb") as out:
+                        out.write(text)
+                applied = subprocess.run(["git", "apply", "--check", path], cwd=tmp,
+                                         capture_output=True, text=True)
+                self.assertEqual(applied.returncode, 0, "%s at %s: %s" % (name, first[1],
+                                                                          applied.stderr))
+            finally:
+                shutil.rmtree(tmp)
+
+
 class Readme(unittest.TestCase):
     def setUp(self):
         self.lines = open(os.path.join(ROOT, "README.md"), encoding="utf-8").read().split("\n")
@@ -231,12 +266,15 @@ def run_junit(classes, junit_path, suite_name):
         root = ET.Element("testsuite", name=suite_name, tests=str(result.testsRun),
                           failures=str(len(result.failures)), errors=str(len(result.errors)))
         bad = {t.id(): text for t, text in result.failures + result.errors}
+        skips = {t.id(): reason for t, reason in result.skipped}
         for test_id in ids:
             parts = test_id.split(".")
             case = ET.SubElement(root, "testcase", classname="%s.%s" % (suite_name, parts[-2]),
                                  name=parts[-1])
             if test_id in bad:
                 ET.SubElement(case, "failure", message=bad[test_id][-4000:])
+            elif test_id in skips:
+                ET.SubElement(case, "skipped", message=skips[test_id])
         for test_id, text in bad.items():
             if test_id not in ids:
                 case = ET.SubElement(root, "testcase", classname=suite_name, name=test_id.split(" ")[0])
@@ -254,7 +292,7 @@ def main():
     args = ap.parse_args()
     if args.root:
         ROOT = os.path.abspath(args.root)
-    return run_junit([Links, Scenes, Readme], args.junit, "docs")
+    return run_junit([Links, Scenes, Readme, Patches], args.junit, "docs")
 
 
 if __name__ == "__main__":
