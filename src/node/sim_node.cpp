@@ -180,10 +180,8 @@ bool SimNode::Step(double period) {
         f3r_sim_time(sim_), err.message);
     return false;
   }
-  periods_ = f3r_session_periods(session_);
-  // the period's end on the session's grid, as the session's own check takes it (the run's
-  // output time may differ from it by a rounding)
-  verifier_->Period(forces.data(), static_cast<double>(periods_) * period,
+  // the period's end on the session's grid: the time the session gives its own check
+  verifier_->Period(forces.data(), static_cast<double>(f3r_session_periods(session_)) * period,
                     f3r_sim_outputs(sim_)->q + F3R_Q_X);
   return true;
 }
@@ -292,7 +290,6 @@ void SimNode::Restart(RunLoop* loop) {
   if (f3r_session_reset(session_, &err) != F3R_OK)
     ROS_ERROR("flex3rpr_node: reset failed: %s", err.message);
   verifier_->Reset();
-  periods_ = 0;
   loop->was_running = false;
   info_.last_error.clear();
   info_.outside_stroke = {};

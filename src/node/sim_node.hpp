@@ -96,7 +96,6 @@ class SimNode {
   // ~verify's thread; destroyed before params_ closes the session whose check it steps
   std::unique_ptr<ClosedLoopVerifier> verifier_;
   double phi_p_ = 0.0;
-  long periods_ = 0;
   double last_published_t_ = -1.0;   // simulated time of the last full Publish (with /tf)
   double waiting_since_ = -1.0;      // lockstep: wall s when the present period began to wait
   double last_republish_ = -1.0;     // lockstep: wall s the waiting state was last sent

@@ -63,14 +63,16 @@ static f3r_status open_loaded(f3r_session* s, const f3r_session_options* options
   s->choose_cpu = cpu_seconds() - start;
   if (st == F3R_OK) st = f3r_model_create(&s->scene, &s->model, err);
   if (st != F3R_OK || options->model_only) return st;
-  if (st == F3R_OK) st = create_sim(s, err);
+  st = create_sim(s, err);
   if (st == F3R_OK) st = create_sensors(s, err);
   if (st == F3R_OK) st = create_check(s, err);
   return st;
 }
 
-f3r_status f3r_session_open(const char* scene_path, const f3r_session_options* options,
-                            f3r_session** out, f3r_error* err) {
+/* Open from a scene file (scene NULL) or from a scene loaded already (copied). */
+static f3r_status open_session(const char* scene_path, const f3r_scene* scene,
+                               const f3r_session_options* options, f3r_session** out,
+                               f3r_error* err) {
   *out = NULL;
   const f3r_session_options none = {0};
   if (!options) options = &none;
@@ -78,7 +80,8 @@ f3r_status f3r_session_open(const char* scene_path, const f3r_session_options* o
   if (!s) return f3r_error_set(err, F3R_ERR_MEMORY, "no memory for a session");
   s->scene = f3r_default_scene();
   const f3r_scene_options source = {options->accuracy, options->overrides, options->override_count};
-  f3r_status st = f3r_scene_load_with(scene_path, &source, &s->scene, err);
+  f3r_status st = scene ? f3r_scene_copy(&s->scene, scene, err)
+                        : f3r_scene_load_with(scene_path, &source, &s->scene, err);
   if (st == F3R_OK) st = open_loaded(s, options, err);
   if (st != F3R_OK) {
     f3r_session_close(s);
@@ -88,22 +91,14 @@ f3r_status f3r_session_open(const char* scene_path, const f3r_session_options* o
   return F3R_OK;
 }
 
+f3r_status f3r_session_open(const char* scene_path, const f3r_session_options* options,
+                            f3r_session** out, f3r_error* err) {
+  return open_session(scene_path, NULL, options, out, err);
+}
+
 f3r_status f3r_session_open_scene(const f3r_scene* scene, const f3r_session_options* options,
                                   f3r_session** out, f3r_error* err) {
-  *out = NULL;
-  const f3r_session_options none = {0};
-  if (!options) options = &none;
-  f3r_session* s = calloc(1, sizeof *s);
-  if (!s) return f3r_error_set(err, F3R_ERR_MEMORY, "no memory for a session");
-  s->scene = f3r_default_scene();
-  f3r_status st = f3r_scene_copy(&s->scene, scene, err);
-  if (st == F3R_OK) st = open_loaded(s, options, err);
-  if (st != F3R_OK) {
-    f3r_session_close(s);
-    return st;
-  }
-  *out = s;
-  return F3R_OK;
+  return open_session(NULL, scene, options, out, err);
 }
 
 void f3r_session_close(f3r_session* s) {
