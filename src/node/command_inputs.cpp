@@ -61,8 +61,8 @@ std::string CommandInputs::ResolveFrame(const std::string& frame, Rotation* to_b
     tf_buffer_.reset(new tf2_ros::Buffer());
     tf_listener_.reset(new tf2_ros::TransformListener(*tf_buffer_));  // its own spin thread
     // Give the listener a moment to hear /tf_static and /tf; in wall time, because simulated
-    // time stands still while this loop waits.
-    const ros::WallTime until = ros::WallTime::now() + ros::WallDuration(0.5);
+    // time stands still while this loop waits. 0.5 s was too short on a loaded 2-core machine.
+    const ros::WallTime until = ros::WallTime::now() + ros::WallDuration(2.0);
     while (ros::WallTime::now() < until && !tf_buffer_->canTransform(f.base, frame, ros::Time(0)))
       ros::WallDuration(0.01).sleep();
   }
