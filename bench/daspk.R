@@ -1,7 +1,7 @@
 # DASPK (R deSolve) on flex3rpr's compiled residual, for the work-precision benchmark
 # (bench/peers.py runs it). The residual F(t, y, y') and its Jacobian dF/dy + cj dF/dy'
 # are those of the core, called by DASPK directly through deSolve's compiled-code interface
-# (src/bench/f3r_peer.c: f3r_peer_desolve_res, f3r_peer_desolve_jac); R only drives.
+# (bench/c/f3r_peer.c: f3r_peer_desolve_res, f3r_peer_desolve_jac); R only drives.
 #
 #   Rscript bench/daspk.R LIB SCENE FORMULATION RTOL ATOL OUT_CSV [JACOBIAN [OUTPUT_STEP]]
 #     LIB          path of libf3r_peer.so

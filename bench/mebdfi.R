@@ -2,7 +2,7 @@
 # (bench/peers.py runs it): the solver and the form of the paper. The residual
 # F(t, y, y') = [q' - v; W' - Q.v; M v' + h + k - Q - G^T lambda; g(q)] and its exact Jacobian are
 # the core's, called by MEBDFI directly through deTestSet's compiled-code interface
-# (src/bench/f3r_peer.c: f3r_peer_desolve_res, f3r_peer_mebdfi_jac); R only drives.
+# (bench/c/f3r_peer.c: f3r_peer_desolve_res, f3r_peer_mebdfi_jac); R only drives.
 #
 #   Rscript bench/mebdfi.R LIB SCENE index3 RTOL ATOL OUT_CSV [JACOBIAN [OUTPUT_STEP]]
 #     LIB          path of libf3r_peer.so

@@ -3,7 +3,7 @@
 Imported by bench/work_precision (plain /usr/bin/python3, Debian's numpy and scipy):
   ensure_installed()                      apt-get installs r-cran-desolve and python3-scipy if missing
                                           (not deTestSet: without it run_mebdfi fails, the rest runs)
-  build_library()                         path of libf3r_peer.so (src/bench/f3r_peer.c): the CMake
+  build_library()                         path of libf3r_peer.so (bench/c/f3r_peer.c): the CMake
                                           target's if built, else compiled here with gcc into build/peer/
   run_daspk(scene, rtol, atol, formulation="dae"|"minimal", jacobian=True)
                                           DASPK of R's deSolve calling the core's residual F(t, y, y')
@@ -54,7 +54,7 @@ import time
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 CMAKE_LIB = os.path.join(ROOT, "build/ws/devel/lib/libf3r_peer.so")
 LOCAL_LIB = os.path.join(ROOT, "build/peer/libf3r_peer.so")
-PEER_SOURCE = os.path.join(ROOT, "src/bench/f3r_peer.c")
+PEER_SOURCE = os.path.join(ROOT, "bench/c/f3r_peer.c")
 CORE_SOURCES = ["beam_basis", "beam_modes", "constraints", "dense", "dynamics", "effects", "form_dae", "form_minimal", "form_minimal_jacobian",
                 "forward",
                 "impact", "modal", "model", "residual", "scene", "scene_overrides", "scene_yaml", "scene_yaml_reader", "status"]
@@ -141,7 +141,7 @@ def _newest_source_mtime():
 
 def build_library():
     """Path of libf3r_peer.so: the CMake target's (build/ws/devel/lib) when it is there and not
-    older than src/bench/f3r_peer.c, else build/peer/libf3r_peer.so, compiled with gcc when stale."""
+    older than bench/c/f3r_peer.c, else build/peer/libf3r_peer.so, compiled with gcc when stale."""
     if os.path.exists(CMAKE_LIB) and os.path.getmtime(CMAKE_LIB) >= os.path.getmtime(PEER_SOURCE):
         return CMAKE_LIB
     if os.path.exists(LOCAL_LIB) and os.path.getmtime(LOCAL_LIB) >= _newest_source_mtime():

@@ -1,7 +1,7 @@
 #!/usr/bin/python3
 """What the Python module costs: a 1 kHz PD in Python against the CLI on the same commands,
 how busy batched rollouts keep the cores, and a 200-point parameter study against the
-process-per-run sweep (scripts/sweep) on the same runs. Prints a Markdown report; timings are
+process-per-run sweep (nodes/sweep) on the same runs. Prints a Markdown report; timings are
 CPU and wall times of this machine, never asserted by a test.
 
   source build/ws/devel/setup.bash; bench/python_module.py [--quick] [--out FILE.md]
@@ -18,8 +18,8 @@ import time
 import numpy as np
 
 ROOT = os.path.dirname(os.path.dirname(os.path.realpath(__file__)))
-# flex3rpr_tools, the module the scripts share, lives in scripts/ beside the rosrun tools.
-sys.path.insert(0, os.path.join(ROOT, "scripts"))
+# flex3rpr_tools, the module the scripts share, lives in nodes/ beside the rosrun tools.
+sys.path.insert(0, os.path.join(ROOT, "nodes"))
 import flex3rpr_tools as T  # noqa: E402
 
 flex3rpr = None  # the built module, imported in main() once the arguments are read (--help needs no build)
@@ -112,7 +112,7 @@ def parameter_study(points, workdir):
                    json.dumps(moduli.tolist())))
     out = os.path.join(workdir, "sweep")
     wall = time.perf_counter()
-    subprocess.run([sys.executable, os.path.join(ROOT, "scripts", "sweep"), spec, "--out", out],
+    subprocess.run([sys.executable, os.path.join(ROOT, "nodes", "sweep"), spec, "--out", out],
                    check=True, stdout=subprocess.DEVNULL)
     sweep_wall = time.perf_counter() - wall
     with open(os.path.join(out, "results.csv")) as f:
@@ -159,7 +159,7 @@ def main():
                   "busy |" % (n, os.cpu_count(), wall, cpu, 100 * busy)]
         points = 20 if args.quick else 200
         sweep_wall, study_wall, apart = parameter_study(points, work)
-        lines += ["| %d-point study, scripts/sweep (a process a run) | %.1f s wall |"
+        lines += ["| %d-point study, nodes/sweep (a process a run) | %.1f s wall |"
                   % (points, sweep_wall),
                   "| the same with flex3rpr.study | %.1f s wall (%.1fx faster); final x_p apart "
                   "by %.1e m |" % (study_wall, sweep_wall / study_wall, apart)]

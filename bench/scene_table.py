@@ -9,8 +9,8 @@ import os
 import sys
 import tempfile
 
-# flex3rpr_tools, the module the scripts share, lives in scripts/ beside the rosrun tools.
-sys.path.insert(0, os.path.join(os.path.dirname(os.path.dirname(os.path.realpath(__file__))), "scripts"))
+# flex3rpr_tools, the module the scripts share, lives in nodes/ beside the rosrun tools.
+sys.path.insert(0, os.path.join(os.path.dirname(os.path.dirname(os.path.realpath(__file__))), "nodes"))
 import flex3rpr_tools as T  # noqa: E402
 
 SHORTEN = {"free_vibration_long.yaml": 2.0, "stiff_high_modes.yaml": 0.01}

@@ -7,4 +7,4 @@ set(F3R_CLI_SOURCES
   src/cli/sensor_columns.c)
 set(F3R_CORE_GTESTS beam_modes beam_basis static_correction stages residual_jacobian linear_solver
     simulation scene_files effects hard_cases accuracy set_state state_space csv_number end_stops
-    stop_stress sensors session measured_run)
+    stop_stress sensors session measured_run kinds)

@@ -31,8 +31,8 @@ import time
 
 # the repository itself, not the workspace's folder of links to it (catkin_lint does not walk links)
 ROOT = os.path.dirname(os.path.dirname(os.path.realpath(__file__)))
-sys.path.insert(0, os.path.join(ROOT, "scripts"))
-import flex3rpr_tools  # noqa: E402  (scripts/: JUnit)
+sys.path.insert(0, os.path.join(ROOT, "nodes"))
+import flex3rpr_tools  # noqa: E402  (nodes/: JUnit)
 # The sanitizers' settings pass into the clean environment (an instrumented node needs them).
 KEEP = ("HOME", "ROS_HOME", "ASAN_OPTIONS", "LSAN_OPTIONS", "UBSAN_OPTIONS")
 # what a devel space's setup sets (catkin's setup_cached.sh)
@@ -139,8 +139,8 @@ def case_catkin_build():
 
 # Executables that work on the source tree and its build/ folder and so are not installed; the
 # pragma in CMakeLists.txt silences catkin_lint on exactly these. They are sorted by folder: the
-# benchmarks in bench/, the CI helpers in scripts/ci/, and in scripts/ itself, the folder of what
-# rosrun starts, only the commands a user runs in a checkout (the rest of scripts/ is installed).
+# benchmarks in bench/, the CI helpers in scripts/ci/, and the commands a user runs in a checkout
+# (scripts/; what rosrun starts is in nodes/, all installed).
 CHECKOUT_FOLDERS = ("bench/", "scripts/ci/")
 CHECKOUT_COMMANDS = {"scripts/install_deps", "scripts/build", "scripts/build_sundials", "scripts/demo"}
 

@@ -84,7 +84,8 @@ TEST(Allocation, NoHeapAllocationWhileSensing) {
   ASSERT_EQ(f3r_scene_load(ScenePath("paper_sim3_fixed_free.yaml").c_str(), &s, &err), F3R_OK);
   auto m = MakeModel(s);
   f3r_sensors_scene c{};
-  for (f3r_sensor_scene* k : {&c.encoders, &c.strain_gauges, &c.accelerometer}) {
+  for (f3r_sensor_scene* k : {&c.kind[F3R_SENSOR_ENCODERS], &c.kind[F3R_SENSOR_STRAIN],
+                              &c.kind[F3R_SENSOR_ACCELEROMETER]}) {
     f3r_sensor_scene_defaults(k);
     k->delay = 3;
     k->noise[0] = k->noise[1] = 1e-3;

@@ -169,7 +169,7 @@ namespace {
 std::string Generate(const std::string& args, const std::string& out) {
   const std::string dir = F3R_SOURCE_DIR;
   const std::string cmd = "F3R_CLI=" + std::string(F3R_CLI) + " /usr/bin/python3 " + dir +
-                          "/scripts/make_urdf.py " + args + " --out " + out;
+                          "/nodes/make_urdf.py " + args + " --out " + out;
   return std::system(cmd.c_str()) == 0 ? out : "";
 }
 
@@ -179,7 +179,7 @@ TEST(Urdf, PassesCheckUrdfAndIsWhatItsGeneratorWrites) {
   const std::string fresh = Generate("", "/tmp/f3r_urdf_check.urdf");
   ASSERT_FALSE(fresh.empty());
   EXPECT_EQ(std::system(("cmp -s " + fresh + " " + dir + "/urdf/flex3rpr.urdf").c_str()), 0)
-      << "urdf/flex3rpr.urdf is out of date: run scripts/make_urdf.py --out urdf/flex3rpr.urdf";
+      << "urdf/flex3rpr.urdf is out of date: run nodes/make_urdf.py --out urdf/flex3rpr.urdf";
 }
 
 // A generated URDF for other stations, a prefix and another scene: valid, names unique, every

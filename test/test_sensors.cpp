@@ -41,9 +41,9 @@ SensorsPtr MakeSensors(const f3r_model* m, const f3r_sensors_scene& config) {
 
 f3r_sensors_scene AllOn() {
   f3r_sensors_scene c{};
-  f3r_sensor_scene_defaults(&c.encoders);
-  f3r_sensor_scene_defaults(&c.strain_gauges);
-  f3r_sensor_scene_defaults(&c.accelerometer);
+  f3r_sensor_scene_defaults(&c.kind[F3R_SENSOR_ENCODERS]);
+  f3r_sensor_scene_defaults(&c.kind[F3R_SENSOR_STRAIN]);
+  f3r_sensor_scene_defaults(&c.kind[F3R_SENSOR_ACCELEROMETER]);
   return c;
 }
 
@@ -107,7 +107,7 @@ TEST(Sensors, StrainGaugesMatchTheCurvatureOfTheDeflectionAtTheClamp) {
   for (int k = 1; k <= 20; ++k) {
     ASSERT_EQ(f3r_sim_advance(sim.get(), k * 5e-4, &err), F3R_OK) << err.message;
     const f3r_outputs* out = f3r_sim_outputs(sim.get());
-    double truth[F3R_SENSOR_KINDS][F3R_SENSOR_MAX_CHANNELS];
+    double truth[F3R_SENSOR_MAX_KINDS][F3R_SENSOR_MAX_CHANNELS];
     ASSERT_EQ(f3r_sensors_truth(sensors.get(), out, truth, &err), F3R_OK) << err.message;
     for (int i = 0; i < 3; ++i) {
       const double fd = FiniteDifferenceStrain(m.get(), out->q, i, 1e-4);
@@ -154,7 +154,7 @@ TEST(Sensors, AccelerometerMatchesTheDifferenceOfThePlatformVelocity) {
       at[n] = *f3r_sim_outputs(sim.get());
     }
     const f3r_outputs& now = at[2];
-    double truth[F3R_SENSOR_KINDS][F3R_SENSOR_MAX_CHANNELS];
+    double truth[F3R_SENSOR_MAX_KINDS][F3R_SENSOR_MAX_CHANNELS];
     ASSERT_EQ(f3r_sensors_truth(sensors.get(), &now, truth, &err), F3R_OK) << err.message;
     auto diff = [&](int j) {
       return (8 * (at[3].v[j] - at[1].v[j]) - (at[4].v[j] - at[0].v[j])) / (12 * h);
@@ -195,7 +195,7 @@ std::vector<Taken> Record(const f3r_model* m, const f3r_sensors_scene& config, i
       throw std::runtime_error(err.message);
     const f3r_outputs* out = f3r_sim_outputs(sim.get());
     if (truth) {
-      double tv[F3R_SENSOR_KINDS][F3R_SENSOR_MAX_CHANNELS];
+      double tv[F3R_SENSOR_MAX_KINDS][F3R_SENSOR_MAX_CHANNELS];
       f3r_sensors_truth(sensors.get(), out, tv, &err);
       truth->emplace_back(tv[kind], tv[kind] + F3R_SENSOR_MAX_CHANNELS);
     }
@@ -216,13 +216,13 @@ bool SameBits(const std::vector<double>& a, const std::vector<double>& b) {
 TEST(Sensors, NoiseIsDeterministicPerSeedAndIndependentOfTheUpdateCalls) {
   auto m = MakeModel(VibratingScene());
   f3r_sensors_scene c = AllOn();
-  c.strain_gauges.noise[0] = 1e-6;
-  c.strain_gauges.seed = 7;
+  c.kind[F3R_SENSOR_STRAIN].noise[0] = 1e-6;
+  c.kind[F3R_SENSOR_STRAIN].seed = 7;
   const auto a = Record(m.get(), c, F3R_SENSOR_STRAIN, 1, 0.01, nullptr);
   const auto b = Record(m.get(), c, F3R_SENSOR_STRAIN, 1, 0.01, nullptr);
   // updated at every 1 ms only: the same samples, bit for bit
   const auto sparse = Record(m.get(), c, F3R_SENSOR_STRAIN, 10, 0.01, nullptr);
-  c.strain_gauges.seed = 8;
+  c.kind[F3R_SENSOR_STRAIN].seed = 8;
   const auto other = Record(m.get(), c, F3R_SENSOR_STRAIN, 1, 0.01, nullptr);
   ASSERT_EQ(a.size(), 11u);  // samples 0..10 at 1 kHz over 10 ms
   ASSERT_EQ(sparse.size(), a.size());
@@ -253,9 +253,9 @@ TEST(Sensors, TheNormalDrawsAreStandardAndIndependentOfChannelAndSeed) {
 TEST(Sensors, RateAndDelay) {
   auto m = MakeModel(VibratingScene());
   f3r_sensors_scene c{};
-  f3r_sensor_scene_defaults(&c.accelerometer);
-  c.accelerometer.rate = 2000;  // every 5 outputs of 0.1 ms
-  c.accelerometer.delay = 3;
+  f3r_sensor_scene_defaults(&c.kind[F3R_SENSOR_ACCELEROMETER]);
+  c.kind[F3R_SENSOR_ACCELEROMETER].rate = 2000;  // every 5 outputs of 0.1 ms
+  c.kind[F3R_SENSOR_ACCELEROMETER].delay = 3;
   std::vector<std::vector<double>> truth;
   const auto got = Record(m.get(), c, F3R_SENSOR_ACCELEROMETER, 1, 0.01, &truth);
   ASSERT_EQ(got.size(), 21u);  // samples due at 0, 0.5 ms, ..., 10 ms
@@ -270,15 +270,15 @@ TEST(Sensors, RateAndDelay) {
 TEST(Sensors, QuantisationRoundsToTheResolution) {
   auto m = MakeModel(VibratingScene());
   f3r_sensors_scene c{};
-  f3r_sensor_scene_defaults(&c.encoders);
-  c.encoders.resolution[0] = 1e-4;  // 0.1 mm
-  c.encoders.resolution[1] = 2 * M_PI / 4096;
+  f3r_sensor_scene_defaults(&c.kind[F3R_SENSOR_ENCODERS]);
+  c.kind[F3R_SENSOR_ENCODERS].resolution[0] = 1e-4;  // 0.1 mm
+  c.kind[F3R_SENSOR_ENCODERS].resolution[1] = 2 * M_PI / 4096;
   std::vector<std::vector<double>> truth;
   const auto got = Record(m.get(), c, F3R_SENSOR_ENCODERS, 1, 0.005, &truth);
   ASSERT_EQ(got.size(), 6u);
   for (size_t n = 0; n < got.size(); ++n)
     for (int ch = 0; ch < 6; ++ch) {
-      const double res = c.encoders.resolution[ch / 3], x = got[n].value[ch];
+      const double res = c.kind[F3R_SENSOR_ENCODERS].resolution[ch / 3], x = got[n].value[ch];
       EXPECT_LT(std::fabs(x / res - std::nearbyint(x / res)), 1e-9);
       EXPECT_LE(std::fabs(x - truth[n * 10][ch]), 0.5 * res * (1 + 1e-12));
     }
@@ -287,7 +287,7 @@ TEST(Sensors, QuantisationRoundsToTheResolution) {
 TEST(Sensors, BadFieldsAreRefusedWithTheFieldAndTheRange) {
   auto m = MakeModel(VibratingScene());
   f3r_sensors_scene c = AllOn();
-  c.strain_gauges.delay = 65;
+  c.kind[F3R_SENSOR_STRAIN].delay = 65;
   f3r_sensors* raw = nullptr;
   f3r_error err{};
   EXPECT_EQ(f3r_sensors_create(m.get(), &c, &raw, &err), F3R_ERR_SCENE);
@@ -295,14 +295,14 @@ TEST(Sensors, BadFieldsAreRefusedWithTheFieldAndTheRange) {
   EXPECT_STREQ(err.field, "sensors.strain_gauges.delay");
   EXPECT_NE(std::strstr(err.message, "0..64"), nullptr) << err.message;
   c = AllOn();
-  c.accelerometer.noise[1] = NAN;
+  c.kind[F3R_SENSOR_ACCELEROMETER].noise[1] = NAN;
   EXPECT_EQ(f3r_sensors_create(m.get(), &c, &raw, &err), F3R_ERR_SCENE);
   EXPECT_STREQ(err.field, "sensors.accelerometer.gyro_noise");
   c = AllOn();
-  c.encoders.rate = 0;
+  c.kind[F3R_SENSOR_ENCODERS].rate = 0;
   EXPECT_EQ(f3r_sensors_create(m.get(), &c, &raw, &err), F3R_ERR_SCENE);
   EXPECT_STREQ(err.field, "sensors.encoders.rate");
-  c.encoders.enabled = 0;  // a sensor that is off is not checked
+  c.kind[F3R_SENSOR_ENCODERS].enabled = 0;  // a sensor that is off is not checked
   EXPECT_EQ(f3r_sensors_create(m.get(), &c, &raw, &err), F3R_OK) << err.message;
   f3r_sensors_destroy(raw);
 }

@@ -47,7 +47,7 @@ std::vector<double> Snapshot(f3r_session* s) {
   v.insert(v.end(), o->stop_force, o->stop_force + 3);
   for (int i = 0; i < 3; ++i) v.push_back(o->stop_locked[i]);
   if (const f3r_sensors* sensors = f3r_session_sensors(s))
-    for (int k = 0; k < F3R_SENSOR_KINDS; ++k) {
+    for (int k = 0; k < f3r_sensor_kind_count(); ++k) {
       const f3r_sensor_reading* r = f3r_sensors_reading(sensors, k);
       v.insert(v.end(), r->value, r->value + r->channels);
       v.push_back(static_cast<double>(r->sample));

@@ -8,6 +8,7 @@
 #include <stddef.h>
 
 #include "flex3rpr/coords.h"
+#include "flex3rpr/kinds.h"
 #include "flex3rpr/status.h"
 
 #ifdef __cplusplus
@@ -145,10 +146,10 @@ typedef struct {
   int seed;             /* 0..2147483647, default 1 */
 } f3r_sensor_scene;
 
+/* Each sensor kind's settings, indexed as the kinds' table (kinds.h; sensors.h names the
+ * built-ins: F3R_SENSOR_ENCODERS, _STRAIN, _ACCELEROMETER). */
 typedef struct {
-  f3r_sensor_scene encoders;      /* rho_i and theta_i of the three legs */
-  f3r_sensor_scene strain_gauges; /* bending strain at each beam's root */
-  f3r_sensor_scene accelerometer; /* the platform's specific force and angular rate */
+  f3r_sensor_scene kind[F3R_SENSOR_MAX_KINDS];
 } f3r_sensors_scene;
 
 /* A sensor's defaults (rate 1000 Hz, seed 1, no delay, noise or quantisation), enabled. */

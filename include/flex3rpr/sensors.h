@@ -1,7 +1,9 @@
 /* f3r_sensors: the scene's simulated sensors (scene.h f3r_sensors_scene, docs/scenes.md), shared
  * by the CLI, the node and any other shell: sampling, Gaussian noise, quantisation and delay.
+ * The kinds, their channels and names are the table of kinds.h; what each measures is
+ * sensor_measures.c's (f3r_sensors_register adds one).
  *
- * Channels of each sensor (F3R_SENSOR_*):
+ * Channels of the built-in sensors (F3R_SENSOR_*):
  *   encoders       6: rho_1..3 (m), theta_1..3 (rad)
  *   strain gauges  3: the bending strain at the root (clamp, x = 0) of link 1..3,
  *                     eps_i = (d/2) w_i''(0), w_i''(0) = sum_j psi_j''(0) eta_j / l^2: the axial
@@ -31,17 +33,35 @@
 extern "C" {
 #endif
 
-enum {
-  F3R_SENSOR_ENCODERS = 0,
-  F3R_SENSOR_STRAIN = 1,
-  F3R_SENSOR_ACCELEROMETER = 2,
-  F3R_SENSOR_KINDS = 3
-};
-#define F3R_SENSOR_MAX_CHANNELS 6
+/* The built-in kinds' indices in the table (sensor_kinds.c). */
+enum { F3R_SENSOR_ENCODERS = 0, F3R_SENSOR_STRAIN = 1, F3R_SENSOR_ACCELEROMETER = 2 };
+
+/* What a measurement sees: the state, its accelerations when the kind asks for them (solved once
+ * per update for all kinds), and the constants its prepare computed for the model. */
+#define F3R_SENSOR_CONSTANTS (3 * F3R_MAX_MODES)
+typedef struct {
+  const f3r_model* model;
+  const f3r_outputs* out;
+  const double* a;         /* q'' at out.t; NULL unless needs_accelerations */
+  const double* constants; /* F3R_SENSOR_CONSTANTS, from prepare (zeros without one) */
+} f3r_sensor_input;
+
+typedef struct {
+  int needs_accelerations;
+  void (*prepare)(const f3r_model* model, double* constants); /* NULL: none */
+  void (*measure)(const f3r_sensor_input* in, double* value); /* the exact channels */
+} f3r_sensor_measure;
+
+/* Adds a sensor kind: its descriptor to the table (f3r_sensor_kind_add) and its measurement, at
+ * the index it returns in *index; scenes then name it under sensors:, and every shell lists its
+ * channels. F3R_ERR_ARGUMENT when the table refuses it. Not thread-safe: before the first scene.
+ * Both must outlive every scene and simulation. */
+f3r_status f3r_sensors_register(const f3r_sensor_kind* kind, const f3r_sensor_measure* measure,
+                                int* index, f3r_error* err);
 
 typedef struct {
   int enabled;
-  int channels;                          /* 6, 3, 3 */
+  int channels;                          /* the kind's (kinds.h) */
   long sample;                           /* k of the sample reported; -1 before the first */
   double measured_at;                    /* t of the state it was taken from (s) */
   long updated_at_sample;                /* the newest sample taken (k), -1 before the first */
@@ -71,13 +91,21 @@ int f3r_sensors_any(const f3r_sensors_scene* config);
  * a time before the last update's, F3R_ERR_SINGULAR when the accelerations cannot be solved. */
 f3r_status f3r_sensors_update(f3r_sensors* sensors, const f3r_outputs* out, f3r_error* err);
 
-/* The reading of sensor kind (F3R_SENSOR_*). */
+/* The reading of sensor kind (F3R_SENSOR_*, or a registered one's index); NULL outside the
+ * table. */
 const f3r_sensor_reading* f3r_sensors_reading(const f3r_sensors* sensors, int kind);
 
+/* The enabled sensors' channels as columns, kind by kind in the table's order: the CLI's CSV,
+ * Python's Sim.sensors. count, the name of column i (kinds.h column), and the readings into
+ * values (count of them). */
+int f3r_sensors_columns(const f3r_sensors* sensors);
+const char* f3r_sensors_column_name(const f3r_sensors* sensors, int column);
+int f3r_sensors_row(const f3r_sensors* sensors, double* values);
+
 /* The exact values every channel would measure at out (no noise, quantisation or delay), each
- * sensor's channels in value[kind][...]. */
+ * sensor's channels in value[kind][...] (enabled kinds only). */
 f3r_status f3r_sensors_truth(f3r_sensors* sensors, const f3r_outputs* out,
-                             double value[F3R_SENSOR_KINDS][F3R_SENSOR_MAX_CHANNELS],
+                             double value[F3R_SENSOR_MAX_KINDS][F3R_SENSOR_MAX_CHANNELS],
                              f3r_error* err);
 
 /* The gauge of link i as a row over its modal coordinates: eps_i = sum_j c[j] eta_ij, c[j] =

@@ -784,7 +784,7 @@ def main():
             failures.append("%s: weights or row sums inconsistent" % t.name)
         failed_tables[t.name] = failures[before:]
     if args.junit:  # one test case a table: its order conditions at the order it claims
-        sys.path.insert(0, os.path.join(ROOT, "scripts"))  # the scripts' shared module
+        sys.path.insert(0, os.path.join(ROOT, "nodes"))  # the scripts' shared module
         import flex3rpr_tools
 
         flex3rpr_tools.write_junit(args.junit, "butcher_tables",

@@ -7,6 +7,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "flex3rpr/kinds.h"
 #include "flex3rpr/scene.h"
 
 void cli_usage(FILE* to) {
@@ -16,7 +17,7 @@ void cli_usage(FILE* to) {
       "                    [--rtol R] [--atol A] [--max-order K] [--output-step DT] [--duration "
       "T]\n"
       "                    [--fd-jacobian] [--dense-linear-solver] [--exact-kinematics]\n"
-      "                    [--ida | --erk | --dirk] [--table NAME]\n"
+      "                    [--integrator NAME] [--table NAME]   (also --NAME: --erk)\n"
       "                    [--stop-at-outputs] [--hold T:INDEX:VALUE ...]\n"
       "                    [--accuracy METRES [--no-verify] [--escalations N]]\n"
       "                    [--linear-path FILE.csv] [--linearise FILE.mat]\n"
@@ -24,7 +25,11 @@ void cli_usage(FILE* to) {
       "                    [--summary-json FILE|-]   (the summary as JSON; -: on stdout)\n"
       "       flex3rpr_sim --modal SCENE.yaml [--modal-csv FILE.csv] [--set FIELD=VALUE ...]\n"
       "       flex3rpr_sim --geometry SCENE.yaml\n"
-      "       flex3rpr_sim --check SCENE.yaml [--set FIELD=VALUE ...]   (load and build only)\n");
+      "       flex3rpr_sim --check SCENE.yaml [--set FIELD=VALUE ...]   (load and build only)\n"
+      "integrators:\n");
+  for (int k = 0; k < f3r_integrator_kind_count(); ++k)
+    fprintf(to, "  %-6s %s\n", f3r_integrator_kind_at(k)->name,
+            f3r_integrator_kind_at(k)->description);
 }
 
 /* The first failure, for the JSON summary's error: a status (f3r_status_name, or "usage" and
@@ -77,9 +82,6 @@ static const option_field switches[] = {
     {"--dense-linear-solver", offsetof(cli_options, dense_linear_solver)},
     {"--exact-kinematics", offsetof(cli_options, exact_kinematics)},
     {"--stop-at-outputs", offsetof(cli_options, stop_at_outputs)},
-    {"--ida", offsetof(cli_options, integrator_ida)},
-    {"--erk", offsetof(cli_options, integrator_erk)},
-    {"--dirk", offsetof(cli_options, integrator_dirk)},
     {"--no-verify", offsetof(cli_options, no_verify)},
 };
 static const option_field paths[] = {
@@ -134,6 +136,18 @@ static int parse_arg(int argc, char** argv, int* k, cli_options* o) {
   const char* a = argv[*k];
   const char* next = *k + 1 < argc ? argv[*k + 1] : NULL;
   const option_field* f;
+  /* --integrator NAME, and --NAME for each integrator of the table (--ida, --erk, --dirk) */
+  f3r_integrator named;
+  const char* integrator = !strcmp(a, "--integrator") ? next
+                           : !strncmp(a, "--", 2) && f3r_integrator_from_name(a + 2, &named) == 0
+                               ? a + 2
+                               : NULL;
+  if (integrator) {
+    if (integrator == next) ++*k;
+    if (o->integrator && strcmp(o->integrator, integrator)) o->integrator_conflict = 1;
+    o->integrator = integrator;
+    return 1;
+  }
   if ((f = find_option(switches, COUNT(switches), a))) {
     *(int*)((char*)o + f->offset) = 1;
     return 1;
@@ -171,8 +185,16 @@ int cli_parse_args(int argc, char** argv, cli_options* o) {
     cli_fail("usage", "no scene given");
     return 0;
   }
-  if (o->integrator_ida + o->integrator_erk + o->integrator_dirk > 1) {
-    cli_fail("usage", "give one of --ida, --erk, --dirk");
+  char names[256];
+  f3r_integrator integrator;
+  if (o->integrator && f3r_integrator_from_name(o->integrator, &integrator) != 0) {
+    cli_fail("usage", "--integrator must be one of %s, got '%s'",
+             f3r_integrator_names(names, sizeof names), o->integrator);
+    return 0;
+  }
+  if (o->integrator_conflict) {
+    cli_fail("usage", "give one integrator: --integrator NAME (one of %s) or --NAME",
+             f3r_integrator_names(names, sizeof names));
     return 0;
   }
   f3r_formulation formulation;

@@ -33,7 +33,8 @@ typedef struct {
   const char* linearise_path; /* --linearise FILE.mat: the state-space model, and FILE.json */
   const char* summary_json;   /* --summary-json FILE: the summary as JSON; "-": on stdout */
   int stop_at_outputs;
-  int integrator_ida, integrator_erk, integrator_dirk;
+  const char* integrator;  /* --integrator NAME or --NAME (kinds.h's table) */
+  int integrator_conflict; /* two different integrators given */
   const char* table;
   int n_holds;
   hold_event holds[MAX_HOLDS];

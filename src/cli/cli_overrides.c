@@ -4,6 +4,9 @@
 #include <stdio.h>
 #include <string.h>
 
+#include "flex3rpr/kinds.h"
+#include "flex3rpr/scene.h"
+
 static void add_number(override_list* l, const char* field, double value) {
   if (value > 0) snprintf(l->own[l->n_own++], sizeof l->own[0], "%s=%.17g", field, value);
 }
@@ -19,15 +22,20 @@ static void add_string(override_list* l, const char* field, const char* value) {
   snprintf(out + n, sizeof l->own[0] - n, "'");
 }
 
+int cli_integrator_minimal_only(const cli_options* o) {
+  f3r_integrator integrator;
+  if (!o->integrator || f3r_integrator_from_name(o->integrator, &integrator) != 0) return 0;
+  return !(f3r_integrator_kind_at((int)integrator)->formulations & (1u << F3R_FORMULATION_DAE));
+}
+
 /* The options' overrides, then the user's --set: applied in order, so a --set wins over an
- * option (--set solver.rtol=1e-5 --rtol 1e-6 runs at 1e-5). --erk and --dirk force the minimal
- * formulation, over --formulation but not over a --set, with force_minimal only (resolve_model). */
+ * option (--set solver.rtol=1e-5 --rtol 1e-6 runs at 1e-5). An integrator of the minimal formulation
+ * only (--erk, --dirk) forces it, over --formulation but not over a --set, with force_minimal only (resolve_model). */
 void cli_build_overrides(const cli_options* o, int force_minimal, override_list* l) {
   memset(l, 0, sizeof *l);
   if (o->formulation) add_string(l, "solver.formulation", o->formulation);
-  if (o->integrator_ida) add_string(l, "solver.integrator", "ida");
-  if (o->integrator_erk || o->integrator_dirk) {
-    add_string(l, "solver.integrator", o->integrator_erk ? "erk" : "dirk");
+  if (o->integrator) {
+    add_string(l, "solver.integrator", o->integrator);
     if (force_minimal) add_string(l, "solver.formulation", "minimal");
   }
   if (o->table) add_string(l, "solver.table", o->table);

@@ -15,9 +15,11 @@ typedef struct {
   int n_own, n_all;
 } override_list;
 
-/* The options' overrides, then the user's --set, in order (a --set wins over an option); --erk
- * and --dirk force the minimal formulation with force_minimal only. */
+/* The options' overrides, then the user's --set, in order (a --set wins over an option); an
+ * integrator of the minimal formulation only (--erk, --dirk) forces it with force_minimal only. */
 void cli_build_overrides(const cli_options* o, int force_minimal, override_list* l);
+/* 1 when the options name an integrator that integrates the minimal formulation only. */
+int cli_integrator_minimal_only(const cli_options* o);
 /* A message about an option's override names the scene instead. */
 void cli_report_load_error(const cli_options* o, const override_list* l, const f3r_error* err);
 

@@ -5,7 +5,7 @@
  *                [--accuracy METRES] [--linear-path FILE.csv] [--set FIELD=VALUE ...] ...
  *   flex3rpr_sim --modal SCENE.yaml
  *   flex3rpr_sim SCENE.yaml --linearise FILE.mat [--set ...]   (state-space export, linear.h)
- *   flex3rpr_sim --geometry SCENE.yaml   (JSON for scripts/make_urdf.py)
+ *   flex3rpr_sim --geometry SCENE.yaml   (JSON for nodes/make_urdf.py)
  *   flex3rpr_sim --check SCENE.yaml [--set ...]   (loads and builds the model only)
  * --summary-json FILE (or - for stdout, the human summary then on stderr) writes the summary's
  * numbers as JSON, units in the key names, with the error when the run fails (run_report.c). */
@@ -52,7 +52,7 @@ static f3r_session* open_session(const cli_options* o) {
    * the accuracy knob keeps: --erk and --dirk force it only when the scene does not load without
    * (a dae from the file or --formulation, which is explicit already). */
   for (int force = 0; force < 2 && !session; ++force) {
-    if (force && !o->integrator_erk && !o->integrator_dirk) break;
+    if (force && !cli_integrator_minimal_only(o)) break;
     cli_build_overrides(o, force, &overrides);
     /* a --hold table is a controller's commands, held over output steps: the knob chooses as for
      * one (the commanded relation, accuracy.excitation), as the node and Python do */

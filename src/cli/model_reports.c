@@ -9,7 +9,7 @@
 #include "flex3rpr/linear_export.h"
 #include "model_reports.h"
 
-/* The model's geometry, masses and stroke as JSON: the URDF generator (scripts/make_urdf.py)
+/* The model's geometry, masses and stroke as JSON: the URDF generator (nodes/make_urdf.py)
  * takes them from here, so that the URDF and the node's model come from one scene. */
 void f3r_cli_print_geometry(const f3r_model* model) {
   const f3r_scene* s = f3r_model_scene(model);

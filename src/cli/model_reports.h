@@ -7,7 +7,7 @@
 #include "cli_options.h"
 #include "flex3rpr/model.h"
 
-/* --geometry: geometry, masses and stroke as JSON on stdout (scripts/make_urdf.py reads it). */
+/* --geometry: geometry, masses and stroke as JSON on stdout (nodes/make_urdf.py reads it). */
 void f3r_cli_print_geometry(const f3r_model* m);
 /* --modal: the linearised natural frequencies (Hz) at the initial pose and each link's basis;
  * with csv_path (--modal-csv) also as CSV there, to 17 digits. */

@@ -7,14 +7,16 @@
 
 #include <sundials/sundials_config.h>
 
+#include "flex3rpr/kinds.h"
 #include "flex3rpr/sim.h"
 #include "summary_json.h"
 
 const char* cli_integrator_text(const cli_options* o, const f3r_scene* scene) {
-  return scene->integrator == F3R_INTEGRATOR_ERK    ? "ARKODE ERKStep"
-         : scene->integrator == F3R_INTEGRATOR_DIRK ? "ARKODE ARKStep, DIRK"
-         : o->fd_jacobian                           ? "IDA, difference-quotient Jacobian"
-                                                    : "IDA, analytic Jacobian";
+  const f3r_integrator_kind* kind = f3r_integrator_kind_at((int)scene->integrator);
+  if (!kind) return "unknown";
+  /* --fd-jacobian is IDA's choice of Newton Jacobian */
+  if (scene->integrator != F3R_INTEGRATOR_IDA) return kind->description;
+  return o->fd_jacobian ? "IDA, difference-quotient Jacobian" : "IDA, analytic Jacobian";
 }
 
 /* Simulated time over a measured time (inf when not measurable). */
@@ -35,13 +37,14 @@ int cli_energy_guard(const run_stats* r) {
 
 static void json_settings(f3r_json* j, const cli_options* o, const f3r_scene* scene,
                           const f3r_model* model) {
-  const int ida = scene->integrator == F3R_INTEGRATOR_IDA;
+  const f3r_integrator_kind* kind = f3r_integrator_kind_at((int)scene->integrator);
+  const int tables = kind && kind->tables, ida = scene->integrator == F3R_INTEGRATOR_IDA;
   f3r_json_object(j, "settings");
   f3r_json_string(j, "formulation", f3r_formulation_name(scene->formulation));
   f3r_json_string(j, "integrator", f3r_integrator_name(scene->integrator));
   f3r_json_string(j, "integrator_text", cli_integrator_text(o, scene));
   f3r_json_string(j, "jacobian", !ida ? NULL : o->fd_jacobian ? "difference_quotient" : "analytic");
-  f3r_json_string(j, "table", ida ? NULL : scene->table[0] ? scene->table : "default");
+  f3r_json_string(j, "table", !tables ? NULL : scene->table[0] ? scene->table : "default");
   f3r_json_number(j, "rtol", scene->rtol);
   f3r_json_number(j, "atol", scene->atol);
   if (ida)
@@ -265,10 +268,10 @@ void cli_print_summary(FILE* human, const cli_options* o, const f3r_scene* scene
   fprintf(human, "formulation         %s, rtol %g, atol %g, %s\n",
           f3r_formulation_name(scene->formulation), scene->rtol, scene->atol,
           cli_integrator_text(o, scene));
-  if (scene->integrator != F3R_INTEGRATOR_IDA)
+  const f3r_integrator_kind* kind = f3r_integrator_kind_at((int)scene->integrator);
+  if (kind && kind->tables)
     fprintf(human, "butcher table       %s\n", scene->table[0] ? scene->table : "default");
-  if (scene->integrator == F3R_INTEGRATOR_IDA)
-    fprintf(human, "max BDF order       %d\n", scene->max_order);
+  if (kind && kind->has_order) fprintf(human, "max BDF order       %d\n", scene->max_order);
   fprintf(human, "sundials            %s, %s\n", SUNDIALS_VERSION, F3R_SUNDIALS_BUILD);
   char basis[3][96];
   for (int i = 0; i < 3; ++i) f3r_model_link_basis_name(model, i, basis[i], sizeof basis[i]);

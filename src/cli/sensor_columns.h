@@ -8,7 +8,7 @@
 #include "flex3rpr/sensors.h"
 
 /* The most characters a row's sensor columns take. */
-#define F3R_SENSOR_ROW_SIZE (3 * F3R_SENSOR_MAX_CHANNELS * 33)
+#define F3R_SENSOR_ROW_SIZE (F3R_SENSOR_MAX_KINDS * F3R_SENSOR_MAX_CHANNELS * 33)
 
 /* Creates the model's sensors when its scene enables any (*sensors NULL otherwise) and takes
  * their samples at the simulation's current state. */

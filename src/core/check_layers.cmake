@@ -1,12 +1,13 @@
 # cmake -DCORE=src/core -DINCLUDE=include/flex3rpr -P check_layers.cmake
 # Fails when a file of the core, or a public header, includes a header of a higher layer. The
 # layers, lowest first, and the public headers each belongs to:
-set(layers base scene physics solve accuracy session)
+set(layers base scene physics solve linear accuracy session)
 set(public_base status.h coords.h csv_number.h)
-set(public_scene scene.h)
+set(public_scene scene.h kinds.h)
 set(public_physics beam_modes.h model.h)
 set(public_solve sim.h output_columns.h sensors.h)
-set(public_accuracy accuracy.h linear.h modal.h linear_export.h)
+set(public_linear linear.h modal.h linear_export.h)
+set(public_accuracy accuracy.h)
 set(public_session session.h closed_loop_check.h measured_run.h)
 
 # rank_<header name> for every public and private header

@@ -86,7 +86,13 @@ _signatures = {
     "f3r_py_modal": (ctypes.c_int, [_p, _d, ctypes.POINTER(ctypes.c_int)]),
     "f3r_py_choice": (ctypes.c_char_p, [_p]),
     "f3r_py_sensors": (ctypes.c_int, [_p, _d]),
-    "f3r_py_sensor_enabled": (ctypes.c_int, [_p, ctypes.c_int]),
+    "f3r_py_sensor_columns": (ctypes.c_int, [_p]),
+    "f3r_py_sensor_kinds": (ctypes.c_int, []),
+    "f3r_py_sensor_kind_key": (ctypes.c_char_p, [ctypes.c_int, ctypes.c_int]),
+    "f3r_py_sensor_column_name": (ctypes.c_char_p, [_p, ctypes.c_int]),
+    "f3r_py_sensor_settings": (None, [_p, ctypes.c_int, _d]),
+    "f3r_py_strain_row": (ctypes.c_int, [_p, ctypes.c_int, _d]),
+    "f3r_py_close_loops": (ctypes.c_int, [_p, _d]),
 }
 for _name, (_restype, _argtypes) in _signatures.items():
     _f = getattr(lib, _name)
@@ -102,6 +108,29 @@ def extra_groups():
         if name is None:
             return groups
         groups.append((name.decode(), count.value))
+
+
+class Geometry(ctypes.Structure):
+    """f3r_geometry of flex3rpr/model.h."""
+    _fields_ = [("base_joint", (ctypes.c_double * 2) * 3), ("platform_angle", ctypes.c_double * 3),
+                ("platform_radius", ctypes.c_double), ("link_length", ctypes.c_double),
+                ("link_mass", ctypes.c_double), ("cylinder_mass", ctypes.c_double),
+                ("cylinder_length", ctypes.c_double), ("platform_mass", ctypes.c_double),
+                ("platform_inertia", ctypes.c_double), ("end_stops", ctypes.c_int),
+                ("stroke_min", ctypes.c_double), ("stroke_max", ctypes.c_double)]
+
+
+lib.f3r_py_geometry.restype = ctypes.POINTER(Geometry)
+lib.f3r_py_geometry.argtypes = [_p]
+MAX_MODES = 20  # F3R_MAX_MODES, flex3rpr/coords.h
+def sensor_keys():
+    """The sensor kinds of the core's table (kinds.h), in its order: (name, (scene keys of
+    noise[0], noise[1], resolution[0], resolution[1], None where the kind has none))."""
+    def text(kind, key):
+        value = lib.f3r_py_sensor_kind_key(kind, key)
+        return value.decode() if value is not None else None
+    return tuple((text(k, -1), tuple(text(k, j) for j in range(4)))
+                 for k in range(lib.f3r_py_sensor_kinds()))
 
 
 class StateSpace(ctypes.Structure):

@@ -164,12 +164,10 @@ class Sim:
         self._extra_groups = _core.extra_groups()
         self._extras = np.zeros(sum(n for _, n in self._extra_groups))
         lib.f3r_py_row(handle, _ptr(self._row))
-        sensor_names = (["enc_rho_1", "enc_rho_2", "enc_rho_3", "enc_theta_1", "enc_theta_2",
-                         "enc_theta_3"], ["strain_1", "strain_2", "strain_3"],
-                        ["accel_x", "accel_y", "gyro_z"])  # the CLI's sensor columns
-        self.sensor_names = [n for k, names in enumerate(sensor_names)
-                             if lib.f3r_py_sensor_enabled(handle, k) for n in names]
-        self._sensors = np.zeros(15)
+        # the enabled sensors' channels, as the CLI's columns: names and sizes from the core's table
+        self.sensor_names = [lib.f3r_py_sensor_column_name(handle, c).decode()
+                             for c in range(lib.f3r_py_sensor_columns(handle))]
+        self._sensors = np.zeros(len(self.sensor_names))
 
     def __del__(self):
         if getattr(self, "_h", None):
@@ -388,6 +386,63 @@ class Sim:
         count = ctypes.c_int(0)
         _core.check(lib.f3r_py_modal(self._h, _ptr(hz), ctypes.byref(count)), self._h)
         return hz[:count.value].copy()
+
+    @property
+    def geometry(self):
+        """The model's geometry (f3r_geometry, docs/model.md) as a dict: base_joint (A_i, 3 x 2,
+        m), platform_angle (phi_i of C_i), platform_radius, link_length, the masses and inertia,
+        end_stops (bool), stroke_min and stroke_max (m)."""
+        g = lib.f3r_py_geometry(self._h).contents
+        out = {name: getattr(g, name) for name, _ in _core.Geometry._fields_}
+        out["base_joint"] = np.array([list(row) for row in g.base_joint])
+        out["platform_angle"] = np.array(list(g.platform_angle))
+        out["end_stops"] = bool(g.end_stops)
+        return out
+
+    @property
+    def sensor_settings(self):
+        """The scene's sensors as this Sim has them (overrides applied, defaults filled in):
+        {"encoders": {"enabled", "rate", "delay", "seed", "stroke_noise", ...}, "strain_gauges":
+        {..., "noise", "resolution"}, "accelerometer": {...}}, the scene file's names."""
+        values, out = np.zeros(8), {}
+        for kind, (name, keys) in enumerate(_core.sensor_keys()):
+            lib.f3r_py_sensor_settings(self._h, kind, _ptr(values))
+            s = {"enabled": bool(values[0]), "rate": float(values[1]), "delay": int(values[2]),
+                 "seed": int(values[3])}
+            s.update((key, float(values[4 + j])) for j, key in enumerate(keys) if key)
+            out[name] = s
+        return out
+
+    def strain_rows(self):
+        """The root strain gauges as rows over the modal coordinates (State.modal, the
+        linearisation's eta states): eps = strain_rows() @ modal, a 3 x (nq - 9) array (rows of
+        zeros for rigid links), the core's f3r_sensors_strain_row (docs/scenes.md, sensors)."""
+        rows = np.zeros((3, self.nq - 9))
+        c = np.zeros(_core.MAX_MODES)
+        start = 0
+        for i in range(3):
+            n = lib.f3r_py_strain_row(self._h, i, _ptr(c))
+            rows[i, start:start + n] = c[:n]
+            start += self.modes[i]
+        return rows
+
+    def close_loops(self, pose, modal=None):
+        """The coordinates q (nq values, State.q's order) of the platform `pose` (x, y, phi) with
+        the links deflected by `modal` (nq - 9 values; None: straight): the core's loop closure
+        gives the strokes q[0:3] and leg directions q[3:6]. The Sim's own state is untouched; a
+        pose the legs cannot reach raises flex3rpr.Error."""
+        q = np.zeros(self.nq)
+        for name, value, start, size in (("pose", pose, 6, 3), ("modal", modal, 9, self.nq - 9)):
+            if value is None and name == "modal":
+                continue
+            value = np.asarray(value, dtype=float).ravel()
+            if value.size != size:
+                raise ValueError("%s: %d values, expected %d" % (name, value.size, size))
+            if not np.all(np.isfinite(value)):
+                raise ValueError("%s: not finite: %s" % (name, value))
+            q[start:start + value.size] = value
+        _core.check(lib.f3r_py_close_loops(self._h, _ptr(q)), self._h)
+        return q
 
     @property
     def accuracy(self):

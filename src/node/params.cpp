@@ -128,7 +128,7 @@ bool ReadBasePose(const ros::NodeHandle& pnh, std::array<double, 3>* pose, std::
 
 // A parameter that sets a scene field, as an override "FIELD=VALUE" for the scene loader.
 struct SceneOverride {
-  const char* param;
+  std::string param;
   std::string text;
 };
 
@@ -239,6 +239,45 @@ bool ReadSolverParams(const ros::NodeHandle& pnh, NodeParams* p, std::vector<Sce
   return true;
 }
 
+// ~sensors/NAME/KEY: the scene's sensors.NAME.KEY, as overrides like every other field, so that
+// the loader checks names, keys and ranges as it checks the file. Naming a sensor turns it on
+// (sensors.NAME.enabled=true first; its own ~sensors/NAME/enabled still wins).
+bool ReadSensorParams(const ros::NodeHandle& pnh, std::vector<SceneOverride>* out,
+                      std::string* error) {
+  XmlRpc::XmlRpcValue all;
+  if (!pnh.getParam("sensors", all)) return true;
+  // rosrun's _sensors:="{...}" arrives as a string: roscpp parses no YAML mappings
+  if (all.getType() != XmlRpc::XmlRpcValue::TypeStruct) {
+    *error =
+        "parameter ~sensors: not a mapping (set it with rosparam or a launch file's <rosparam>)";
+    return false;
+  }
+  for (auto& [sensor, keys] : all) {
+    const std::string field = "sensors." + sensor, param = "sensors/" + sensor;
+    if (keys.getType() != XmlRpc::XmlRpcValue::TypeStruct) {
+      *error = "parameter ~" + param + ": not a mapping of the sensor's keys";
+      return false;
+    }
+    out->push_back({param, field + ".enabled=true"});
+    for (auto& [key, value] : keys) {
+      std::string text;
+      switch (value.getType()) {
+        case XmlRpc::XmlRpcValue::TypeBoolean:
+          text = static_cast<bool>(value) ? "true" : "false";
+          break;
+        case XmlRpc::XmlRpcValue::TypeInt: text = std::to_string(static_cast<int>(value)); break;
+        case XmlRpc::XmlRpcValue::TypeDouble: text = Number(static_cast<double>(value)); break;
+        case XmlRpc::XmlRpcValue::TypeString: text = Quoted(static_cast<std::string>(value)); break;
+        default:
+          *error = "parameter ~" + param + "/" + key + ": not a number, an integer or a boolean";
+          return false;
+      }
+      out->push_back({param + "/" + key, field + "." + key + "=" + text});
+    }
+  }
+  return true;
+}
+
 // ~scene with the overrides, loaded with ~accuracy (m; the scene's accuracy.end_effector when
 // 0). An error about an override names its parameter: "parameter ~rtol: solver.rtol: ...".
 bool LoadOverridden(NodeParams* p, double accuracy, const std::vector<SceneOverride>& overrides,
@@ -280,7 +319,7 @@ bool LoadScene(const ros::NodeHandle& pnh, NodeParams* p, std::string* error) {
   }
   std::vector<SceneOverride> overrides;
   if (!ReadSolverParams(pnh, p, &overrides, error) || !ReadInitialPose(pnh, p, &overrides, error) ||
-      !LoadOverridden(p, accuracy, overrides, error))
+      !ReadSensorParams(pnh, &overrides, error) || !LoadOverridden(p, accuracy, overrides, error))
     return false;
   if (!p->end_stops || p->scene.end_stops) return true;
   overrides.push_back({"end_stops", "effects.end_stops={}"});

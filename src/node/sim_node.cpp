@@ -73,7 +73,7 @@ bool SimNode::Init() {
   if (!CheckInitialPose()) return false;
   inputs_.reset(new CommandInputs(pnh_, *model_, params_, &phi_p_));
   outputs_.reset(new StateOutputs(nh_, pnh_, *model_, params_));
-  if (!StartSensors()) return false;
+  StartSensors();
   services_.reset(new Services(pnh_, &control_, Handlers()));
   ROS_INFO(
       "flex3rpr_node: scene %s, nq %d, %s, rtol %g, publishing at %g Hz of simulated time, "
@@ -155,9 +155,7 @@ static ros::WallDuration SpinFor(double seconds) {
 // a stamp (TF_REPEATED_DATA).
 void SimNode::PublishAt(const f3r_outputs& out) {
   ReadMeasurement();
-  std::string error;
-  if (!sensors_->Update(out, &error))
-    ROS_ERROR_THROTTLE(1.0, "flex3rpr_node: sensors: %s", error.c_str());
+  sensors_->Publish(out.t);
   if (out.t > last_published_t_) {
     outputs_->Publish(out, info_);
     last_published_t_ = out.t;
@@ -296,7 +294,7 @@ void SimNode::Restart(RunLoop* loop) {
   outputs_->RestartCount();
   commands_taken_ = false;
   last_published_t_ = -1.0;  // time starts over
-  sensors_->Reset();
+  sensors_->Reset();         // the session's sensors started over
   PublishAt(*f3r_sim_outputs(sim_));
 }
 

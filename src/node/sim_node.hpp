@@ -11,7 +11,7 @@
 #include "pacer.hpp"
 #include "sensor_outputs.hpp"
 #include "params.hpp"
-#include "services.hpp"
+#include "run_control_services.hpp"
 #include "state_outputs.hpp"
 
 namespace flex3rpr {
@@ -68,14 +68,14 @@ class SimNode {
   // Lockstep: the present period has no command yet. Warns (throttled) and reports on ~status and
   // /diagnostics once it has waited ~lockstep_warn_after wall seconds.
   void AwaitCommand(double wall_now);
-  // The services that act on the simulation (sim_services.cpp).
+  // The services that act on the simulation (session_services.cpp).
   SimHandlers Handlers();
   void StepWithCommandCall(const StepWithCommand::Request& req, StepWithCommand::Response* res);
   void SetStateCall(const SetState::Request& req, SetState::Response* res);
   void LineariseCall(Linearise::Response* res);
   // The scene's sensors with the ~sensors parameters (sensor_outputs.cpp); false with a
   // ROS_ERROR.
-  bool StartSensors();
+  void StartSensors();
   // Into ~status and a throttled warning while the achieved factor is short of the request.
   void ReportPace();
   // rho_i outside the scene's stroke: into ~status, and a warning once per excursion.

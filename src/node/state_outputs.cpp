@@ -2,6 +2,8 @@
 
 #include "master_probe.hpp"
 
+#include "flex3rpr/output_columns.h"
+
 #include <tf2_eigen/tf2_eigen.h>
 
 #include <Eigen/Geometry>
@@ -39,6 +41,15 @@ StateOutputs::StateOutputs(ros::NodeHandle& nh, ros::NodeHandle& pnh, const f3r_
     : model_(model), params_(params), frames_(params.frames) {
   Advertise(nh, pnh);
   PrepareMessages();
+  // ~state's outputs: the CSV's columns (flex3rpr/output_columns.h), named once by a parameter
+  std::vector<std::string> columns(static_cast<size_t>(f3r_output_columns(&model)));
+  for (size_t k = 0; k < columns.size(); ++k) {
+    char name[F3R_OUTPUT_NAME];
+    f3r_output_column_name(&model, static_cast<int>(k), name);
+    columns[k] = name;
+  }
+  pnh.setParam("output_columns", columns);
+  state_.outputs.assign(columns.size(), 0.0);
   SendStaticFrames();
   PrepareTransforms();
 }
@@ -110,7 +121,7 @@ void StateOutputs::PrepareMessages() {
   diagnostics_.status[0].hardware_id = "flex3rpr";
 }
 
-// Static frames, as the URDF's fixed joints (scripts/make_urdf.py): world -> base, the nominal
+// Static frames, as the URDF's fixed joints (nodes/make_urdf.py): world -> base, the nominal
 // beam tips, the beams' clamped roots (station 0 is the piston, whatever the deflection) and
 // the platform joints.
 void StateOutputs::SendStaticFrames() {
@@ -236,6 +247,7 @@ void StateOutputs::PublishState(const f3r_outputs& out, const ros::Time& stamp) 
   state_.modal_rate = beam_.modal_rate;
   for (size_t c = 0; c < 6; ++c) state_.loop_force[c] = out.lambda[c];
   for (size_t i = 0; i < 3; ++i) state_.stop_force[i] = out.stop_force[i];
+  f3r_output_row(&model_, &out, state_.outputs.data());
   state_pub_.publish(state_);
 }
 

@@ -32,8 +32,7 @@ std::string CheckUrdf(const std::string& xml, const f3r_model& model, const Fram
     const auto pc = urdf->getJoint("platform_c" + n + "_joint");
     if (!revolute || !prismatic || !tip || !pc)
       return "robot_description lacks joint leg_" + n + "_revolute, leg_" + n + "_prismatic, leg_" +
-             n + "_tip_nominal_joint or platform_c" + n +
-             "_joint (scripts/make_urdf.py writes them)";
+             n + "_tip_nominal_joint or platform_c" + n + "_joint (nodes/make_urdf.py writes them)";
     const auto& a = revolute->parent_to_joint_origin_transform.position;
     if (std::fabs(a.x - g.base_joint[i][0]) > tol)
       return Mismatch(revolute->name, "origin x (A_i)", a.x, g.base_joint[i][0]);
@@ -69,7 +68,7 @@ std::string CheckUrdf(const std::string& xml, const f3r_model& model, const Fram
   for (const auto& name : names)
     if (!urdf->getLink(name))
       return "robot_description lacks link " + name +
-             " (generate it for this node's ~tf_prefix and ~beam_points: scripts/make_urdf.py "
+             " (generate it for this node's ~tf_prefix and ~beam_points: nodes/make_urdf.py "
              "--prefix "
              "--beam-points, as sim.launch does)";
   const std::string points = std::to_string(frames.beam[0].size());

@@ -57,22 +57,44 @@ F3R_PY_EXPORT f3r_status f3r_py_create(const char* path, double accuracy, const 
   return st == F3R_OK ? st : fail(p, &err, st);
 }
 
-/* The enabled sensors' readings (encoders, gauges, accelerometer, as the CLI's columns) into
- * values; returns their count (0 without sensors). */
+/* The enabled sensors' readings (the CLI's columns, f3r_sensors_row) into values; returns their
+ * count (0 without sensors). */
 F3R_PY_EXPORT int f3r_py_sensors(const f3r_py* p, double* values) {
   const f3r_sensors* sensors = f3r_session_sensors(p->session);
-  int n = 0;
-  for (int k = 0; sensors && k < F3R_SENSOR_KINDS; ++k) {
-    const f3r_sensor_reading* r = f3r_sensors_reading(sensors, k);
-    for (int c = 0; r->enabled && c < r->channels; ++c) values[n++] = r->value[c];
-  }
-  return n;
+  return sensors ? f3r_sensors_row(sensors, values) : 0;
 }
 
-/* 1 when sensor kind (F3R_SENSOR_*) is enabled. */
-F3R_PY_EXPORT int f3r_py_sensor_enabled(const f3r_py* p, int kind) {
+/* The sensor kinds' table (kinds.h): the count; kind k's name (key -1) or the scene key of its
+ * noise[0], noise[1], resolution[0], resolution[1] (key 0..3; NULL where it has none). */
+F3R_PY_EXPORT int f3r_py_sensor_kinds(void) { return f3r_sensor_kind_count(); }
+F3R_PY_EXPORT const char* f3r_py_sensor_kind_key(int kind, int key) {
+  const f3r_sensor_kind* k = f3r_sensor_kind_at(kind);
+  if (!k || key < -1 || key > 3) return NULL;
+  return key < 0 ? k->name : key < 2 ? k->noise_key[key] : k->resolution_key[key - 2];
+}
+
+/* The enabled sensors' column count, and column i's name (kinds.h's table). */
+F3R_PY_EXPORT int f3r_py_sensor_columns(const f3r_py* p) {
   const f3r_sensors* sensors = f3r_session_sensors(p->session);
-  return sensors && f3r_sensors_reading(sensors, kind)->enabled;
+  return sensors ? f3r_sensors_columns(sensors) : 0;
+}
+F3R_PY_EXPORT const char* f3r_py_sensor_column_name(const f3r_py* p, int column) {
+  return f3r_sensors_column_name(f3r_session_sensors(p->session), column);
+}
+
+/* The scene's settings of sensor kind (F3R_SENSOR_*) as the session has them (overrides
+ * applied): enabled, rate, delay, seed, noise[0], noise[1], resolution[0], resolution[1]. */
+F3R_PY_EXPORT void f3r_py_sensor_settings(const f3r_py* p, int kind, double* values) {
+  const f3r_sensor_scene* s = &scene_of(p)->sensors.kind[kind];
+  const double v[8] = {s->enabled,  s->rate,     s->delay,         s->seed,
+                       s->noise[0], s->noise[1], s->resolution[0], s->resolution[1]};
+  memcpy(values, v, sizeof v);
+}
+
+/* Link's root strain gauge as a row over its modal coordinates (f3r_sensors_strain_row):
+ * returns the count written to c (0 for a rigid link). */
+F3R_PY_EXPORT int f3r_py_strain_row(const f3r_py* p, int link, double* c) {
+  return f3r_sensors_strain_row(model_of(p), link, c);
 }
 
 F3R_PY_EXPORT int f3r_py_nq(const f3r_py* p) { return f3r_model_nq(model_of(p)); }
@@ -86,6 +108,23 @@ F3R_PY_EXPORT const f3r_geometry* f3r_py_geometry(const f3r_py* p) {
   static _Thread_local f3r_geometry g;
   g = f3r_model_geometry(model_of(p));
   return &g;
+}
+/* The loop closure (f3r_model_close_loops): q (nq values) with the platform pose and modal
+ * coordinates set gets the legs' rho and theta. A pose the legs cannot reach fails, q as it was. */
+F3R_PY_EXPORT f3r_status f3r_py_close_loops(f3r_py* p, double* q) {
+  const f3r_model* model = model_of(p);
+  double full[F3R_MAX_Q] = {0};
+  const size_t size = (size_t)f3r_model_nq(model) * sizeof *q;
+  memcpy(full, q, size);
+  const f3r_status st = f3r_model_close_loops(model, full);
+  if (st != F3R_OK) {
+    snprintf(p->message, sizeof p->message,
+             "close_loops: the legs cannot reach the pose (%g, %g, %g) with these deflections",
+             q[6], q[7], q[8]);
+    return st;
+  }
+  memcpy(q, full, size);
+  return F3R_OK;
 }
 F3R_PY_EXPORT int f3r_py_columns(const f3r_py* p) { return f3r_output_columns(model_of(p)); }
 F3R_PY_EXPORT int f3r_py_column_name(const f3r_py* p, int k, char* name) {

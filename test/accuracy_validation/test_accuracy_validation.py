@@ -24,7 +24,7 @@ import xml.etree.ElementTree as ET
 
 ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
 SCRIPT = os.path.join(ROOT, "bench", "validate_accuracy")
-sys.path.insert(0, os.path.join(ROOT, "scripts"))
+sys.path.insert(0, os.path.join(ROOT, "nodes"))
 import flex3rpr_tools as T  # noqa: E402
 
 # An undamped resonance (the case the check was added for), mixed fixed-pinned and fixed-free

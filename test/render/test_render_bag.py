@@ -1,6 +1,6 @@
 #!/usr/bin/python3
 """Records 0.1 s of paper simulation 3 (fixed-free) through flex3rpr_node with launch/record.launch,
-renders it in rviz under Xvfb with scripts/render_bag, and checks the result:
+renders it in rviz under Xvfb with nodes/render_bag, and checks the result:
 
   bag_counts     rosbag info lists every recorded topic with its expected count: duration *
                  publish_rate + 1 on /clock, /tf, joint_states, ~status, ~beam_state, ~beams, ~odom,
@@ -322,7 +322,7 @@ def run(args, checks, work):
     # --- render -------------------------------------------------------------------------------------
     frames_dir = os.path.join(work, "frames")
     t0 = time.time()
-    r = subprocess.run(["/usr/bin/python3", os.path.join(ROOT, "scripts", "render_bag"), bag, "--at",
+    r = subprocess.run(["/usr/bin/python3", os.path.join(ROOT, "nodes", "render_bag"), bag, "--at",
                         ",".join(str(t) for t in TIMES), "--out", frames_dir], env=env, stdin=subprocess.DEVNULL,
                        capture_output=True, text=True, timeout=900)
     with open(os.path.join(work, "render.log"), "w") as f:

@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-"""rostest of the example controllers in lockstep (scripts/pd_controller, scripts/lqr_controller):
+"""rostest of the example controllers in lockstep (nodes/pd_controller, nodes/lqr_controller):
 each run is `roslaunch flex3rpr pd_control.launch` (or lqr_) at realtime_factor 0 on its own
 master, and the controller's log (every state it answered, repr-exact) is what is compared.
 

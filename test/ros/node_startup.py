@@ -60,11 +60,15 @@ class NodeStartup(unittest.TestCase):
 
     def test_bad_sensor_parameters_are_named(self):
         for value, message in (
+                # the scene loader's checks and words, as for the file (the override path)
                 ("{encoders: {rate: 0}}",
-                 "parameter ~sensors.encoders.rate: 0 is out of range (0, 1e+06] Hz"),
-                ("{strain_gauges: {delay: 2.5}}", "parameter ~sensors/strain_gauges/delay: not an integer"),
-                ("{accelerometer: {gyro_noise: -1.0}}",
-                 "parameter ~sensors.accelerometer.gyro_noise: -1 must be finite and at least 0")):
+                 "parameter ~sensors/encoders/rate: sensors.encoders.rate: 0 is out of range (0, 1e+06] Hz"),
+                ("{strain_gauges: {delay: 2.5}}",
+                 "parameter ~sensors/strain_gauges/delay: sensors.strain_gauges.delay: 2.5 is not a whole number"),
+                ("{accelerometer: {gyro_noise: -1.0}}", "parameter ~sensors/accelerometer/gyro_noise: "
+                 "sensors.accelerometer.gyro_noise: -1 must be finite and at least 0"),
+                ("{gyroscope: {rate: 100}}", "parameter ~sensors/gyroscope: sensors.gyroscope: unknown sensor "
+                 "(allowed: encoders, strain_gauges, accelerometer)")):
             subprocess.run(["rosparam", "set", "/bad_sensors/sensors", value], check=True)
             code, out = run_node("__name:=bad_sensors")
             subprocess.run(["rosparam", "delete", "/bad_sensors/sensors"], check=True)

@@ -1,8 +1,10 @@
 #!/usr/bin/python3
 """flex3rpr.Sim.step against the node's ~step_with_command: 400 calls of varying commands and
-period counts, every state equal to the bit (time, joints, pose, twist, modal coordinates)."""
+period counts, every state equal to the bit (time, joints, pose, twist, modal coordinates), and the last
+~state's outputs equal to Python's State row, column for column."""
 import os
 import sys
+import time
 import unittest
 
 import numpy as np
@@ -10,7 +12,7 @@ import rospy
 import rostest
 
 import flex3rpr
-from flex3rpr.msg import EffortCommand
+from flex3rpr.msg import EffortCommand, FullState
 from flex3rpr.srv import StepWithCommand
 
 NODE = "/flex3rpr_node"
@@ -45,6 +47,15 @@ class PythonEqualsNode(unittest.TestCase):
                                  s.q[i])
                 self.assertEqual(res.joint_state.position[names.index("leg_%d_revolute" % (i + 1))],
                                  s.q[3 + i])
+        # ~state's outputs are the CSV's row, which Python's State holds: one table of columns
+        self.assertEqual(rospy.get_param(NODE + "/output_columns"), sim.columns)
+        latest = []
+        rospy.Subscriber(NODE + "/state", FullState, latest.append)  # latched in lockstep
+        deadline = time.time() + 120
+        while time.time() < deadline and not (latest and latest[-1].sim_time == s.t):
+            time.sleep(0.05)
+        self.assertTrue(latest and latest[-1].sim_time == s.t, "no ~state at t = %g" % s.t)
+        self.assertEqual(list(latest[-1].outputs), s.vector.tolist())
 
 
 if __name__ == "__main__":

@@ -4,7 +4,7 @@ however busy the machine, and ends cleanly.
 
 One recording of paper simulation 1 (0.05 s at 1 kHz: 51 states) with `roslaunch flex3rpr
 record.launch` (its own master on a free port), while one CPU hog per core (busy Python loops)
-competes with the node and the recorder (scripts/record_lockstep). record.launch holds the node
+competes with the node and the recorder (nodes/record_lockstep). record.launch holds the node
 in lockstep with the recorder, so the load may slow the recording but not thin it:
 
 test_launch_ends_cleanly       roslaunch exits with code 0, without "REQUIRED process has died"

@@ -1,4 +1,4 @@
-"""What the sweep tests share: the 24-run spec, running scripts/sweep, reading results, JUnit."""
+"""What the sweep tests share: the 24-run spec, running nodes/sweep, reading results, JUnit."""
 import argparse
 import csv
 import os
@@ -8,9 +8,9 @@ import tempfile
 import time
 
 ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
-sys.path.insert(0, os.path.join(ROOT, "scripts"))
+sys.path.insert(0, os.path.join(ROOT, "nodes"))
 import flex3rpr_tools  # noqa: E402  (scripts/: JUnit)
-SWEEP = os.path.join(ROOT, "scripts", "sweep")
+SWEEP = os.path.join(ROOT, "nodes", "sweep")
 TIMING_COLUMNS = {"cpu_time_s", "wall_time_s", "host"}
 
 # 4 diameters x 2 boundary models x 3 random platform masses, 0.02 s of paper simulation 3 each
@@ -38,7 +38,7 @@ def write_spec(directory, name, text):
 
 
 def sweep(*args, sim, timeout=3600, **kwargs):
-    """Runs scripts/sweep to its end: (exit code, stderr)."""
+    """Runs nodes/sweep to its end: (exit code, stderr)."""
     env = dict(os.environ, F3R_SIM=sim)
     p = subprocess.run(["/usr/bin/python3", SWEEP, *args], capture_output=True, text=True, env=env,
                        timeout=timeout, **kwargs)

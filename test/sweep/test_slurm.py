@@ -1,9 +1,9 @@
 #!/usr/bin/python3
-"""The slurm engine of scripts/sweep on a real single-node Slurm cluster started here.
+"""The slurm engine of nodes/sweep on a real single-node Slurm cluster started here.
 
 usage: test_slurm.py --sim FLEX3RPR_SIM [--junit FILE] [--work DIR]
 
-scripts/slurm_cluster starts munged, slurmctld and slurmd from Debian's packages with every file
+nodes/slurm_cluster starts munged, slurmctld and slurmd from Debian's packages with every file
 in one directory (root only: the daemons run as root). Then:
 - the 24-run grid of test_sweep.py, submitted as an `sbatch --array` job (6 tasks, after the
   reference job), gives the same results CSV as the local engine, row by row, apart from the
@@ -24,7 +24,7 @@ sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 import sweep_support as S  # noqa: E402
 
 ARGS = None
-CLUSTER = os.path.join(S.ROOT, "scripts", "slurm_cluster")
+CLUSTER = os.path.join(S.ROOT, "nodes", "slurm_cluster")
 # A short fixed path: munge's socket path must stay under 108 bytes, and a cluster an earlier,
 # killed run left behind is stopped by the next start from the same directory.
 CLUSTER_DIR = "/tmp/flex3rpr_slurm_test"
@@ -51,7 +51,7 @@ class SlurmEngine(unittest.TestCase):
         p = subprocess.run(["bash", CLUSTER, "start", CLUSTER_DIR], capture_output=True, text=True, timeout=600)
         print(p.stdout + p.stderr)
         if p.returncode != 0:
-            raise RuntimeError(f"scripts/slurm_cluster start failed:\n{p.stdout}{p.stderr}")
+            raise RuntimeError(f"nodes/slurm_cluster start failed:\n{p.stdout}{p.stderr}")
         cls.started = True
         os.environ["SLURM_CONF"] = os.path.join(CLUSTER_DIR, "slurm.conf")
         cls.work = ARGS.work

@@ -1,5 +1,5 @@
 #!/usr/bin/python3
-"""Parameter sweeps (scripts/sweep) on the local and ssh engines: real GNU parallel, the real CLI.
+"""Parameter sweeps (nodes/sweep) on the local and ssh engines: real GNU parallel, the real CLI.
 
 usage: test_sweep.py --sim FLEX3RPR_SIM [--junit FILE] [--work DIR]
 

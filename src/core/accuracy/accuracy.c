@@ -9,7 +9,7 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "accuracy_choice.h"
+#include "accuracy_parts.h"
 
 /* Commands from outside are unknown when the knob chooses: it sizes the model for steps of
  * accuracy.excitation (limits.force unless the scene states less) on the leg forces at t = 0,

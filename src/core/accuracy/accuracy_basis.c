@@ -6,7 +6,7 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "accuracy_choice.h"
+#include "accuracy_parts.h"
 
 /* The uniform counts the paper's modes are tried at before the corrected search: 1 and 2. r = 3
  * (its reference has 12 modes a link, the choosing's largest linear model) waits with the rest:

@@ -5,7 +5,7 @@
 #include <stdio.h>
 #include <string.h>
 
-#include "accuracy_choice.h"
+#include "accuracy_parts.h"
 
 void f3r_accuracy_append(char* text, size_t size, const char* fmt, ...) {
   const size_t used = strlen(text);

@@ -4,11 +4,13 @@
 #include <math.h>
 #include <string.h>
 
-#include "accuracy_choice.h"
+#include "accuracy_parts.h"
+#include "flex3rpr/kinds.h"
 
 /* A relation's cost, an explicit integrator's scaled by explicit_scale. */
 double f3r_relation_cost(const f3r_solver_relation* r, double explicit_scale) {
-  return r->integrator == F3R_INTEGRATOR_ERK ? r->cost * explicit_scale : r->cost;
+  const f3r_integrator_kind* kind = f3r_integrator_kind_at((int)r->integrator);
+  return kind && kind->explicit_method ? r->cost * explicit_scale : r->cost;
 }
 
 /* The cheapest measured solver whose error fits `budget`, among those the scene leaves open, with

@@ -2,9 +2,12 @@
  * stage of the forward pass (forward.c) that fills it. The caller sets the inputs (as MuJoCo's
  * mjData holds qpos and qvel) and calls f3r_forward(m, d, what) with the stages it needs; a stage
  * reads the inputs and the fields of the stages before it and writes its own fields once. So each
- * leg's trigonometry is evaluated once per evaluation, and a new force term is one stage and one
- * field. Private: the query functions of queries.h run the stages they need into a local f3r_data
- * and read it.
+ * leg's trigonometry is evaluated once per evaluation. A new force term is its code in the stage
+ * that sums Q (forces.c, or effects.c for one the scene switches on) and a field here only if a
+ * later stage reads it; a switchable one also needs its scene field (scene.h, scene_yaml.c), its
+ * compiled parameters and its derivatives for the Jacobian (effects.c): about five files.
+ * Private: the query functions of queries.h run the stages they need into a local f3r_data and
+ * read it.
  *
  * Conventions (docs/model.md, position.c, mass.c, velocity.c): per link, e = (c, s) along the
  * leg, n = (-s, c) across it, L = rho + l, w the tip deflection; C_i sits at

@@ -46,7 +46,7 @@ void f3r_state_kinds(const f3r_model* model, f3r_formulation form, double* id);
 void f3r_index3_variable_indices(const f3r_model* model, int* index_of, int counts[3]);
 
 /* The shapes of a residual F(t, y, y'), its Jacobian and an explicit right-hand side y' = f(t, y),
- * which the functions below and the peers (src/bench) share. */
+ * which the functions below and the peers (bench/c) share. */
 typedef f3r_status f3r_residual_fn(const f3r_model* model, f3r_formulation form, double t,
                                    const double* y, const double* yp, const double* held,
                                    double* res, f3r_workspace* ws);

@@ -3,6 +3,7 @@
 #include <stdio.h>
 #include <string.h>
 
+#include "flex3rpr/kinds.h"
 #include "flex3rpr/scene.h"
 
 #define COUNT(table) ((int)(sizeof(table) / sizeof(table)[0]))
@@ -14,16 +15,12 @@ static const char* const link_model_names[] = {"rigid", "fixed_pinned", "fixed_f
 static const char* const formulation_names[] = {"dae", "minimal", "index3"};
 #define SELECTABLE_FORMULATIONS 2
 
-static const char* const integrator_names[] = {"ida", "erk", "dirk"};
-
 /* The tables are indexed by value: they must follow the enums' order. */
 _Static_assert(F3R_LINK_RIGID == 0 && F3R_LINK_FIXED_PINNED == 1 && F3R_LINK_FIXED_FREE == 2,
                "link_model_names follows f3r_link_model");
 _Static_assert(F3R_FORMULATION_DAE == 0 && F3R_FORMULATION_MINIMAL == 1 &&
                    F3R_FORMULATION_INDEX3 == 2,
                "formulation_names follows f3r_formulation");
-_Static_assert(F3R_INTEGRATOR_IDA == 0 && F3R_INTEGRATOR_ERK == 1 && F3R_INTEGRATOR_DIRK == 2,
-               "integrator_names follows f3r_integrator");
 
 static const char* name_of(const char* const* names, int count, int value) {
   return value >= 0 && value < count ? names[value] : "unknown";
@@ -62,4 +59,28 @@ static const char* join(const char* const* names, int count, char* list, size_t 
 F3R_ENUM_NAMES(f3r_link_model, link_model_names, COUNT(link_model_names), COUNT(link_model_names))
 F3R_ENUM_NAMES(f3r_formulation, formulation_names, COUNT(formulation_names),
                SELECTABLE_FORMULATIONS)
-F3R_ENUM_NAMES(f3r_integrator, integrator_names, COUNT(integrator_names), COUNT(integrator_names))
+
+/* The integrators' names are their table's (integrator_kinds.c), which may grow at run time. */
+static int integrator_names(const char** names) {
+  const int count = f3r_integrator_kind_count();
+  for (int k = 0; k < count; ++k) names[k] = f3r_integrator_kind_at(k)->name;
+  return count;
+}
+
+const char* f3r_integrator_name(f3r_integrator value) {
+  const f3r_integrator_kind* kind = f3r_integrator_kind_at((int)value);
+  return kind ? kind->name : "unknown";
+}
+
+int f3r_integrator_from_name(const char* name, f3r_integrator* value) {
+  const char* names[F3R_INTEGRATOR_MAX_KINDS];
+  const int k = value_of(names, integrator_names(names), name);
+  if (k < 0) return -1;
+  *value = (f3r_integrator)k;
+  return 0;
+}
+
+const char* f3r_integrator_names(char* list, size_t size) {
+  const char* names[F3R_INTEGRATOR_MAX_KINDS];
+  return join(names, integrator_names(names), list, size);
+}

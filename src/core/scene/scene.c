@@ -5,6 +5,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "flex3rpr/kinds.h"
 #include "flex3rpr/scene.h"
 
 f3r_scene f3r_default_scene(void) {
@@ -292,20 +293,9 @@ static f3r_status validate_input_shape(const f3r_input* in, const char* name, f3
   return F3R_OK;
 }
 
-static const char* const explicit_tables[] = {"ARKODE_FEHLBERG_13_7_8",
-                                              "ARKODE_DORMAND_PRINCE_7_4_5",
-                                              "ARKODE_VERNER_8_5_6",
-                                              "dormand_prince_8_5",
-                                              "verner_8_7",
-                                              "verner_9_8",
-                                              NULL};
-static const char* const implicit_tables[] = {
-    "ARKODE_KVAERNO_7_4_5", "ARKODE_ARK548L2SA_DIRK_8_4_5", "ARKODE_SDIRK_5_3_4", NULL};
-
 const char* const* f3r_rk_tables(f3r_integrator integrator) {
-  return integrator == F3R_INTEGRATOR_ERK    ? explicit_tables
-         : integrator == F3R_INTEGRATOR_DIRK ? implicit_tables
-                                             : NULL;
+  const f3r_integrator_kind* kind = f3r_integrator_kind_at((int)integrator);
+  return kind ? kind->tables : NULL;
 }
 
 static int table_known(f3r_integrator integrator, const char* name) {
@@ -502,17 +492,27 @@ static f3r_status validate_solver_and_run(const f3r_scene* s, f3r_error* err) {
   if (s->formulation != F3R_FORMULATION_DAE && s->formulation != F3R_FORMULATION_MINIMAL)
     return f3r_scene_error(err, "solver.formulation", NULL, "%d is not one of dae, minimal",
                            (int)s->formulation);
-  if (s->integrator != F3R_INTEGRATOR_IDA && s->integrator != F3R_INTEGRATOR_ERK &&
-      s->integrator != F3R_INTEGRATOR_DIRK)
-    return f3r_scene_error(err, "solver.integrator", NULL, "%d is not one of ida, erk, dirk",
-                           (int)s->integrator);
-  if (s->integrator != F3R_INTEGRATOR_IDA && s->formulation != F3R_FORMULATION_MINIMAL)
-    return f3r_scene_error(err, "solver.integrator", NULL,
-                           "%s integrates the minimal formulation only",
-                           s->integrator == F3R_INTEGRATOR_ERK ? "erk" : "dirk");
-  if (s->table[0] && s->integrator == F3R_INTEGRATOR_IDA)
-    return f3r_scene_error(err, "solver.table", NULL,
-                           "a Butcher table needs integrator erk or dirk");
+  const f3r_integrator_kind* kind = f3r_integrator_kind_at((int)s->integrator);
+  if (!kind) {
+    char allowed[256];
+    return f3r_scene_error(err, "solver.integrator", NULL, "%d is not one of %s",
+                           (int)s->integrator, f3r_integrator_names(allowed, sizeof allowed));
+  }
+  if (!(kind->formulations & (1u << s->formulation)))
+    return f3r_scene_error(err, "solver.integrator", NULL, "%s integrates the %s formulation only",
+                           kind->name,
+                           f3r_formulation_name(kind->formulations & (1u << F3R_FORMULATION_DAE)
+                                                    ? F3R_FORMULATION_DAE
+                                                    : F3R_FORMULATION_MINIMAL));
+  if (s->table[0] && !kind->tables) {
+    char with_tables[256] = "";
+    for (int k = 0; k < f3r_integrator_kind_count(); ++k)
+      if (f3r_integrator_kind_at(k)->tables)
+        snprintf(with_tables + strlen(with_tables), sizeof with_tables - strlen(with_tables),
+                 "%s%s", with_tables[0] ? " or " : "", f3r_integrator_kind_at(k)->name);
+    return f3r_scene_error(err, "solver.table", NULL, "a Butcher table needs integrator %s",
+                           with_tables);
+  }
   if (s->table[0] && !table_known(s->integrator, s->table)) {
     char allowed[512] = "";
     for (const char* const* t = f3r_rk_tables(s->integrator); *t; ++t)

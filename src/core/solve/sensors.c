@@ -7,39 +7,28 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "beam_basis.h"
 #include "model_layout.h"
 #include "queries.h"
+#include "sensor_measures.h"
 
 #define LINE (F3R_SENSOR_MAX_DELAY + 1)
 
 struct f3r_sensors {
   const f3r_model* model;
-  f3r_sensor_scene config[F3R_SENSOR_KINDS];
-  double strain_row[3][F3R_MAX_MODES];
-  double line[F3R_SENSOR_KINDS][LINE][F3R_SENSOR_MAX_CHANNELS]; /* sample k at k % (delay+1) */
-  double line_t[F3R_SENSOR_KINDS][LINE];
-  f3r_sensor_reading reading[F3R_SENSOR_KINDS];
+  int kinds; /* the table's count at creation */
+  f3r_sensor_scene config[F3R_SENSOR_MAX_KINDS];
+  double constants[F3R_SENSOR_MAX_KINDS][F3R_SENSOR_CONSTANTS];     /* each kind's prepare */
+  double line[F3R_SENSOR_MAX_KINDS][LINE][F3R_SENSOR_MAX_CHANNELS]; /* sample k at k % (delay+1) */
+  double line_t[F3R_SENSOR_MAX_KINDS][LINE];
+  f3r_sensor_reading reading[F3R_SENSOR_MAX_KINDS];
   double last_t;
   double* work; /* f3r_solve_accelerations_work_size */
 };
 
-static const int kChannels[F3R_SENSOR_KINDS] = {6, 3, 3};
-
 int f3r_sensors_any(const f3r_sensors_scene* c) {
-  return c->encoders.enabled || c->strain_gauges.enabled || c->accelerometer.enabled;
-}
-
-int f3r_sensors_strain_row(const f3r_model* m, int link, double* c) {
-  const f3r_link_params* lp = &m->link[link];
-  if (lp->model == F3R_LINK_RIGID) return 0;
-  const double l = m->link_length, half = 0.5 * m->scene.link_diameter;
-  for (int j = 0; j < lp->modes; ++j) {
-    double dd = 0.0;
-    f3r_beam_basis_eval(&m->basis[link], j, 0.0, NULL, NULL, &dd);
-    c[j] = half * dd / (l * l);
-  }
-  return lp->modes;
+  for (int k = 0; k < F3R_SENSOR_MAX_KINDS; ++k)
+    if (c->kind[k].enabled) return 1;
+  return 0;
 }
 
 f3r_status f3r_sensors_create(const f3r_model* model, const f3r_sensors_scene* config,
@@ -55,10 +44,12 @@ f3r_status f3r_sensors_create(const f3r_model* model, const f3r_sensors_scene* c
     return f3r_error_set(err, F3R_ERR_MEMORY, "f3r_sensors_create: out of memory");
   }
   s->model = model;
-  s->config[F3R_SENSOR_ENCODERS] = config->encoders;
-  s->config[F3R_SENSOR_STRAIN] = config->strain_gauges;
-  s->config[F3R_SENSOR_ACCELEROMETER] = config->accelerometer;
-  for (int i = 0; i < 3; ++i) f3r_sensors_strain_row(model, i, s->strain_row[i]);
+  s->kinds = f3r_sensor_kind_count();
+  for (int k = 0; k < s->kinds; ++k) {
+    s->config[k] = config->kind[k];
+    const f3r_sensor_measure* measure = f3r_sensor_measure_of(k);
+    if (measure->prepare) measure->prepare(model, s->constants[k]);
+  }
   f3r_sensors_reset(s);
   *out = s;
   return F3R_OK;
@@ -71,11 +62,11 @@ void f3r_sensors_destroy(f3r_sensors* s) {
 }
 
 void f3r_sensors_reset(f3r_sensors* s) {
-  for (int k = 0; k < F3R_SENSOR_KINDS; ++k) {
+  for (int k = 0; k < s->kinds; ++k) {
     f3r_sensor_reading* r = &s->reading[k];
     memset(r, 0, sizeof *r);
     r->enabled = s->config[k].enabled;
-    r->channels = kChannels[k];
+    r->channels = f3r_sensor_kind_at(k)->channels;
     r->sample = -1;
     r->updated_at_sample = -1;
   }
@@ -91,7 +82,31 @@ void f3r_sensors_copy(f3r_sensors* to, const f3r_sensors* from) {
 }
 
 const f3r_sensor_reading* f3r_sensors_reading(const f3r_sensors* s, int kind) {
-  return kind >= 0 && kind < F3R_SENSOR_KINDS ? &s->reading[kind] : NULL;
+  return kind >= 0 && kind < s->kinds ? &s->reading[kind] : NULL;
+}
+
+int f3r_sensors_columns(const f3r_sensors* s) {
+  int n = 0;
+  for (int k = 0; k < s->kinds; ++k)
+    if (s->reading[k].enabled) n += s->reading[k].channels;
+  return n;
+}
+
+const char* f3r_sensors_column_name(const f3r_sensors* s, int column) {
+  for (int k = 0; k < s->kinds && column >= 0; ++k) {
+    if (!s->reading[k].enabled) continue;
+    if (column < s->reading[k].channels) return f3r_sensor_kind_at(k)->column[column];
+    column -= s->reading[k].channels;
+  }
+  return NULL;
+}
+
+int f3r_sensors_row(const f3r_sensors* s, double* values) {
+  int n = 0;
+  for (int k = 0; k < s->kinds; ++k)
+    for (int c = 0; s->reading[k].enabled && c < s->reading[k].channels; ++c)
+      values[n++] = s->reading[k].value[c];
+  return n;
 }
 
 /* SplitMix64's finaliser: a bijection of 64-bit words that mixes every bit. */
@@ -113,39 +128,45 @@ double f3r_sensor_normal(int seed, int kind, int channel, long sample) {
   return sqrt(-2.0 * log(u1)) * cos(2.0 * M_PI * u2); /* Box-Muller */
 }
 
-f3r_status f3r_sensors_truth(f3r_sensors* s, const f3r_outputs* out,
-                             double value[F3R_SENSOR_KINDS][F3R_SENSOR_MAX_CHANNELS],
-                             f3r_error* err) {
+/* The exact values of the kinds with want[k] into value[k]; the accelerations are solved once,
+ * when one of them asks. */
+static f3r_status measure_kinds(f3r_sensors* s, const f3r_outputs* out, const int* want,
+                                double value[F3R_SENSOR_MAX_KINDS][F3R_SENSOR_MAX_CHANNELS],
+                                f3r_error* err) {
   const f3r_model* m = s->model;
-  for (int j = 0; j < F3R_Q_LEG_JOINTS; ++j) value[F3R_SENSOR_ENCODERS][j] = out->q[j];
-  for (int i = 0; i < 3; ++i) {
-    const f3r_link_params* lp = &m->link[i];
-    double eps = 0.0;
-    if (lp->model != F3R_LINK_RIGID)
-      for (int j = 0; j < lp->modes; ++j) eps += s->strain_row[i][j] * out->q[lp->eta_index + j];
-    value[F3R_SENSOR_STRAIN][i] = eps;
-  }
   double a[F3R_MAX_Q], lambda[F3R_NCON];
-  if (f3r_solve_accelerations(m, out->q, out->v, out->forces, a, lambda, s->work) != F3R_OK)
-    return f3r_error_set(err, F3R_ERR_SINGULAR,
-                         "accelerometer: the accelerations cannot be solved at t = %g", out->t);
-  const double fx = a[F3R_Q_X] - m->gravity[0], fy = a[F3R_Q_Y] - m->gravity[1];
-  const double c = cos(out->q[F3R_Q_PHI]), sn = sin(out->q[F3R_Q_PHI]);
-  value[F3R_SENSOR_ACCELEROMETER][0] = c * fx + sn * fy;
-  value[F3R_SENSOR_ACCELEROMETER][1] = -sn * fx + c * fy;
-  value[F3R_SENSOR_ACCELEROMETER][2] = out->v[F3R_Q_PHI];
+  f3r_sensor_input in = {m, out, NULL, NULL};
+  for (int k = 0; k < s->kinds; ++k) {
+    if (!want[k]) continue;
+    const f3r_sensor_measure* measure = f3r_sensor_measure_of(k);
+    if (measure->needs_accelerations && !in.a) {
+      if (f3r_solve_accelerations(m, out->q, out->v, out->forces, a, lambda, s->work) != F3R_OK)
+        return f3r_error_set(err, F3R_ERR_SINGULAR,
+                             "%s: the accelerations cannot be solved at t = %g",
+                             f3r_sensor_kind_at(k)->name, out->t);
+      in.a = a;
+    }
+    in.constants = s->constants[k];
+    measure->measure(&in, value[k]);
+  }
   return F3R_OK;
+}
+
+f3r_status f3r_sensors_truth(f3r_sensors* s, const f3r_outputs* out,
+                             double value[F3R_SENSOR_MAX_KINDS][F3R_SENSOR_MAX_CHANNELS],
+                             f3r_error* err) {
+  int want[F3R_SENSOR_MAX_KINDS];
+  for (int k = 0; k < s->kinds; ++k) want[k] = 1;
+  return measure_kinds(s, out, want, value, err);
 }
 
 /* Sample k of sensor kind from the exact values: noise, then quantisation. */
 static void measure(f3r_sensors* s, int kind, long k, const double* truth, double t) {
   const f3r_sensor_scene* c = &s->config[kind];
   double* slot = s->line[kind][k % (c->delay + 1)];
-  for (int ch = 0; ch < kChannels[kind]; ++ch) {
-    /* noise[g] and resolution[g]: encoders' strokes 0, angles 1; the gyro 1 */
-    const int g = kind == F3R_SENSOR_ENCODERS        ? ch / 3
-                  : kind == F3R_SENSOR_ACCELEROMETER ? ch == 2
-                                                     : 0;
+  const f3r_sensor_kind* described = f3r_sensor_kind_at(kind);
+  for (int ch = 0; ch < described->channels; ++ch) {
+    const int g = described->group[ch]; /* which noise[g] and resolution[g] */
     double x = truth[ch];
     if (c->noise[g] > 0.0) x += c->noise[g] * f3r_sensor_normal(c->seed, kind, ch, k);
     if (c->resolution[g] > 0.0) x = c->resolution[g] * nearbyint(x / c->resolution[g]);
@@ -164,29 +185,34 @@ f3r_status f3r_sensors_update(f3r_sensors* s, const f3r_outputs* out, f3r_error*
                          "f3r_sensors_update: t = %.17g is before the last update's %.17g "
                          "(f3r_sensors_reset first)",
                          out->t, s->last_t);
-  double truth[F3R_SENSOR_KINDS][F3R_SENSOR_MAX_CHANNELS];
-  int have_truth = 0;
-  for (int kind = 0; kind < F3R_SENSOR_KINDS; ++kind) {
+  double truth[F3R_SENSOR_MAX_KINDS][F3R_SENSOR_MAX_CHANNELS];
+  long due[F3R_SENSOR_MAX_KINDS];
+  int want[F3R_SENSOR_MAX_KINDS], any = 0;
+  for (int kind = 0; kind < s->kinds; ++kind) {
+    s->reading[kind].fresh = 0;
+    due[kind] = due_sample(out->t, s->config[kind].rate);
+    want[kind] = s->config[kind].enabled && due[kind] > s->reading[kind].updated_at_sample;
+    any |= want[kind];
+  }
+  if (!any) {
+    s->last_t = out->t;
+    return F3R_OK;
+  }
+  const f3r_status st = measure_kinds(s, out, want, truth, err);
+  if (st != F3R_OK) return st;
+  for (int kind = 0; kind < s->kinds; ++kind) {
+    if (!want[kind]) continue;
     f3r_sensor_reading* r = &s->reading[kind];
     const f3r_sensor_scene* c = &s->config[kind];
-    r->fresh = 0;
-    if (!c->enabled) continue;
-    const long due = due_sample(out->t, c->rate);
-    if (due <= r->updated_at_sample) continue;
-    if (!have_truth) {
-      const f3r_status st = f3r_sensors_truth(s, out, truth, err);
-      if (st != F3R_OK) return st;
-      have_truth = 1;
-    }
     long first = r->updated_at_sample + 1;
-    if (first < due - c->delay) first = due - c->delay;
-    for (long k = first; k <= due; ++k) measure(s, kind, k, truth[kind], out->t);
-    const long reported = due - c->delay > 0 ? due - c->delay : 0;
+    if (first < due[kind] - c->delay) first = due[kind] - c->delay;
+    for (long k = first; k <= due[kind]; ++k) measure(s, kind, k, truth[kind], out->t);
+    const long reported = due[kind] - c->delay > 0 ? due[kind] - c->delay : 0;
     const int at = (int)(reported % (c->delay + 1));
     memcpy(r->value, s->line[kind][at], sizeof r->value);
     r->measured_at = s->line_t[kind][at];
     r->sample = reported;
-    r->updated_at_sample = due;
+    r->updated_at_sample = due[kind];
     r->fresh = 1;
   }
   s->last_t = out->t;

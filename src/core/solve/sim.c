@@ -127,9 +127,13 @@ f3r_status f3r_sim_create(const f3r_model* model, const f3r_solver_settings* set
   if (!s) return f3r_error_set(err, F3R_ERR_MEMORY, "f3r_sim_create: out of memory");
   s->model = model;
   s->settings = settings ? *settings : f3r_solver_settings_from_scene(&model->scene);
-  s->ops = s->settings.integrator == F3R_INTEGRATOR_ERK    ? &f3r_erk_stepper
-           : s->settings.integrator == F3R_INTEGRATOR_DIRK ? &f3r_dirk_stepper
-                                                           : &f3r_ida_stepper;
+  s->ops = f3r_stepper_ops_of((int)s->settings.integrator);
+  if (!s->ops) {
+    const int integrator = (int)s->settings.integrator;
+    free(s);
+    return f3r_error_set(err, F3R_ERR_ARGUMENT, "f3r_sim_create: integrator %d is not one of %d",
+                         integrator, f3r_integrator_kind_count());
+  }
   s->ny = f3r_state_size(model, s->settings.formulation);
   f3r_stepper* stp = &s->stepper;
   stp->model = model;

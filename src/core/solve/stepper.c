@@ -8,6 +8,27 @@
 
 #include "erk_tables.h"
 
+/* In the order of integrator_kinds.c's table. */
+static const f3r_stepper_ops* steppers[F3R_INTEGRATOR_MAX_KINDS] = {
+    &f3r_ida_stepper, &f3r_erk_stepper, &f3r_dirk_stepper};
+
+const f3r_stepper_ops* f3r_stepper_ops_of(int kind) {
+  return kind >= 0 && kind < f3r_integrator_kind_count() ? steppers[kind] : NULL;
+}
+
+f3r_status f3r_integrators_register(const f3r_integrator_kind* kind, const f3r_stepper_ops* ops,
+                                    int* index, f3r_error* err) {
+  const int k = ops ? f3r_integrator_kind_add(kind) : -1;
+  if (k < 0)
+    return f3r_error_set(err, F3R_ERR_ARGUMENT,
+                         "f3r_integrators_register: '%s' refused (no stepper, a name taken, no "
+                         "formulation or %d integrators already)",
+                         kind && kind->name ? kind->name : "(null)", F3R_INTEGRATOR_MAX_KINDS);
+  steppers[k] = ops;
+  *index = k;
+  return F3R_OK;
+}
+
 void f3r_stepper_error_handler(int code, const char* module, const char* function, char* msg,
                                void* user) {
   f3r_stepper* st = user;
@@ -64,7 +85,7 @@ void f3r_stepper_root_directions(int directions[F3R_NROOTS]) {
 f3r_status f3r_stepper_explicit_start(f3r_stepper* st, double t0, int implicit,
                                       const char* default_table, ARKodeButcherTable* table,
                                       f3r_error* err) {
-  const char* integrator = implicit ? "dirk" : "erk";
+  const char* integrator = f3r_integrator_name(st->settings.integrator);
   *table = NULL;
   st->t_segment = t0;
   if (st->settings.formulation != F3R_FORMULATION_MINIMAL)

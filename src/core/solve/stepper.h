@@ -15,6 +15,7 @@
 #include <sunlinsol/sunlinsol_dense.h>
 #include <sunmatrix/sunmatrix_dense.h>
 
+#include "flex3rpr/kinds.h"
 #include "flex3rpr/sim.h"
 
 #include "events.h"
@@ -81,6 +82,15 @@ extern const f3r_stepper_ops f3r_ida_stepper;
 
 extern const f3r_stepper_ops f3r_erk_stepper;
 extern const f3r_stepper_ops f3r_dirk_stepper;
+
+/* The stepper of integrator kind k (kinds.h: built-ins in F3R_INTEGRATOR_* order, then those
+ * registered); NULL when there is none. */
+const f3r_stepper_ops* f3r_stepper_ops_of(int kind);
+/* Adds an integrator: its descriptor to the scene layer's table (f3r_integrator_kind_add) and
+ * its stepper here, at the same index, which it returns (the f3r_integrator a scene names it
+ * by); F3R_ERR_ARGUMENT when the table refuses it. Not thread-safe: before the first scene. */
+f3r_status f3r_integrators_register(const f3r_integrator_kind* kind, const f3r_stepper_ops* ops,
+                                    int* index, f3r_error* err);
 
 /* The simulation's stepper (sim.c), for the tests. */
 const f3r_stepper* f3r_sim_stepper(const f3r_sim* sim);

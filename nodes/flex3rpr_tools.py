@@ -30,7 +30,7 @@ import unittest
 import xml.etree.ElementTree as ET
 
 HERE = os.path.dirname(os.path.abspath(__file__))
-ROOT = os.path.dirname(HERE)  # the checkout, when this file is scripts/flex3rpr_tools.py
+ROOT = os.path.dirname(HERE)  # the checkout, when this file is nodes/flex3rpr_tools.py
 
 
 def find_binary(name="flex3rpr_sim", env="F3R_SIM"):

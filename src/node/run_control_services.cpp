@@ -1,4 +1,4 @@
-#include "services.hpp"
+#include "run_control_services.hpp"
 
 namespace flex3rpr {
 

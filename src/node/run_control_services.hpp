@@ -1,7 +1,7 @@
 // ~pause, ~resume (std_srvs/Empty), ~reset and ~step (std_srvs/Trigger), as gazebo_ros users
 // know them. They only set flags; the loop in sim_node.cpp acts on them between periods.
 // ~step_with_command, ~set_state and ~linearise act on the simulation itself, through the
-// handlers the node gives (sim_services.cpp); callbacks run between periods (one thread).
+// handlers the node gives (session_services.cpp); callbacks run between periods (one thread).
 #pragma once
 
 #include <ros/ros.h>

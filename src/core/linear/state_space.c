@@ -5,7 +5,7 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "accuracy_parts.h"
+#include "linear_parts.h"
 #include "dense.h"
 #include "model_layout.h"
 

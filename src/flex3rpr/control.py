@@ -1,6 +1,8 @@
-"""What the example controllers (scripts/pd_controller, scripts/lqr_controller) share: the
-manipulator's geometry and inverse kinematics, the linear plant that `flex3rpr_sim SCENE
---linearise FILE.mat` exports and a discrete LQR designed on it, and the lockstep plumbing.
+"""What the example controllers (nodes/pd_controller, nodes/lqr_controller) share: the scene
+as `flex3rpr.Sim` loads and checks it (its home pose, stroke, the legs' joints of a pose through the
+core's loop closure, its linear plant, the root strain gauges' rows, the sensors as the node has
+them), a discrete LQR and a steady-state Kalman filter designed on that plant, and the lockstep
+plumbing. Nothing here models the robot: every physical quantity comes from the core.
 
 Lockstep (flex3rpr_node ~lockstep): the node publishes the state at t_k (joint_states, ~odom,
 ~beam_state, ~status, latched) and integrates [t_k, t_k+1] only after the next command arrives,
@@ -16,56 +18,77 @@ import json
 import math
 import os
 import queue
-import subprocess
-import tempfile
 import threading
 import time
 
 import numpy as np
 
-import flex3rpr_tools  # beside this module: finds flex3rpr_sim
+import flex3rpr
 
-# ---- geometry (docs/model.md; defaults of the scene's geometry and link sections) ---------
-LEG_ANGLES = (-math.pi / 6, math.pi / 2, 7 * math.pi / 6)
 JOINTS_RHO = ["leg_%d_prismatic" % (i + 1) for i in range(3)]
 JOINTS_THETA = ["leg_%d_revolute" % (i + 1) for i in range(3)]
 
 
-class Geometry:
-    """A_i at radius base_side/sqrt(3) and angle phi_i, C_i at radius platform_side/sqrt(3) and
-    angle phi_i + phi_p from P; the stroke rho_i = |C_i - A_i| - l (undeflected link)."""
+# ---- the scene, through flex3rpr.Sim -----------------------------------------------------------
+def scene_overrides(value, name="~set"):
+    """Scene overrides as flex3rpr_sim's --set gives them: "FIELD=VALUE" strings (a list, or
+    one string), in order (a later one of the same field wins); None, "" or []: none. Returns
+    the overrides for flex3rpr.Sim."""
+    if value in (None, "", []):
+        return {}
+    items = [value] if isinstance(value, str) else value
+    if not isinstance(items, (list, tuple)):
+        raise ValueError("%s: a list of FIELD=VALUE strings expected, got %r" % (name, value))
+    out = {}
+    for item in items:
+        field, sep, text = str(item).partition("=")
+        if not sep or not field.strip():
+            raise ValueError("%s: %r is not FIELD=VALUE (as flex3rpr_sim --set)" % (name, item))
+        out.pop(field.strip(), None)
+        out[field.strip()] = text.strip()
+    return out
 
-    def __init__(self, base_side=0.66, platform_side=0.1, link_length=0.2, stroke_min=0.0,
-                 stroke_max=0.2, home=(0.0, 0.0, 0.0)):
-        self.r_a = base_side / math.sqrt(3.0)
-        self.r_c = platform_side / math.sqrt(3.0)
-        self.l = link_length
-        self.stroke = (stroke_min, stroke_max)
-        self.home = tuple(float(v) for v in home)
 
-    @classmethod
-    def from_scene(cls, path):
-        """The geometry and the initial platform pose of a scene YAML (defaults where it is silent)."""
-        import yaml
-        with open(path) as fh:
-            s = yaml.safe_load(fh) or {}
-        g = s.get("geometry") or {}
-        link = s.get("link") or {}
-        init = s.get("initial") or {}
-        return cls(g.get("base_side", 0.66), g.get("platform_side", 0.1), link.get("length", 0.2),
-                   g.get("stroke_min", 0.0), g.get("stroke_max", 0.2),
-                   init.get("platform_pose", (0.0, 0.0, 0.0)))
+def sensor_overrides(params, name="~sensors"):
+    """The node's ~sensors parameters ({encoders: {delay: 1, ...}, strain_gauges: {...}}) as scene
+    overrides, field by field over the scene's sensors section, as the node applies them: a
+    sensor named is on (from the defaults where the scene has none)."""
+    out = {}
+    if not params:
+        return out
+    if not isinstance(params, dict):
+        raise ValueError("%s: not a mapping: %r" % (name, params))
+    for sensor, fields in params.items():
+        if not isinstance(fields, dict):
+            raise ValueError("%s/%s: not a mapping: %r" % (name, sensor, fields))
+        for key, value in fields.items():
+            out["sensors.%s.%s" % (sensor, key)] = value
+    return out
 
-    def inverse_kinematics(self, pose):
-        """Strokes rho_i and leg directions theta_i of the platform pose (x, y, phi), straight links."""
-        x, y, phi = pose
-        rho, theta = [], []
-        for a in LEG_ANGLES:
-            dx = x + self.r_c * math.cos(a + phi) - self.r_a * math.cos(a)
-            dy = y + self.r_c * math.sin(a + phi) - self.r_a * math.sin(a)
-            rho.append(math.hypot(dx, dy) - self.l)
-            theta.append(math.atan2(dy, dx))
-        return rho, theta
+
+def open_scene(scene, overrides=None):
+    """flex3rpr.Sim of the scene with the overrides: checked as the node and the CLI check it
+    (flex3rpr.SceneError names the file or override, the field and the allowed range)."""
+    return flex3rpr.Sim(scene, overrides=overrides or {})
+
+
+def home_pose(sim):
+    """The scene's initial platform pose (x, y, phi)."""
+    return tuple(float(v) for v in sim.state.pose)
+
+
+def stroke(sim):
+    """The stroke's limits (stroke_min, stroke_max) of rho_i, m."""
+    g = sim.geometry
+    return g["stroke_min"], g["stroke_max"]
+
+
+def leg_joints(sim, pose, modal=None):
+    """Strokes rho_i and leg directions theta_i of the platform pose (x, y, phi) with the links
+    deflected by modal (the model's modal coordinates; None: straight), by the core's loop
+    closure. flex3rpr.Error for a pose the legs cannot reach."""
+    q = sim.close_loops(pose, modal)
+    return [float(v) for v in q[0:3]], [float(v) for v in q[3:6]]
 
 
 def wrap(angle):
@@ -85,10 +108,22 @@ def parse_pose(value, home):
     return tuple(value)
 
 
+def node_arguments(doc):
+    """A controller node's command line: --help prints its docstring; the ROS remappings and
+    roslaunch's __name:=, __log:= arguments pass (rospy.myargv takes them out)."""
+    import argparse
+    import rospy
+    parts = doc.split("\n\n")
+    ap = argparse.ArgumentParser(description=parts[0], epilog="\n\n".join(parts[1:]),
+                                 formatter_class=argparse.RawDescriptionHelpFormatter)
+    return ap.parse_args(rospy.myargv()[1:])
+
+
 # ---- the linear plant ----------------------------------------------------------------------------
 def load_plant(path):
-    """The plant `flex3rpr_sim --linearise` writes: the JSON beside a .mat (or the .mat through
-    scipy.io.loadmat, or a JSON given directly). Returns a dict of numpy arrays and name lists."""
+    """A plant file as `flex3rpr_sim --linearise` writes it: the JSON beside a .mat (or the .mat
+    through scipy.io.loadmat, or a JSON given directly). Returns a dict of numpy arrays and name
+    lists, as flex3rpr.Sim.linearise()."""
     root, ext = os.path.splitext(path)
     json_path = path if ext == ".json" else root + ".json"
     plant = {}
@@ -118,36 +153,31 @@ def load_plant(path):
     return out
 
 
-def node_arguments(doc):
-    """A controller node's command line: --help prints its docstring; the ROS remappings and
-    roslaunch's __name:=, __log:= arguments pass (rospy.myargv takes them out)."""
-    import argparse
-    import rospy
-    parts = doc.split("\n\n")
-    ap = argparse.ArgumentParser(description=parts[0], epilog="\n\n".join(parts[1:]),
-                                 formatter_class=argparse.RawDescriptionHelpFormatter)
-    return ap.parse_args(rospy.myargv()[1:])
+def complete_plant(plant, sim, label="the plant"):
+    """A loaded plant without outputs (C, y0, output_names) gets the scene's, the same states
+    required: the tip deflections' rows and the encoders' come from the core's linearisation."""
+    if "C" in plant and "output_names" in plant and "y0" in plant:
+        return plant
+    own = sim.linearise()
+    if own["state_names"] != plant["state_names"]:
+        raise ValueError("%s has no outputs (C, y0, output_names) and its states are not the scene's "
+                         "(%s against %s)" % (label, plant["state_names"], own["state_names"]))
+    out = dict(plant)
+    for key in ("C", "D", "y0", "output_names"):
+        out[key] = own[key]
+    return out
 
 
-def find_cli():
-    """flex3rpr_sim: $F3R_SIM, beside this module (an install space), the source tree's build,
-    catkin_find, or PATH (flex3rpr_tools.find_binary)."""
-    try:
-        return flex3rpr_tools.find_binary("flex3rpr_sim", "F3R_SIM")
-    except FileNotFoundError:
-        return "flex3rpr_sim"
-
-
-def linearise(scene, cli=None):
-    """Runs `flex3rpr_sim SCENE --linearise plant.mat` in a temporary folder and loads the plant."""
-    cli = cli or find_cli()
-    with tempfile.TemporaryDirectory(prefix="flex3rpr_plant_") as tmp:
-        mat = os.path.join(tmp, "plant.mat")
-        res = subprocess.run([cli, scene, "--linearise", mat], capture_output=True, text=True, timeout=600)
-        if res.returncode != 0 or not os.path.exists(mat):
-            raise RuntimeError("%s %s --linearise failed (exit %d): %s" % (cli, scene, res.returncode,
-                                                                          (res.stderr or res.stdout).strip()))
-        return load_plant(mat)
+def modal_states(plant, sim):
+    """The plant's state indices of the model's modal coordinates eta_i_j, in State.modal's order
+    (link 1's, then 2's, then 3's); ValueError when the plant's modal states are not the model's."""
+    names = plant["state_names"]
+    want = ["eta_%d_%d" % (i + 1, j + 1) for i in range(3) for j in range(sim.modes[i])]
+    have = [n for n in names if n.startswith("eta_") and not n.endswith("_rate")]
+    if sorted(have) != sorted(want):
+        raise ValueError("the plant's modal states %s are not the scene's model's %s (modes %s)"
+                         % (have, want, sim.modes))
+    return [names.index(n) for n in want]
 
 
 def discretise(A, B, dt):
@@ -161,18 +191,13 @@ def discretise(A, B, dt):
 
 
 def tip_rows(plant):
-    """The tip deflections' rows over the state: the plant's C rows tip_deflection_1..3, or
-    psi_j(1) = 2 (-1)^j of fixed-free modes when the plant has no C."""
-    nx = plant["A"].shape[0]
+    """The tip deflections' rows over the state: the plant's C rows tip_deflection_1..3 (a loaded
+    plant without them: complete_plant first)."""
     names = plant.get("output_names", [])
-    if "C" in plant and all("tip_deflection_%d" % (i + 1) in names for i in range(3)):
-        return np.vstack([plant["C"][names.index("tip_deflection_%d" % (i + 1))] for i in range(3)])
-    rows = np.zeros((3, nx))
-    for k, s in enumerate(plant["state_names"]):
-        if s.startswith("eta_") and not s.endswith("_rate"):
-            i, j = (int(v) for v in s[4:].split("_"))
-            rows[i - 1, k] = 2.0 * (-1) ** j
-    return rows
+    want = ["tip_deflection_%d" % (i + 1) for i in range(3)]
+    if "C" not in plant or not all(n in names for n in want):
+        raise ValueError("the plant has no C rows %s (complete_plant gives it the scene's)" % ", ".join(want))
+    return np.vstack([plant["C"][names.index(n)] for n in want])
 
 
 def lqr_design(plant, dt, pose_scale=(0.01, 0.01, 0.03), rate_scale=(0.3, 0.3, 1.0), tip_scale=1e-6,
@@ -200,38 +225,12 @@ def lqr_design(plant, dt, pose_scale=(0.01, 0.01, 0.03), rate_scale=(0.3, 0.3, 1
     return K, Ad, Bd
 
 
-def clamped_roots(end, count):
-    """alpha_j, j = 1..count, of a fixed-free (cos a cosh a + 1 = 0) or fixed-pinned
-    (tan a = tanh a) beam, bracketed near (j - 1/2) pi and (j + 1/4) pi."""
-    from scipy.optimize import brentq
-    if end == "fixed_free":
-        f, centre = (lambda a: math.cos(a) * math.cosh(a) + 1.0), (lambda j: (j - 0.5) * math.pi)
-    else:
-        f, centre = (lambda a: math.tan(a) - math.tanh(a)), (lambda j: (j + 0.25) * math.pi)
-    return [brentq(f, centre(j) - 0.4, centre(j) + 0.4, xtol=1e-15) for j in range(1, count + 1)]
-
-
-def gauge_rows(plant, scene):
-    """The root strain gauges' rows over the plant's state (docs/scenes.md, sensors):
-    eps_i = (d/2) w_i''(0) = (d/2) / l^2 sum_j psi_j''(0) eta_ij, with psi_j''(0) = -2 alpha_j^2
-    for the paper's modes. The plant's modal states must all be modes (no static correction:
-    their curvatures are not closed-form; the core has them, f3r_sensors_strain_row)."""
-    import yaml
-    with open(scene) as fh:
-        s = yaml.safe_load(fh) or {}
-    link = s.get("link") or {}
-    d, l = float(link.get("diameter", 0.010)), float(link.get("length", 0.2))
-    links = s.get("links") or {}
-    links = links if isinstance(links, list) else [links] * 3
+def gauge_rows(plant, sim):
+    """The root strain gauges' rows over the plant's state (docs/scenes.md, sensors): eps_i =
+    (d/2) w_i''(0), the core's rows over the modal coordinates (flex3rpr.Sim.strain_rows,
+    f3r_sensors_strain_row: static shapes included) placed at the plant's eta states."""
     rows = np.zeros((3, plant["A"].shape[0]))
-    for k, name in enumerate(plant["state_names"]):
-        if name.startswith("eta_") and not name.endswith("_rate"):
-            i, j = (int(v) for v in name[4:].split("_"))
-            spec = links[i - 1] or {}
-            if spec.get("static_correction"):
-                raise ValueError("gauge_rows: link %d has static shapes; the observer needs plain modes" % i)
-            alpha = clamped_roots(spec.get("model", "fixed_free"), j)[-1]
-            rows[i - 1, k] = 0.5 * d / l ** 2 * (-2.0 * alpha ** 2)
+    rows[:, modal_states(plant, sim)] = sim.strain_rows()
     return rows
 
 
