@@ -1,0 +1,210 @@
+// The eigenvalues of the minimal formulation's explicit ODE y' = f(t, y) along a scene's path,
+// and the stability bounds of the explicit Runge-Kutta tables on the imaginary and the negative
+// real axis: what limits an explicit integrator's step (bench/eigenvalues writes the page).
+//   f3r_eigenvalues SCENE.yaml [EVERY_S] [TABLE ...]
+//   f3r_eigenvalues --erk-errors SCENE.yaml RTOL [TABLE]
+// The second form runs ERK at RTOL (atol RTOL/100, as the benchmark) and, after each 0.1 ms,
+// names the state component whose weighted local error estimate (ARKODE's, |e_i| w_i) is the
+// largest of the last step: which motion the error test follows.
+// Prints JSON: {"samples": [{"t", "re": [...], "im": [...]}], "tables": [{"name", "imaginary",
+// "real"}]}. The Jacobian is f3r_explicit_rhs's by central differences (the ODE IDA and ERK both
+// integrate in the minimal formulation); the path is IDA's at rtol 1e-10.
+#include <cstdio>  // first: arkode_butcher.h uses FILE without including it
+
+#include <arkode/arkode_butcher_erk.h>
+#include <arkode/arkode_erkstep.h>
+
+#include <Eigen/Dense>
+#include <cmath>
+#include <complex>
+#include <cstdlib>
+#include <string>
+#include <vector>
+
+#include "erk_tables.h"
+#include "residual.h"
+#include "stepper.h"
+
+namespace {
+
+// |R(z)| of an explicit table: R(z) = 1 + z b^T (I - z A)^{-1} 1, by forward substitution.
+double Amplification(ARKodeButcherTable t, std::complex<double> z) {
+  const int s = t->stages;
+  std::vector<std::complex<double>> k(static_cast<size_t>(s));
+  std::complex<double> sum = 0.0;
+  for (int i = 0; i < s; ++i) {
+    std::complex<double> ki = 1.0;
+    for (int j = 0; j < i; ++j) ki += z * t->A[i][j] * k[static_cast<size_t>(j)];
+    k[static_cast<size_t>(i)] = ki;
+    sum += t->b[i] * ki;
+  }
+  return std::abs(1.0 + z * sum);
+}
+
+// The largest y with |R(y d)| <= 1 on the whole segment from 0 (d = i: the imaginary axis, -1:
+// the negative real axis), to 1e-4.
+double Bound(ARKodeButcherTable t, std::complex<double> d) {
+  double y = 0.0;
+  const double h = 1e-4;
+  while (y < 50.0 && Amplification(t, (y + h) * d) <= 1.0 + 1e-12) y += h;
+  return y;
+}
+
+// The group of minimal state component i (y = [z | u | W], z = (X_p, Y_p, phi_p, eta)): "pose",
+// "pose rate", "mode j" or "mode j rate" (j of each link's basis, from 1), "work".
+std::string Group(const f3r_model* m, int i) {
+  const int nz = f3r_model_nq(m) - F3R_Q_INDEPENDENT;
+  if (i == 2 * nz) return "work";
+  const bool rate = i >= nz;
+  const int q = (rate ? i - nz : i) + F3R_Q_INDEPENDENT;
+  if (q < F3R_Q_MODAL) return rate ? "pose rate" : "pose";
+  for (int l = 0; l < 3; ++l) {
+    const f3r_link_params* lp = f3r_model_link(m, l);
+    if (q >= lp->eta_index && q < lp->eta_index + lp->modes)
+      return "mode " + std::to_string(q - lp->eta_index + 1) + (rate ? " rate" : "");
+  }
+  return "?";
+}
+
+// --erk-errors: the histogram of the groups that set ERK's steps, and the mean step.
+int ErkErrors(const char* path, double rtol, const char* table) {
+  f3r_scene scene;
+  f3r_error err{};
+  if (f3r_scene_load(path, &scene, &err) != F3R_OK) {
+    std::fprintf(stderr, "%s\n", err.message);
+    return 1;
+  }
+  scene.formulation = F3R_FORMULATION_MINIMAL;
+  scene.integrator = F3R_INTEGRATOR_ERK;
+  scene.rtol = rtol;
+  scene.atol = rtol / 100;
+  std::snprintf(scene.table, sizeof scene.table, "%s", table ? table : "");
+  f3r_model* model = nullptr;
+  f3r_sim* sim = nullptr;
+  if (f3r_model_create(&scene, &model, &err) != F3R_OK ||
+      f3r_sim_create(model, nullptr, &sim, &err) != F3R_OK) {
+    std::fprintf(stderr, "%s\n", err.message);
+    return 1;
+  }
+  const int ny = f3r_state_size(model, F3R_FORMULATION_MINIMAL);
+  SUNContext ctx = nullptr;
+  SUNContext_Create(nullptr, &ctx);
+  N_Vector ele = N_VNew_Serial(ny, ctx), ewt = N_VNew_Serial(ny, ctx);
+  std::vector<std::pair<std::string, int>> counts;
+  void* mem = f3r_sim_stepper(sim)->mem;
+  long samples = 0;
+  double norm_sum = 0.0;
+  for (int k = 1; k * 1e-4 <= scene.duration + 1e-12; ++k) {
+    if (f3r_sim_advance(sim, k * 1e-4, &err) != F3R_OK) {
+      std::fprintf(stderr, "%s\n", err.message);
+      return 1;
+    }
+    if (ERKStepGetEstLocalErrors(mem, ele) < 0 || ERKStepGetErrWeights(mem, ewt) < 0) continue;
+    int worst = 0;
+    double largest = -1.0, squares = 0.0;
+    for (int i = 0; i < ny; ++i) {
+      const double w = std::fabs(NV_Ith_S(ele, i)) * NV_Ith_S(ewt, i);
+      squares += w * w;
+      if (w > largest) largest = w, worst = i;
+    }
+    norm_sum += std::sqrt(squares / ny);
+    const std::string g = Group(model, worst);
+    bool found = false;
+    for (auto& c : counts)
+      if (c.first == g) ++c.second, found = true;
+    if (!found) counts.push_back({g, 1});
+    ++samples;
+  }
+  const f3r_sim_stats stats = f3r_sim_outputs(sim)->stats;
+  std::printf(
+      "{\"rtol\": %g, \"steps\": %ld, \"fails\": %ld, \"mean_step\": %.6g, \"samples\": %ld, "
+      "\"mean_error_norm\": %.3g, \"largest\": {",
+      rtol, stats.steps, stats.error_test_failures,
+      scene.duration / static_cast<double>(stats.steps), samples,
+      norm_sum / static_cast<double>(samples));
+  for (size_t c = 0; c < counts.size(); ++c)
+    std::printf("%s\"%s\": %d", c ? ", " : "", counts[c].first.c_str(), counts[c].second);
+  std::printf("}}\n");
+  N_VDestroy(ele);
+  N_VDestroy(ewt);
+  SUNContext_Free(&ctx);
+  f3r_sim_destroy(sim);
+  f3r_model_destroy(model);
+  f3r_scene_free(&scene);
+  return 0;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  if (argc >= 4 && std::string(argv[1]) == "--erk-errors")
+    return ErkErrors(argv[2], std::atof(argv[3]), argc > 4 ? argv[4] : nullptr);
+  if (argc < 2) {
+    std::fprintf(stderr, "usage: f3r_eigenvalues SCENE.yaml [EVERY_S] [TABLE ...]\n");
+    return 2;
+  }
+  const double every = argc > 2 ? std::atof(argv[2]) : 0.005;
+  f3r_scene scene;
+  f3r_error err{};
+  if (f3r_scene_load(argv[1], &scene, &err) != F3R_OK) {
+    std::fprintf(stderr, "%s\n", err.message);
+    return 1;
+  }
+  scene.formulation = F3R_FORMULATION_MINIMAL;
+  scene.integrator = F3R_INTEGRATOR_IDA;
+  scene.rtol = 1e-10;
+  scene.atol = 1e-12;
+  f3r_model* model = nullptr;
+  f3r_sim* sim = nullptr;
+  if (f3r_model_create(&scene, &model, &err) != F3R_OK ||
+      f3r_sim_create(model, nullptr, &sim, &err) != F3R_OK) {
+    std::fprintf(stderr, "%s\n", err.message);
+    return 1;
+  }
+  f3r_workspace* ws = f3r_workspace_create(model);
+  const int ny = f3r_state_size(model, F3R_FORMULATION_MINIMAL);
+  const int n = ny - 1;  // the last component, W, is the work: no dynamics of its own
+  std::printf("{\"state_size\": %d, \"samples\": [", n);
+  std::vector<double> y(static_cast<size_t>(ny)), fp(y), fm(y);
+  for (int k = 0; k * every <= scene.duration + 1e-12; ++k) {
+    const double t = k * every;
+    if (k > 0 && f3r_sim_advance(sim, t, &err) != F3R_OK) {
+      std::fprintf(stderr, "%s\n", err.message);
+      return 1;
+    }
+    const double* state = f3r_sim_state(sim);
+    y.assign(state, state + ny);
+    Eigen::MatrixXd A(n, n);
+    for (int j = 0; j < n; ++j) {
+      const double h = 1e-6 * std::max(1.0, std::fabs(y[static_cast<size_t>(j)]));
+      const double keep = y[static_cast<size_t>(j)];
+      y[static_cast<size_t>(j)] = keep + h;
+      f3r_explicit_rhs(model, t, y.data(), nullptr, fp.data(), ws);
+      y[static_cast<size_t>(j)] = keep - h;
+      f3r_explicit_rhs(model, t, y.data(), nullptr, fm.data(), ws);
+      y[static_cast<size_t>(j)] = keep;
+      for (int i = 0; i < n; ++i)
+        A(i, j) = (fp[static_cast<size_t>(i)] - fm[static_cast<size_t>(i)]) / (2 * h);
+    }
+    Eigen::EigenSolver<Eigen::MatrixXd> es(A, false);
+    std::printf("%s{\"t\": %.6g, \"re\": [", k ? ", " : "", t);
+    for (int i = 0; i < n; ++i) std::printf("%s%.9g", i ? ", " : "", es.eigenvalues()[i].real());
+    std::printf("], \"im\": [");
+    for (int i = 0; i < n; ++i) std::printf("%s%.9g", i ? ", " : "", es.eigenvalues()[i].imag());
+    std::printf("]}");
+  }
+  std::printf("], \"tables\": [");
+  for (int a = 3; a < argc; ++a) {
+    ARKodeButcherTable t = f3r_stepper_load_table(0, argv[a]);
+    if (!t) continue;
+    std::printf("%s{\"name\": \"%s\", \"stages\": %d, \"imaginary\": %.4f, \"real\": %.4f}",
+                a > 3 ? ", " : "", argv[a], t->stages, Bound(t, {0.0, 1.0}), Bound(t, {-1.0, 0.0}));
+    ARKodeButcherTable_Free(t);
+  }
+  std::printf("]}\n");
+  f3r_workspace_destroy(ws);
+  f3r_sim_destroy(sim);
+  f3r_model_destroy(model);
+  f3r_scene_free(&scene);
+  return 0;
+}

@@ -1,0 +1,177 @@
+/* A multirate candidate for #59, as a benchmark prototype, not a simulation back end: the minimal
+ * ODE y' = f(y) split as f = f_S + f_F with the fast part linear, f_F(y) = J_F (y - y_ref), J_F
+ * the columns of f's Jacobian for the modal coordinates and their rates (the elastic
+ * oscillations and what they drive), refreshed every `refresh` s of the path; SUNDIALS' MRIStep
+ * with a fixed slow step (6.4 has no slow adaptivity) over an adaptive explicit inner ARKStep.
+ * Prints the end-effector path at 1 ms (t, X_p, Y_p) as CSV and, on stderr, CPU seconds, slow
+ * steps, fast steps and right-hand sides.
+ *   f3r_mri SCENE.yaml SLOW_STEP INNER_RTOL [REFRESH_S] [ORDER] [INNER_ORDER] */
+#include <stdio.h> /* first: arkode_butcher.h uses FILE without including it */
+
+#include <arkode/arkode_arkstep.h>
+#include <arkode/arkode_mristep.h>
+#include <math.h>
+#include <nvector/nvector_serial.h>
+#include <stdlib.h>
+#include <string.h>
+#include <time.h>
+
+#include "flex3rpr/sim.h"
+#include "model_layout.h"
+#include "residual.h"
+
+typedef struct {
+  const f3r_model* model;
+  f3r_workspace* ws;
+  int ny, nz;
+  double* JF;    /* ny x ny, column-major: the fast columns only */
+  double* yref;  /* the state the fast part is linear about */
+  double* work;  /* ny */
+  int* fast;     /* 1 for the columns of the modal coordinates and rates */
+  long full_rhs; /* f3r_explicit_rhs calls, the Jacobian's included */
+  double refresh, refreshed_at;
+} split;
+
+static void fast_part(const split* s, const double* y, double* out) {
+  for (int i = 0; i < s->ny; ++i) out[i] = 0.0;
+  for (int j = 0; j < s->ny; ++j) {
+    if (!s->fast[j]) continue;
+    const double d = y[j] - s->yref[j];
+    const double* col = s->JF + (size_t)j * s->ny;
+    for (int i = 0; i < s->ny; ++i) out[i] += col[i] * d;
+  }
+}
+
+/* J_F at y: central differences of f in the fast columns. */
+static void linearise(split* s, double t, const double* y) {
+  double* yy = malloc(sizeof(double) * s->ny);
+  double* fp = malloc(sizeof(double) * s->ny);
+  double* fm = malloc(sizeof(double) * s->ny);
+  memcpy(yy, y, sizeof(double) * s->ny);
+  memcpy(s->yref, y, sizeof(double) * s->ny);
+  for (int j = 0; j < s->ny; ++j) {
+    if (!s->fast[j]) continue;
+    const double h = 1e-7 * fmax(1.0, fabs(y[j]));
+    yy[j] = y[j] + h;
+    f3r_explicit_rhs(s->model, t, yy, NULL, fp, s->ws);
+    yy[j] = y[j] - h;
+    f3r_explicit_rhs(s->model, t, yy, NULL, fm, s->ws);
+    yy[j] = y[j];
+    s->full_rhs += 2;
+    for (int i = 0; i < s->ny; ++i) s->JF[(size_t)j * s->ny + i] = (fp[i] - fm[i]) / (2 * h);
+  }
+  s->refreshed_at = t;
+  free(yy);
+  free(fp);
+  free(fm);
+}
+
+static int slow_rhs(realtype t, N_Vector y, N_Vector ydot, void* user) {
+  split* s = user;
+  const double* yy = N_VGetArrayPointer(y);
+  double* out = N_VGetArrayPointer(ydot);
+  ++s->full_rhs;
+  if (f3r_explicit_rhs(s->model, t, yy, NULL, out, s->ws) != F3R_OK) return 1;
+  fast_part(s, yy, s->work);
+  for (int i = 0; i < s->ny; ++i) out[i] -= s->work[i];
+  return 0;
+}
+
+static int fast_rhs(realtype t, N_Vector y, N_Vector ydot, void* user) {
+  (void)t;
+  fast_part(user, N_VGetArrayPointer(y), N_VGetArrayPointer(ydot));
+  return 0;
+}
+
+/* After each slow step: a new linearisation when refresh has passed (the split changes only
+ * between slow steps, where f = f_S + f_F holds for either). */
+static int after_step(realtype t, N_Vector y, void* user) {
+  split* s = user;
+  if (s->refresh > 0 && t - s->refreshed_at >= s->refresh - 1e-12)
+    linearise(s, t, N_VGetArrayPointer(y));
+  return 0;
+}
+
+static double cpu(void) {
+  struct timespec ts;
+  clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &ts);
+  return ts.tv_sec + 1e-9 * ts.tv_nsec;
+}
+
+int main(int argc, char** argv) {
+  if (argc < 4) {
+    fprintf(stderr,
+            "usage: f3r_mri SCENE.yaml SLOW_STEP INNER_RTOL [REFRESH_S] [ORDER] [INNER_ORDER]\n");
+    return 2;
+  }
+  const double slow_step = atof(argv[2]), inner_rtol = atof(argv[3]);
+  f3r_scene scene;
+  f3r_error err = {0};
+  if (f3r_scene_load(argv[1], &scene, &err) != F3R_OK) {
+    fprintf(stderr, "%s\n", err.message);
+    return 1;
+  }
+  scene.formulation = F3R_FORMULATION_MINIMAL;
+  f3r_model* model = NULL;
+  f3r_sim* sim = NULL;
+  if (f3r_model_create(&scene, &model, &err) != F3R_OK ||
+      f3r_sim_create(model, NULL, &sim, &err) != F3R_OK) {
+    fprintf(stderr, "%s\n", err.message);
+    return 1;
+  }
+  split s = {0};
+  s.model = model;
+  s.ws = f3r_workspace_create(model);
+  s.ny = f3r_state_size(model, F3R_FORMULATION_MINIMAL);
+  s.nz = (s.ny - 1) / 2;
+  s.refresh = argc > 4 ? atof(argv[4]) : 0.0;
+  s.JF = calloc((size_t)s.ny * s.ny, sizeof(double));
+  s.yref = calloc(s.ny, sizeof(double));
+  s.work = calloc(s.ny, sizeof(double));
+  s.fast = calloc(s.ny, sizeof(int));
+  for (int k = 3; k < s.nz; ++k) s.fast[k] = s.fast[s.nz + k] = 1; /* eta and eta' */
+  SUNContext ctx = NULL;
+  SUNContext_Create(NULL, &ctx);
+  N_Vector y = N_VNew_Serial(s.ny, ctx);
+  memcpy(N_VGetArrayPointer(y), f3r_sim_state(sim), sizeof(double) * s.ny);
+  const double t0 = cpu();
+  linearise(&s, 0.0, N_VGetArrayPointer(y));
+  void* inner = ARKStepCreate(fast_rhs, NULL, 0.0, y, ctx);
+  ARKStepSStolerances(inner, inner_rtol, inner_rtol * 1e-2);
+  ARKStepSetUserData(inner, &s);
+  ARKStepSetMaxNumSteps(inner, 100000000L);
+  ARKStepSetOrder(inner, argc > 6 ? atoi(argv[6]) : 5);
+  MRIStepInnerStepper stepper = NULL;
+  ARKStepCreateMRIStepInnerStepper(inner, &stepper);
+  void* mri = MRIStepCreate(slow_rhs, NULL, 0.0, y, stepper, ctx);
+  MRIStepSetUserData(mri, &s);
+  MRIStepSetFixedStep(mri, slow_step);
+  MRIStepSetMaxNumSteps(mri, 100000000L);
+  if (argc > 5) MRIStepSetOrder(mri, atoi(argv[5]));
+  MRIStepSetPostprocessStepFn(mri, after_step);
+  printf("t,x_p,y_p\n");
+  const double* yy = N_VGetArrayPointer(y);
+  printf("%.6g,%.17g,%.17g\n", 0.0, yy[0], yy[1]);
+  for (int k = 1; k * 1e-3 <= scene.duration + 1e-12; ++k) {
+    realtype t = 0.0;
+    const int flag = MRIStepEvolve(mri, k * 1e-3, y, &t, ARK_NORMAL);
+    if (flag < 0) {
+      fprintf(stderr, "MRIStepEvolve: %d at t = %g\n", flag, t);
+      return 1;
+    }
+    printf("%.6g,%.17g,%.17g\n", k * 1e-3, yy[0], yy[1]);
+  }
+  const double seconds = cpu() - t0;
+  long slow = 0, fast = 0, fe = 0, fi = 0;
+  MRIStepGetNumSteps(mri, &slow);
+  ARKStepGetNumSteps(inner, &fast);
+  ARKStepGetNumRhsEvals(inner, &fe, &fi);
+  fprintf(stderr, "cpu %.6f slow_steps %ld fast_steps %ld fast_rhs %ld full_rhs %ld\n", seconds,
+          slow, fast, fe, s.full_rhs);
+  MRIStepFree(&mri);
+  MRIStepInnerStepper_Free(&stepper);
+  ARKStepFree(&inner);
+  N_VDestroy(y);
+  SUNContext_Free(&ctx);
+  return 0;
+}
