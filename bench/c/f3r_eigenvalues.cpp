@@ -27,8 +27,9 @@
 
 namespace {
 
-// |R(z)| of an explicit table: R(z) = 1 + z b^T (I - z A)^{-1} 1, by forward substitution.
-double Amplification(ARKodeButcherTable t, std::complex<double> z) {
+// |R(z)| of an explicit table's solution (weights b; embedded: its embedding's, d): R(z) = 1 +
+// z b^T (I - z A)^{-1} 1, by forward substitution.
+double Amplification(ARKodeButcherTable t, std::complex<double> z, bool embedded = false) {
   const int s = t->stages;
   std::vector<std::complex<double>> k(static_cast<size_t>(s));
   std::complex<double> sum = 0.0;
@@ -36,17 +37,17 @@ double Amplification(ARKodeButcherTable t, std::complex<double> z) {
     std::complex<double> ki = 1.0;
     for (int j = 0; j < i; ++j) ki += z * t->A[i][j] * k[static_cast<size_t>(j)];
     k[static_cast<size_t>(i)] = ki;
-    sum += t->b[i] * ki;
+    sum += (embedded ? t->d[i] : t->b[i]) * ki;
   }
   return std::abs(1.0 + z * sum);
 }
 
 // The largest y with |R(y d)| <= 1 on the whole segment from 0 (d = i: the imaginary axis, -1:
 // the negative real axis), to 1e-4.
-double Bound(ARKodeButcherTable t, std::complex<double> d) {
+double Bound(ARKodeButcherTable t, std::complex<double> d, bool embedded = false) {
   double y = 0.0;
   const double h = 1e-4;
-  while (y < 50.0 && Amplification(t, (y + h) * d) <= 1.0 + 1e-12) y += h;
+  while (y < 50.0 && Amplification(t, (y + h) * d, embedded) <= 1.0 + 1e-12) y += h;
   return y;
 }
 
@@ -197,8 +198,13 @@ int main(int argc, char** argv) {
   for (int a = 3; a < argc; ++a) {
     ARKodeButcherTable t = f3r_stepper_load_table(0, argv[a]);
     if (!t) continue;
-    std::printf("%s{\"name\": \"%s\", \"stages\": %d, \"imaginary\": %.4f, \"real\": %.4f}",
-                a > 3 ? ", " : "", argv[a], t->stages, Bound(t, {0.0, 1.0}), Bound(t, {-1.0, 0.0}));
+    std::printf(
+        "%s{\"name\": \"%s\", \"stages\": %d, \"order\": %d, \"embedded_order\": %d, "
+        "\"imaginary\": %.4f, \"real\": %.4f, \"embedded_imaginary\": %.4f, "
+        "\"embedded_real\": %.4f}",
+        a > 3 ? ", " : "", argv[a], t->stages, t->q, t->p, Bound(t, {0.0, 1.0}),
+        Bound(t, {-1.0, 0.0}), t->d ? Bound(t, {0.0, 1.0}, true) : 0.0,
+        t->d ? Bound(t, {-1.0, 0.0}, true) : 0.0);
     ARKodeButcherTable_Free(t);
   }
   std::printf("]}\n");
