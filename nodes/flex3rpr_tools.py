@@ -13,8 +13,8 @@ docs/benchmarks/.
   replace_section(path, begin, end, section)   a generated report between its marker lines
   machine_stamp()             CPU, cores, date and commit, for a report
 
-Imported by the scripts beside it (scripts/ in a checkout, lib/flex3rpr/ in an install space), by
-the benchmarks in bench/ and the CI helpers in scripts/ci/ (which put scripts/ on their path) and
+Imported by the tools beside it (nodes/ in a checkout, lib/flex3rpr/ in an install space), by
+the benchmarks in bench/ and the CI helpers in scripts/ci/ (which put nodes/ on their path) and
 by the tests under test/. JUnit is written with xml.etree: rosunit.junitxml (python3-rosunit
 1.15.8), which the ROS test tools use, cannot write a suite with cases: Result.xml_element() calls
 TestCaseResult.xml(testsuite), which takes no argument (TypeError), and its cdata() wrappers are

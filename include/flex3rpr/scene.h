@@ -29,9 +29,13 @@ typedef enum {
 } f3r_formulation;
 
 typedef enum {
-  F3R_INTEGRATOR_IDA = 0, /* SUNDIALS IDA: variable-order BDF, implicit (both formulations) */
-  F3R_INTEGRATOR_ERK = 1, /* SUNDIALS ARKODE ERKStep, explicit Runge-Kutta (minimal only) */
-  F3R_INTEGRATOR_DIRK = 2 /* SUNDIALS ARKODE ARKStep, diagonally implicit RK (minimal only) */
+  F3R_INTEGRATOR_IDA = 0,  /* SUNDIALS IDA: variable-order BDF, implicit (both formulations) */
+  F3R_INTEGRATOR_ERK = 1,  /* SUNDIALS ARKODE ERKStep, explicit Runge-Kutta (minimal only) */
+  F3R_INTEGRATOR_DIRK = 2, /* SUNDIALS ARKODE ARKStep, diagonally implicit RK (minimal only) */
+  /* registered integrators (kinds.h) take the values after the built-ins, up to this one: it
+   * makes them values of the enum in C++ too, where a value outside the enum's range is
+   * undefined */
+  F3R_INTEGRATOR_LAST_KIND = F3R_INTEGRATOR_MAX_KINDS - 1
 } f3r_integrator;
 
 /* The enums' names as scene files, --set, the CLI and the node's parameters spell them ("rigid",
