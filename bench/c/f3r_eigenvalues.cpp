@@ -67,26 +67,46 @@ std::string Group(const f3r_model* m, int i) {
   return "?";
 }
 
-// --erk-errors: the histogram of the groups that set ERK's steps, and the mean step.
-int ErkErrors(const char* path, double rtol, const char* table) {
+// A scene in the minimal formulation with one solver, its model and its simulation.
+struct Run {
   f3r_scene scene;
-  f3r_error err{};
-  if (f3r_scene_load(path, &scene, &err) != F3R_OK) {
-    std::fprintf(stderr, "%s\n", err.message);
-    return 1;
-  }
-  scene.formulation = F3R_FORMULATION_MINIMAL;
-  scene.integrator = F3R_INTEGRATOR_ERK;
-  scene.rtol = rtol;
-  scene.atol = rtol / 100;
-  std::snprintf(scene.table, sizeof scene.table, "%s", table ? table : "");
   f3r_model* model = nullptr;
   f3r_sim* sim = nullptr;
-  if (f3r_model_create(&scene, &model, &err) != F3R_OK ||
-      f3r_sim_create(model, nullptr, &sim, &err) != F3R_OK) {
-    std::fprintf(stderr, "%s\n", err.message);
-    return 1;
+  ~Run() {
+    f3r_sim_destroy(sim);
+    f3r_model_destroy(model);
+    f3r_scene_free(&scene);
   }
+};
+
+// Loads path into run with the solver given; false (said on stderr) on an error.
+bool Open(const char* path, f3r_integrator integrator, double rtol, double atol, const char* table,
+          Run* run) {
+  f3r_error err{};
+  run->scene = f3r_default_scene();
+  if (f3r_scene_load(path, &run->scene, &err) == F3R_OK) {
+    f3r_scene& s = run->scene;
+    s.formulation = F3R_FORMULATION_MINIMAL;
+    s.integrator = integrator;
+    s.rtol = rtol;
+    s.atol = atol;
+    std::snprintf(s.table, sizeof s.table, "%s", table ? table : "");
+    if (f3r_model_create(&s, &run->model, &err) == F3R_OK &&
+        f3r_sim_create(run->model, nullptr, &run->sim, &err) == F3R_OK)
+      return true;
+  }
+  std::fprintf(stderr, "%s\n", err.message);
+  return false;
+}
+
+// --erk-errors: the histogram of the groups that set ERK's steps, and the mean step.
+int ErkErrors(const char* path, double rtol, const char* table) {
+  Run run;
+  if (!Open(path, F3R_INTEGRATOR_ERK, rtol, rtol / 100, table, &run)) return 1;
+  const f3r_scene& scene = run.scene;
+  const f3r_model* model = run.model;
+  f3r_sim* sim = run.sim;
+  f3r_error err{};
   const int ny = f3r_state_size(model, F3R_FORMULATION_MINIMAL);
   SUNContext ctx = nullptr;
   SUNContext_Create(nullptr, &ctx);
@@ -129,9 +149,6 @@ int ErkErrors(const char* path, double rtol, const char* table) {
   N_VDestroy(ele);
   N_VDestroy(ewt);
   SUNContext_Free(&ctx);
-  f3r_sim_destroy(sim);
-  f3r_model_destroy(model);
-  f3r_scene_free(&scene);
   return 0;
 }
 
@@ -145,23 +162,12 @@ int main(int argc, char** argv) {
     return 2;
   }
   const double every = argc > 2 ? std::atof(argv[2]) : 0.005;
-  f3r_scene scene;
+  Run run;  // IDA's path at rtol 1e-10
+  if (!Open(argv[1], F3R_INTEGRATOR_IDA, 1e-10, 1e-12, nullptr, &run)) return 1;
+  const f3r_scene& scene = run.scene;
+  const f3r_model* model = run.model;
+  f3r_sim* sim = run.sim;
   f3r_error err{};
-  if (f3r_scene_load(argv[1], &scene, &err) != F3R_OK) {
-    std::fprintf(stderr, "%s\n", err.message);
-    return 1;
-  }
-  scene.formulation = F3R_FORMULATION_MINIMAL;
-  scene.integrator = F3R_INTEGRATOR_IDA;
-  scene.rtol = 1e-10;
-  scene.atol = 1e-12;
-  f3r_model* model = nullptr;
-  f3r_sim* sim = nullptr;
-  if (f3r_model_create(&scene, &model, &err) != F3R_OK ||
-      f3r_sim_create(model, nullptr, &sim, &err) != F3R_OK) {
-    std::fprintf(stderr, "%s\n", err.message);
-    return 1;
-  }
   f3r_workspace* ws = f3r_workspace_create(model);
   const int ny = f3r_state_size(model, F3R_FORMULATION_MINIMAL);
   const int n = ny - 1;  // the last component, W, is the work: no dynamics of its own
@@ -209,8 +215,5 @@ int main(int argc, char** argv) {
   }
   std::printf("]}\n");
   f3r_workspace_destroy(ws);
-  f3r_sim_destroy(sim);
-  f3r_model_destroy(model);
-  f3r_scene_free(&scene);
   return 0;
 }
