@@ -5,6 +5,7 @@
 
 #include "flex3rpr/kinds.h"
 #include "flex3rpr/scene.h"
+#include "names.h"
 
 #define COUNT(table) ((int)(sizeof(table) / sizeof(table)[0]))
 
@@ -32,16 +33,20 @@ static int value_of(const char* const* names, int count, const char* name) {
   return -1;
 }
 
-/* "a, b, c", cut short (but terminated) when list is too small. */
-static const char* join(const char* const* names, int count, char* list, size_t size) {
+const char* f3r_join_names(const char* const* names, int count, const char* separator, char* list,
+                           size_t size) {
   size_t used = 0;
   if (size) list[0] = '\0';
   for (int k = 0; k < count && used < size; ++k) {
-    const int n = snprintf(list + used, size - used, "%s%s", k ? ", " : "", names[k]);
+    const int n = snprintf(list + used, size - used, "%s%s", k ? separator : "", names[k]);
     if (n < 0) break;
     used += (size_t)n;
   }
   return list;
+}
+
+static const char* join(const char* const* names, int count, char* list, size_t size) {
+  return f3r_join_names(names, count, ", ", list, size);
 }
 
 /* The three functions scene.h declares for one enum: type_name, type_from_name and type_names.

@@ -7,6 +7,7 @@
 
 #include "flex3rpr/kinds.h"
 #include "flex3rpr/scene.h"
+#include "names.h"
 
 f3r_scene f3r_default_scene(void) {
   f3r_scene s;
@@ -505,13 +506,13 @@ static f3r_status validate_solver_and_run(const f3r_scene* s, f3r_error* err) {
                                                     ? F3R_FORMULATION_DAE
                                                     : F3R_FORMULATION_MINIMAL));
   if (s->table[0] && !kind->tables) {
-    char with_tables[256] = "";
+    const char* names[F3R_INTEGRATOR_MAX_KINDS];
+    int count = 0;
     for (int k = 0; k < f3r_integrator_kind_count(); ++k)
-      if (f3r_integrator_kind_at(k)->tables)
-        snprintf(with_tables + strlen(with_tables), sizeof with_tables - strlen(with_tables),
-                 "%s%s", with_tables[0] ? " or " : "", f3r_integrator_kind_at(k)->name);
+      if (f3r_integrator_kind_at(k)->tables) names[count++] = f3r_integrator_kind_at(k)->name;
+    char with_tables[256];
     return f3r_scene_error(err, "solver.table", NULL, "a Butcher table needs integrator %s",
-                           with_tables);
+                           f3r_join_names(names, count, " or ", with_tables, sizeof with_tables));
   }
   if (s->table[0] && !table_known(s->integrator, s->table)) {
     char allowed[512] = "";

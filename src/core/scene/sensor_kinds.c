@@ -1,9 +1,9 @@
 /* The sensor kinds (kinds.h): one row each, the only list of them. Their measurements are the
  * solve layer's (src/core/solve/sensor_measures.c), in the same order. */
-#include <stdio.h>
 #include <string.h>
 
 #include "flex3rpr/kinds.h"
+#include "names.h"
 
 static const f3r_sensor_kind kBuiltin[] = {
     {"encoders",
@@ -55,15 +55,9 @@ int f3r_sensor_kind_find(const char* name) {
 }
 
 const char* f3r_sensor_kind_names(char* list, size_t size) {
-  size_t used = 0;
-  if (size) list[0] = '\0';
-  for (int k = 0; k < f3r_sensor_kind_count() && used < size; ++k) {
-    const int n =
-        snprintf(list + used, size - used, "%s%s", k ? ", " : "", f3r_sensor_kind_at(k)->name);
-    if (n < 0) break;
-    used += (size_t)n;
-  }
-  return list;
+  const char* names[F3R_SENSOR_MAX_KINDS];
+  for (int k = 0; k < f3r_sensor_kind_count(); ++k) names[k] = f3r_sensor_kind_at(k)->name;
+  return f3r_join_names(names, f3r_sensor_kind_count(), ", ", list, size);
 }
 
 int f3r_sensor_kind_add(const f3r_sensor_kind* kind) {
