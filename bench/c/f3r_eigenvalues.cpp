@@ -3,6 +3,7 @@
 // real axis: what limits an explicit integrator's step (bench/eigenvalues writes the page).
 //   f3r_eigenvalues SCENE.yaml [EVERY_S] [TABLE ...]
 //   f3r_eigenvalues --erk-errors SCENE.yaml RTOL [TABLE]
+//   f3r_eigenvalues --lawson SCENE.yaml RTOL REFRESH_S [TABLE]   (below, at Lawson)
 // The second form runs ERK at RTOL (atol RTOL/100, as the benchmark) and, after each 0.1 ms,
 // names the state component whose weighted local error estimate (ARKODE's, |e_i| w_i) is the
 // largest of the last step: which motion the error test follows.
@@ -18,6 +19,7 @@
 #include <cmath>
 #include <complex>
 #include <cstdlib>
+#include <ctime>
 #include <string>
 #include <vector>
 
@@ -152,9 +154,118 @@ int ErkErrors(const char* path, double rtol, const char* table) {
   return 0;
 }
 
+double Cpu() {
+  timespec ts;
+  clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &ts);
+  return static_cast<double>(ts.tv_sec) + 1e-9 * static_cast<double>(ts.tv_nsec);
+}
+
+// --lawson: an integrating-factor (Lawson) Runge-Kutta method on the minimal ODE, a prototype
+// for #59. f = L y + N(y), L the columns of f's Jacobian for the modal coordinates and rates
+// (central differences) refreshed every `refresh` s, diagonalised once per refresh (L = V Λ V⁻¹);
+// each step applies the explicit table to v = exp(-(t - t_n) L) y, so the linearised elastic
+// oscillation is exact and only N is left to the steps. Embedded error estimate and a standard
+// step controller (atol = rtol / 100). Prints the path at 1 ms as CSV (t, x_p, y_p) and, on
+// stderr, CPU seconds, steps, rejections and right-hand sides. LAWSON_NO_L=1 sets L = 0: the same
+// loop as a plain explicit Runge-Kutta method, the control.
+int Lawson(const char* path, double rtol, double refresh, const char* table_name) {
+  using cvec = Eigen::VectorXcd;
+  Run run;
+  if (!Open(path, F3R_INTEGRATOR_IDA, 1e-10, 1e-12, nullptr, &run)) return 1;
+  const f3r_model* m = run.model;
+  f3r_workspace* ws = f3r_workspace_create(m);
+  const int ny = f3r_state_size(m, F3R_FORMULATION_MINIMAL), nz = (ny - 1) / 2;
+  ARKodeButcherTable tb =
+      f3r_stepper_load_table(0, table_name ? table_name : "ARKODE_FEHLBERG_13_7_8");
+  const int s = tb->stages, p = std::min(tb->q, tb->p);
+  const double atol = rtol / 100;
+  Eigen::VectorXd y = Eigen::Map<const Eigen::VectorXd>(f3r_sim_state(run.sim), ny);
+  Eigen::MatrixXd L(ny, ny);
+  Eigen::MatrixXcd V, Vinv;
+  cvec lam;
+  long rhs = 0, steps = 0, rejected = 0, refreshes = 0;
+  auto f = [&](double t, const Eigen::VectorXd& x, Eigen::VectorXd* out) {
+    ++rhs;
+    return f3r_explicit_rhs(m, t, x.data(), nullptr, out->data(), ws) == F3R_OK;
+  };
+  auto linearise = [&](double t) {
+    L.setZero();
+    Eigen::VectorXd xp = y, fp(ny), fm(ny);
+    for (int j = 3; j < 2 * nz; ++j) {
+      if (j >= nz && j < nz + 3) continue;  // the pose rates
+      const double h = 1e-7 * std::max(1.0, std::fabs(y[j]));
+      xp[j] = y[j] + h;
+      f(t, xp, &fp);
+      xp[j] = y[j] - h;
+      f(t, xp, &fm);
+      xp[j] = y[j];
+      L.col(j) = (fp - fm) / (2 * h);
+    }
+    if (std::getenv("LAWSON_NO_L")) L.setZero();
+    Eigen::EigenSolver<Eigen::MatrixXd> es(L);
+    V = es.eigenvectors();
+    lam = es.eigenvalues();
+    Vinv = V.inverse();
+    ++refreshes;
+  };
+  const double t0 = Cpu();
+  double t = 0.0, t_ref = -1e9, h = 1e-5;
+  std::vector<cvec> u(static_cast<size_t>(s));
+  Eigen::VectorXd Y(ny), F(ny), ynew(ny);
+  std::printf("t,x_p,y_p\n%.6g,%.17g,%.17g\n", 0.0, y[0], y[1]);
+  const double duration = run.scene.duration;
+  for (int k = 1; k * 1e-3 <= duration + 1e-12; ++k) {
+    const double t_out = k * 1e-3;
+    while (t < t_out - 1e-14) {
+      if (t - t_ref >= refresh - 1e-12) linearise(t), t_ref = t;
+      const double hh = std::min(h, t_out - t);
+      const cvec w0 = Vinv * y.cast<std::complex<double>>();
+      for (int i = 0; i < s; ++i) {
+        cvec acc = cvec::Zero(ny);
+        for (int j = 0; j < i; ++j) acc += tb->A[i][j] * u[static_cast<size_t>(j)];
+        const cvec e = (tb->c[i] * hh * lam).array().exp();
+        Y = (V * (e.array() * (w0 + hh * acc).array()).matrix()).real();
+        if (!f(t + tb->c[i] * hh, Y, &F)) return 1;
+        F -= L * Y;
+        u[static_cast<size_t>(i)] = (Vinv * F.cast<std::complex<double>>()).array() / e.array();
+      }
+      cvec sol = cvec::Zero(ny), est = cvec::Zero(ny);
+      for (int i = 0; i < s; ++i) {
+        sol += tb->b[i] * u[static_cast<size_t>(i)];
+        est += (tb->b[i] - tb->d[i]) * u[static_cast<size_t>(i)];
+      }
+      const cvec eh = (hh * lam).array().exp();
+      ynew = (V * (eh.array() * (w0 + hh * sol).array()).matrix()).real();
+      const Eigen::VectorXd err = (V * (eh.array() * (hh * est).array()).matrix()).real();
+      double sq = 0.0;
+      for (int n = 0; n < ny; ++n) {
+        const double w = err[n] / (rtol * std::fabs(y[n]) + atol);
+        sq += w * w;
+      }
+      const double norm = std::sqrt(sq / ny);
+      const double grow = norm > 0 ? 0.9 * std::pow(norm, -1.0 / (p + 1)) : 5.0;
+      if (norm <= 1.0) {
+        t += hh, y = ynew, ++steps;
+        if (hh == h) h = hh * std::min(5.0, std::max(0.2, grow));
+      } else {
+        ++rejected;
+        h = hh * std::min(1.0, std::max(0.2, grow));
+      }
+    }
+    std::printf("%.6g,%.17g,%.17g\n", t_out, y[0], y[1]);
+  }
+  std::fprintf(stderr, "cpu %.6f steps %ld rejected %ld rhs %ld refreshes %ld\n", Cpu() - t0, steps,
+               rejected, rhs, refreshes);
+  f3r_workspace_destroy(ws);
+  ARKodeButcherTable_Free(tb);
+  return 0;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
+  if (argc >= 5 && std::string(argv[1]) == "--lawson")
+    return Lawson(argv[2], std::atof(argv[3]), std::atof(argv[4]), argc > 5 ? argv[5] : nullptr);
   if (argc >= 4 && std::string(argv[1]) == "--erk-errors")
     return ErkErrors(argv[2], std::atof(argv[3]), argc > 4 ? argv[4] : nullptr);
   if (argc < 2) {
