@@ -119,6 +119,24 @@ static double cpu(void) {
   return ts.tv_sec + 1e-9 * ts.tv_nsec;
 }
 
+/* The path at 1 ms (t, X_p, Y_p) as CSV from either stepper's Evolve; 1 when it fails. */
+typedef int evolve_fn(void* mem, realtype tout, N_Vector y, realtype* t, int task);
+static int print_path(evolve_fn* evolve, const char* name, void* mem, N_Vector y, double duration) {
+  printf("t,x_p,y_p\n");
+  const double* yy = N_VGetArrayPointer(y);
+  printf("%.6g,%.17g,%.17g\n", 0.0, yy[0], yy[1]);
+  for (int k = 1; k * 1e-3 <= duration + 1e-12; ++k) {
+    realtype t = 0.0;
+    const int flag = evolve(mem, k * 1e-3, y, &t, ARK_NORMAL);
+    if (flag < 0) {
+      fprintf(stderr, "%s: %d at t = %g\n", name, flag, t);
+      return 1;
+    }
+    printf("%.6g,%.17g,%.17g\n", k * 1e-3, yy[0], yy[1]);
+  }
+  return 0;
+}
+
 /* The path under ARKStep IMEX; prints it and the counts as main's multirate run does. */
 static int run_imex(split* s, const f3r_scene* scene, N_Vector y, SUNContext ctx, double rtol,
                     int order, double t0) {
@@ -148,18 +166,7 @@ static int run_imex(split* s, const f3r_scene* scene, N_Vector y, SUNContext ctx
   ARKStepSetLSetupFrequency(ark, 1);
   ARKStepSetJacEvalFrequency(ark, 1);
   ARKStepSetPostprocessStepFn(ark, imex_after_step);
-  printf("t,x_p,y_p\n");
-  const double* yy = N_VGetArrayPointer(y);
-  printf("%.6g,%.17g,%.17g\n", 0.0, yy[0], yy[1]);
-  for (int k = 1; k * 1e-3 <= scene->duration + 1e-12; ++k) {
-    realtype t = 0.0;
-    const int flag = ARKStepEvolve(ark, k * 1e-3, y, &t, ARK_NORMAL);
-    if (flag < 0) {
-      fprintf(stderr, "ARKStepEvolve: %d at t = %g\n", flag, t);
-      return 1;
-    }
-    printf("%.6g,%.17g,%.17g\n", k * 1e-3, yy[0], yy[1]);
-  }
+  if (print_path(ARKStepEvolve, "ARKStepEvolve", ark, y, scene->duration)) return 1;
   const double seconds = cpu() - t0;
   long steps = 0, fe = 0, fi = 0, setups = 0, nni = 0;
   ARKStepGetNumSteps(ark, &steps);
@@ -230,18 +237,7 @@ int main(int argc, char** argv) {
   MRIStepSetMaxNumSteps(mri, 100000000L);
   if (argc > 5) MRIStepSetOrder(mri, atoi(argv[5]));
   MRIStepSetPostprocessStepFn(mri, after_step);
-  printf("t,x_p,y_p\n");
-  const double* yy = N_VGetArrayPointer(y);
-  printf("%.6g,%.17g,%.17g\n", 0.0, yy[0], yy[1]);
-  for (int k = 1; k * 1e-3 <= scene.duration + 1e-12; ++k) {
-    realtype t = 0.0;
-    const int flag = MRIStepEvolve(mri, k * 1e-3, y, &t, ARK_NORMAL);
-    if (flag < 0) {
-      fprintf(stderr, "MRIStepEvolve: %d at t = %g\n", flag, t);
-      return 1;
-    }
-    printf("%.6g,%.17g,%.17g\n", k * 1e-3, yy[0], yy[1]);
-  }
+  if (print_path(MRIStepEvolve, "MRIStepEvolve", mri, y, scene.duration)) return 1;
   const double seconds = cpu() - t0;
   long slow = 0, fast = 0, fe = 0, fi = 0;
   MRIStepGetNumSteps(mri, &slow);
