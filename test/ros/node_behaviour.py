@@ -46,6 +46,7 @@ class Recorder:
         self.lock = threading.Lock()
         self.status = None
         self.joints = []     # (t, {name: (position, effort)})
+        self.last_joint_stamp = None   # the exact stamp: from_sec(to_sec(s)) can lose 1 ns
         self.platform = {}   # t -> (x, y, phi)
         self.clock = None
         self.starts = {"joints": 0, "tf": 0}
@@ -63,6 +64,7 @@ class Recorder:
             if m.header.stamp.to_sec() == 0.0:
                 self.joints.clear()
                 self.starts["joints"] += 1
+            self.last_joint_stamp = m.header.stamp
             self.joints.append((m.header.stamp.to_sec(),
                                 {n: (p, e) for n, p, e in zip(m.name, m.position, m.effort)}))
 
@@ -153,9 +155,11 @@ class NodeBehaviour(unittest.TestCase):
         self.send(self.group, Float64MultiArray(data=[2.0, -1.0, 0.5, 0.3, -0.2, 0.1]))
         self.run_until(self.rec.sim_time() + 0.03)
         buf = self.tf_buffer
+        # TF is looked up at the JointState's own stamp: one nanosecond off, tf2 interpolates
+        # and the legs' ~1 m/s moves the points by 1e-9 m (a CI failure of 1.02e-9 m).
         with self.rec.lock:
-            t, joints = self.rec.joints[-1]
-        stamp = rospy.Time.from_sec(t)
+            _, joints = self.rec.joints[-1]
+            stamp = self.rec.last_joint_stamp
         self.rec.wait(lambda: buf.can_transform("world", "leg_3_beam_10", stamp), timeout=60,
                       what="beam frames in TF")
         p = buf.lookup_transform("world", "platform", stamp).transform
