@@ -289,7 +289,9 @@ class Summary(unittest.TestCase):
 
     def test_h_the_energy_guard(self):
         """Two configurations known to exit 0 with garbage trip the guard; a correct run does not."""
-        for args in (["--erk", "--table", "ARKODE_VERNER_8_5_6", "--rtol", "1e-4"],
+        # (Verner 6(5) at rtol 1e-4 was the explicit one until its steps evaluated all their
+        # stages, #59; Dormand-Prince 5(4), whose last stage is its solution, is unchanged)
+        for args in (["--erk", "--table", "ARKODE_DORMAND_PRINCE_7_4_5", "--rtol", "3e-2"],
                      ["--ida", "--max-order", "3", "--rtol", "1e-3"]):
             with self.subTest(args=args):
                 summary, p = T.run_sim(ARGS.sim, scene("paper_sim3_fixed_free"), *args)

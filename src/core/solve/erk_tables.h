@@ -5,6 +5,10 @@
 #ifndef FLEX3RPR_ERK_TABLES_H
 #define FLEX3RPR_ERK_TABLES_H
 
+#ifdef __cplusplus
+extern "C" {
+#endif
+
 typedef struct {
   const char* name;   /* e.g. "dormand_prince_8_5" */
   const char* source; /* where the coefficients come from (paper + where copied from) */
@@ -20,5 +24,9 @@ extern const int f3r_erk_table_count;
 
 /* The table called name, NULL when there is none. */
 const f3r_erk_table* f3r_erk_table_find(const char* name);
+
+#ifdef __cplusplus
+}
+#endif
 
 #endif

@@ -387,6 +387,7 @@ static f3r_status check_strokes(const f3r_sim* s, double t, f3r_error* err) {
  * exactly and restarts from a consistent state with the forces' right limit. */
 f3r_status f3r_sim_advance(f3r_sim* s, double t_out, f3r_error* err) {
   const f3r_model* m = s->model;
+  s->stepper.output_interval = t_out - s->t;
   while (t_out > s->t) {
     if (t_out - s->t <= 1e-13 * fmax(1.0, fabs(t_out))) { /* closer than IDA can step */
       s->t = t_out;

@@ -3,6 +3,7 @@
 
 #include <arkode/arkode_butcher_dirk.h>
 #include <arkode/arkode_butcher_erk.h>
+#include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
 
@@ -45,14 +46,37 @@ int f3r_stepper_roots(const f3r_stepper* st, double t, const double* y, double* 
   return f3r_event_roots(st->model, st->settings.formulation, y, st->locked, force, g);
 }
 
+/* SUNDIALS 6.4.1's ERKStep and ARKStep (erkStep_FullRHS, arkStep_FullRHS, ARK_FULLRHS_END) take
+ * the last stage's right-hand side for f(t_{n+1}, y_{n+1}), the next step's first stage,
+ * whenever |c[s-1] - 1| <= 1e-10 (their TINY). That is f at the step's solution only when the
+ * last row of A is b. Fehlberg 7(8), DOP853 and Verner's pairs have c[s-1] = 1 without it, and
+ * ran as another, less accurate and less stable method, with s-1 right-hand sides a step
+ * (docs/benchmarks/eigenvalues.md). Moving that c 1e-9 below 1 makes ARKODE evaluate the first
+ * stage afresh, with this library or any other; the stage's time moves by 1e-9 h. */
+static void start_each_step_afresh(ARKodeButcherTable table) {
+  if (!table) return;
+  const int last = table->stages - 1;
+  if (fabs(table->c[last] - 1.0) > 1e-10) return;
+  for (int j = 0; j < table->stages; ++j)
+    if (fabs(table->A[last][j] - table->b[j]) > 1e-10) {
+      table->c[last] = 1.0 - 1e-9;
+      return;
+    }
+}
+
 ARKodeButcherTable f3r_stepper_load_table(int implicit, const char* name) {
   if (!name) return NULL;
-  if (implicit) return ARKodeButcherTable_LoadDIRKByName(name);
-  const f3r_erk_table* own = f3r_erk_table_find(name);
-  if (!own) return ARKodeButcherTable_LoadERKByName(name);
-  /* ARKODE copies the arrays; it only takes them non-const */
-  return ARKodeButcherTable_Create(own->stages, own->order, own->embedded_order, (double*)own->c,
-                                   (double*)own->A, (double*)own->b, (double*)own->b_embedded);
+  ARKodeButcherTable table = NULL;
+  const f3r_erk_table* own = implicit ? NULL : f3r_erk_table_find(name);
+  if (implicit)
+    table = ARKodeButcherTable_LoadDIRKByName(name);
+  else if (!own)
+    table = ARKodeButcherTable_LoadERKByName(name);
+  else /* ARKODE copies the arrays; it only takes them non-const */
+    table = ARKodeButcherTable_Create(own->stages, own->order, own->embedded_order, (double*)own->c,
+                                      (double*)own->A, (double*)own->b, (double*)own->b_embedded);
+  start_each_step_afresh(table);
+  return table;
 }
 
 int f3r_stepper_explicit_rhs(realtype t, N_Vector y, N_Vector ydot, void* user) {
@@ -116,7 +140,8 @@ f3r_status f3r_arkode_configure(f3r_stepper* st, const f3r_arkode_calls* calls, 
    * (ARKODE's default) is no better in any of them and costs four right-hand sides an
    * interpolation; stop_at_outputs (the node's) makes every output a step end. */
   CHECK(calls->set_interpolant_degree(st->mem, 4));
-  if (st->settings.max_step > 0.0) CHECK(calls->set_max_step(st->mem, st->settings.max_step));
+  st->step_cap = st->settings.max_step > 0.0 ? st->settings.max_step : 0.0;
+  if (st->step_cap > 0.0) CHECK(calls->set_max_step(st->mem, st->step_cap));
   int directions[F3R_NROOTS];
   f3r_stepper_root_directions(directions);
   CHECK(calls->root_init(st->mem, F3R_NROOTS, f3r_stepper_explicit_roots));
@@ -153,6 +178,17 @@ f3r_status f3r_arkode_advance(f3r_stepper* st, double tout, double tstop, N_Vect
   (void)yp; /* y' costs a right-hand side: the simulation evaluates it when outputs need it */
   const f3r_arkode_calls* calls = st->arkode;
   CHECK(calls->set_stop_time(st->mem, tstop)); /* see stepper_ida.c */
+  /* The quartic Hermite output errs as the step's fifth power, the method's steps only as their
+   * eighth on Fehlberg 7(8): on rigid.yaml at rtol 1e-9, 1 ms outputs, steps of up to 46 ms put
+   * the outputs between them 5.3e-7 m off, where their ends are within 1e-16 m. Capped at four
+   * output intervals: 79 steps instead of 28, 5.3e-11 m (eight: 48, 1.8e-9 m; docs/solvers.md).
+   * Elastic links' steps are far shorter than such a cap. */
+  if (!st->settings.stop_at_outputs && st->output_interval > 0.0) {
+    double cap = 4.0 * st->output_interval;
+    if (st->settings.max_step > 0.0) cap = fmin(cap, st->settings.max_step);
+    if (cap != st->step_cap) CHECK(calls->set_max_step(st->mem, cap));
+    st->step_cap = cap;
+  }
   realtype t = *t_reached;
   const int flag = calls->evolve(st->mem, tout, y, &t, ARK_NORMAL);
   *t_reached = t;

@@ -54,6 +54,9 @@ typedef struct {
                            * the forces' right limit (f3r_stepper_force_time), as the consistent
                            * state there did: a held force that jumps at a breakpoint belongs to
                            * the segment after it */
+  double output_interval;    /* t_out - t of the simulation's current f3r_sim_advance: ERK and
+                              * DIRK interpolate outputs, so they cap their step at a few */
+  double step_cap;           /* ERK, DIRK: the largest step ARKODE was given (0: none) */
   int yp_stale;              /* 1: advance left y' unset (an explicit method needs no y'); the
                            * simulation evaluates it only when outputs ask for it */
   int locked[3];             /* the legs held at their stops (equations.h f3r_stop_locks), as the
@@ -177,7 +180,9 @@ void f3r_arkode_stats(const f3r_stepper* st, f3r_sim_stats* out);
  * getter counts 0), the others 0: the start of a back end's counters. */
 void f3r_arkode_counters(const f3r_stepper* st, f3r_sim_stats* raw);
 /* A Butcher table by name (ARKODE's, e.g. ARKODE_FEHLBERG_13_7_8, or erk_tables.c's), explicit
- * or diagonally implicit; NULL when there is none by that name. The caller frees it. */
+ * or diagonally implicit; NULL when there is none by that name. The caller frees it. A last c of
+ * 1 whose row of A is not b is moved 1e-9 below 1, so that ARKODE evaluates each step's first
+ * stage instead of reusing the last (stepper.c). */
 ARKodeButcherTable f3r_stepper_load_table(int implicit, const char* name);
 
 #ifdef __cplusplus
