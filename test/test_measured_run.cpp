@@ -115,4 +115,32 @@ TEST(MeasuredRun, EveryRunFailingAcceptsNothing) {
   f3r_scene_free(&scene);
 }
 
+// A fixed-free link already at 20 modes is checked on 18 modes and the static shapes' pair, not on
+// its own basis, which would measure none of the basis's error (mixed_rigid_free_free at 1e-6 m:
+// 8.1e-10 m measured against 2.3e-7 m true, accuracy_check.c); a fixed-pinned link at 20 and a
+// fixed-free one whose modes the scene fixes keep theirs.
+TEST(MeasuredRun, AFixedFreeLinkAtTwentyModesIsCheckedOnThePair) {
+  f3r_scene scene = Resolved({});
+  for (int i = 0; i < 3; ++i) {
+    scene.links[i].model = i == 2 ? F3R_LINK_FIXED_PINNED : F3R_LINK_FIXED_FREE;
+    scene.links[i].modes = F3R_MAX_MODES;
+    scene.links[i].static_correction = 0;
+  }
+  f3r_scene check;
+  ASSERT_EQ(f3r_accuracy_check_scene(&scene, 0, &check), 1);
+  for (int i = 0; i < 2; ++i) {
+    EXPECT_EQ(check.links[i].modes, F3R_MAX_MODES - 2) << i;
+    EXPECT_TRUE(check.links[i].static_correction) << i;
+    EXPECT_EQ(check.links[i].shape_mix_kind, F3R_SHAPE_PAIR) << i;
+  }
+  EXPECT_EQ(check.links[2].modes, F3R_MAX_MODES);
+  EXPECT_FALSE(check.links[2].static_correction);
+  scene.explicit_settings = F3R_EXPLICIT_MODES << 1;  // only link 1's modes are the scene's own
+  ASSERT_EQ(f3r_accuracy_check_scene(&scene, 1, &check), 1);
+  EXPECT_EQ(check.links[0].modes, F3R_MAX_MODES - 2);
+  EXPECT_EQ(check.links[1].modes, F3R_MAX_MODES);
+  EXPECT_FALSE(check.links[1].static_correction);
+  f3r_scene_free(&scene);
+}
+
 }  // namespace
