@@ -22,6 +22,7 @@ struct f3r_sim {
   f3r_stepper stepper;
   int ny;
   N_Vector y, yp;
+  N_Vector y_attempt; /* the consistent state an advance of the stepper starts from, for a retry */
   f3r_workspace* out_ws; /* scratch for outputs, so outputs never disturb the residual's */
   double held[F3R_MAX_Q];
   double t;            /* time of the current state */
@@ -139,6 +140,7 @@ f3r_status f3r_sim_create(const f3r_model* model, const f3r_solver_settings* set
   stp->model = model;
   stp->settings = s->settings;
   stp->held = s->held;
+  stp->first_step_scale = 1.0;
   f3r_status st = F3R_OK;
   double q[F3R_MAX_Q], v[F3R_MAX_Q];
   if (s->settings.formulation != F3R_FORMULATION_DAE &&
@@ -160,10 +162,11 @@ f3r_status f3r_sim_create(const f3r_model* model, const f3r_solver_settings* set
   }
   s->y = N_VNew_Serial(s->ny, stp->ctx);
   s->yp = N_VNew_Serial(s->ny, stp->ctx);
+  s->y_attempt = N_VNew_Serial(s->ny, stp->ctx);
   stp->ws = f3r_workspace_create(model);
   s->out_ws = f3r_workspace_create(model);
   s->impact_work = calloc(f3r_impact_work_size(model), sizeof(double));
-  if (!s->y || !s->yp || !stp->ws || !s->out_ws || !s->impact_work) {
+  if (!s->y || !s->yp || !s->y_attempt || !stp->ws || !s->out_ws || !s->impact_work) {
     st = f3r_error_set(err, F3R_ERR_MEMORY, "f3r_sim_create: out of memory");
     goto fail;
   }
@@ -196,6 +199,7 @@ void f3r_sim_destroy(f3r_sim* s) {
   s->ops->release(&s->stepper);
   if (s->y) N_VDestroy(s->y);
   if (s->yp) N_VDestroy(s->yp);
+  if (s->y_attempt) N_VDestroy(s->y_attempt);
   f3r_workspace_destroy(s->stepper.ws);
   f3r_workspace_destroy(s->out_ws);
   free(s->impact_work);
@@ -385,9 +389,31 @@ static f3r_status check_strokes(const f3r_sim* s, double t, f3r_error* err) {
 
 /* Integrates to t_out without crossing a breakpoint of the scripted inputs: at each one it stops
  * exactly and restarts from a consistent state with the forces' right limit. */
+/* ERKStep (SUNDIALS 6.4.1, erkStep_TakeStep) gives up when the right-hand side asks for a smaller
+ * step, which it does for a stage in a state it cannot evaluate. After a breakpoint the restart
+ * takes the step the run had reached, which a quiet segment before it may have made long: on
+ * table_pulses_fixed_free (2 modes + the pair a link) every table stopped 2 ms after the first
+ * pulse. An ARKODE attempt that fails so is made again from the state it started from, its first
+ * step a hundredth of the last one, up to this many times. */
+#define F3R_RETRIES_AFTER_A_REFUSED_STAGE 3
+
+/* 1 when the failed attempt from t_start is to be made again (the state and solver restored). */
+static int retry_refused_stage(f3r_sim* s, long asked_before, int* retries, f3r_error* err) {
+  if (!s->stepper.arkode || s->stepper.recoverable == asked_before ||
+      *retries >= F3R_RETRIES_AFTER_A_REFUSED_STAGE)
+    return 0;
+  ++*retries;
+  N_VScale(1.0, s->y_attempt, s->y);
+  s->stepper.first_step_scale = 1e-2;
+  const f3r_status st = s->ops->restart(&s->stepper, s->y, s->yp, s->t, err);
+  s->stepper.first_step_scale = 1.0;
+  return st == F3R_OK;
+}
+
 f3r_status f3r_sim_advance(f3r_sim* s, double t_out, f3r_error* err) {
   const f3r_model* m = s->model;
   s->stepper.output_interval = t_out - s->t;
+  int retries = 0;
   while (t_out > s->t) {
     if (t_out - s->t <= 1e-13 * fmax(1.0, fabs(t_out))) { /* closer than IDA can step */
       s->t = t_out;
@@ -404,8 +430,11 @@ f3r_status f3r_sim_advance(f3r_sim* s, double t_out, f3r_error* err) {
       limit = 1e300;
     double t_reached = s->t;
     int event = 0;
+    const long asked_before = s->stepper.recoverable;
+    N_VScale(1.0, s->y, s->y_attempt);
     f3r_status st =
         s->ops->advance(&s->stepper, t_stop, limit, s->y, s->yp, &t_reached, &event, err);
+    if (st != F3R_OK && retry_refused_stage(s, asked_before, &retries, err)) continue;
     if (st != F3R_OK) {
       s->t = t_reached;
       return st;

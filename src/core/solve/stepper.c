@@ -167,7 +167,7 @@ f3r_status f3r_arkode_restart(f3r_stepper* st, N_Vector y, N_Vector yp, double t
   /* The step the run had reached, not a fresh estimate: from a quiet state the estimate took
    * 0.13 s at once after a held force stepped, into a pose the legs cannot reach, and ERKStep
    * (SUNDIALS 6.4.1) does not recover from a right-hand side that asks for a smaller step. */
-  if (last > 0.0) CHECK(calls->set_init_step(st->mem, last));
+  if (last > 0.0) CHECK(calls->set_init_step(st->mem, last * st->first_step_scale));
   calls->counters(st, &st->counted);
   st->t_segment = t;
   return F3R_OK;

@@ -57,6 +57,8 @@ typedef struct {
   double output_interval;    /* t_out - t of the simulation's current f3r_sim_advance: ERK and
                               * DIRK interpolate outputs, so they cap their step at a few */
   double step_cap;           /* ERK, DIRK: the largest step ARKODE was given (0: none) */
+  double first_step_scale;   /* ERK, DIRK: a restart's first step is this times the last one (1;
+                              * the simulation's retry after a refused stage makes it smaller) */
   int yp_stale;              /* 1: advance left y' unset (an explicit method needs no y'); the
                            * simulation evaluates it only when outputs ask for it */
   int locked[3];             /* the legs held at their stops (equations.h f3r_stop_locks), as the
