@@ -140,7 +140,6 @@ f3r_status f3r_sim_create(const f3r_model* model, const f3r_solver_settings* set
   stp->model = model;
   stp->settings = s->settings;
   stp->held = s->held;
-  stp->first_step_scale = 1.0;
   f3r_status st = F3R_OK;
   double q[F3R_MAX_Q], v[F3R_MAX_Q];
   if (s->settings.formulation != F3R_FORMULATION_DAE &&
@@ -388,28 +387,8 @@ static f3r_status check_strokes(const f3r_sim* s, double t, f3r_error* err) {
 }
 
 /* Integrates to t_out without crossing a breakpoint of the scripted inputs: at each one it stops
- * exactly and restarts from a consistent state with the forces' right limit. */
-/* ERKStep (SUNDIALS 6.4.1, erkStep_TakeStep) gives up when the right-hand side asks for a smaller
- * step, which it does for a stage in a state it cannot evaluate. After a breakpoint the restart
- * takes the step the run had reached, which a quiet segment before it may have made long: on
- * table_pulses_fixed_free (2 modes + the pair a link) every table stopped 2 ms after the first
- * pulse. An ARKODE attempt that fails so is made again from the state it started from, its first
- * step a hundredth of the last one, up to this many times. */
-#define F3R_RETRIES_AFTER_A_REFUSED_STAGE 3
-
-/* 1 when the failed attempt from t_start is to be made again (the state and solver restored). */
-static int retry_refused_stage(f3r_sim* s, long asked_before, int* retries, f3r_error* err) {
-  if (!s->stepper.arkode || s->stepper.recoverable == asked_before ||
-      *retries >= F3R_RETRIES_AFTER_A_REFUSED_STAGE)
-    return 0;
-  ++*retries;
-  N_VScale(1.0, s->y_attempt, s->y);
-  s->stepper.first_step_scale = 1e-2;
-  const f3r_status st = s->ops->restart(&s->stepper, s->y, s->yp, s->t, err);
-  s->stepper.first_step_scale = 1.0;
-  return st == F3R_OK;
-}
-
+ * exactly and restarts from a consistent state with the forces' right limit. An attempt whose
+ * stage the right-hand side refused is made again from its start (f3r_arkode_retry_refused). */
 f3r_status f3r_sim_advance(f3r_sim* s, double t_out, f3r_error* err) {
   const f3r_model* m = s->model;
   s->stepper.output_interval = t_out - s->t;
@@ -434,7 +413,9 @@ f3r_status f3r_sim_advance(f3r_sim* s, double t_out, f3r_error* err) {
     N_VScale(1.0, s->y, s->y_attempt);
     f3r_status st =
         s->ops->advance(&s->stepper, t_stop, limit, s->y, s->yp, &t_reached, &event, err);
-    if (st != F3R_OK && retry_refused_stage(s, asked_before, &retries, err)) continue;
+    if (st != F3R_OK && f3r_arkode_retry_refused(&s->stepper, asked_before, &retries, s->y_attempt,
+                                                 s->y, s->t, err))
+      continue;
     if (st != F3R_OK) {
       s->t = t_reached;
       return st;

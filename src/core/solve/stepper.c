@@ -155,8 +155,8 @@ f3r_status f3r_arkode_configure(f3r_stepper* st, const f3r_arkode_calls* calls, 
  * too; nfe and nfi are zeroed only by Create and ReInit. So base takes only what was counted since
  * the last restart, and the counters are read again after the reset: before the first step a
  * reset is a FIRST_INIT, which zeroes some. */
-f3r_status f3r_arkode_restart(f3r_stepper* st, N_Vector y, N_Vector yp, double t, f3r_error* err) {
-  (void)yp;
+static f3r_status restart_with_step(f3r_stepper* st, N_Vector y, double t, double step_scale,
+                                    f3r_error* err) {
   const f3r_arkode_calls* calls = st->arkode;
   f3r_arkode_stats(st, &st->base);
   calls->counters(st, &st->counted); /* in base now, also if the reset fails */
@@ -167,10 +167,32 @@ f3r_status f3r_arkode_restart(f3r_stepper* st, N_Vector y, N_Vector yp, double t
   /* The step the run had reached, not a fresh estimate: from a quiet state the estimate took
    * 0.13 s at once after a held force stepped, into a pose the legs cannot reach, and ERKStep
    * (SUNDIALS 6.4.1) does not recover from a right-hand side that asks for a smaller step. */
-  if (last > 0.0) CHECK(calls->set_init_step(st->mem, last * st->first_step_scale));
+  if (last > 0.0) CHECK(calls->set_init_step(st->mem, last * step_scale));
   calls->counters(st, &st->counted);
   st->t_segment = t;
   return F3R_OK;
+}
+
+f3r_status f3r_arkode_restart(f3r_stepper* st, N_Vector y, N_Vector yp, double t, f3r_error* err) {
+  (void)yp;
+  return restart_with_step(st, y, t, 1.0, err);
+}
+
+/* ERKStep (SUNDIALS 6.4.1, erkStep_TakeStep) gives up when the right-hand side asks for a smaller
+ * step, which it does for a stage in a state it cannot evaluate. After a breakpoint the restart
+ * takes the step the run had reached, which a quiet segment before it may have made long: on
+ * table_pulses_fixed_free (2 modes + the pair a link) every table stopped 2 ms after the first
+ * pulse. Made again from its start with a hundredth of that step, every table ran it through. */
+#define F3R_RETRIES_AFTER_A_REFUSED_STAGE 3
+
+int f3r_arkode_retry_refused(f3r_stepper* st, long asked_before, int* retries, N_Vector start,
+                             N_Vector y, double t, f3r_error* err) {
+  if (!st->arkode || st->recoverable == asked_before ||
+      *retries >= F3R_RETRIES_AFTER_A_REFUSED_STAGE)
+    return 0;
+  ++*retries;
+  N_VScale(1.0, start, y);
+  return restart_with_step(st, y, t, 1e-2, err) == F3R_OK;
 }
 
 f3r_status f3r_arkode_advance(f3r_stepper* st, double tout, double tstop, N_Vector y, N_Vector yp,

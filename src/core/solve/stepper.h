@@ -57,8 +57,6 @@ typedef struct {
   double output_interval;    /* t_out - t of the simulation's current f3r_sim_advance: ERK and
                               * DIRK interpolate outputs, so they cap their step at a few */
   double step_cap;           /* ERK, DIRK: the largest step ARKODE was given (0: none) */
-  double first_step_scale;   /* ERK, DIRK: a restart's first step is this times the last one (1;
-                              * the simulation's retry after a refused stage makes it smaller) */
   int yp_stale;              /* 1: advance left y' unset (an explicit method needs no y'); the
                            * simulation evaluates it only when outputs ask for it */
   int locked[3];             /* the legs held at their stops (equations.h f3r_stop_locks), as the
@@ -175,6 +173,12 @@ struct f3r_arkode_calls {
 f3r_status f3r_arkode_configure(f3r_stepper* st, const f3r_arkode_calls* calls, f3r_error* err);
 /* ops->restart, ops->advance and ops->stats of both ARKODE back ends, through st->arkode. */
 f3r_status f3r_arkode_restart(f3r_stepper* st, N_Vector y, N_Vector yp, double t, f3r_error* err);
+/* After an advance that failed: 1 when it was an ARKODE back end's attempt whose stage the
+ * right-hand side refused (st->recoverable grew past asked_before), and the stepper has been
+ * restarted from start (copied into y) at t with a hundredth of the step, at most three times
+ * per *retries (stepper.c); the caller then advances again. */
+int f3r_arkode_retry_refused(f3r_stepper* st, long asked_before, int* retries, N_Vector start,
+                             N_Vector y, double t, f3r_error* err);
 f3r_status f3r_arkode_advance(f3r_stepper* st, double tout, double tstop, N_Vector y, N_Vector yp,
                               double* t_reached, int* event, f3r_error* err);
 void f3r_arkode_stats(const f3r_stepper* st, f3r_sim_stats* out);
