@@ -169,6 +169,15 @@ TEST(EnergyGuard, IgnoresRoundingAtRestAndTripsOnGarbage) {
 TEST(StopStress, MinimalIda) { Stress("minimal, IDA", ""); }
 TEST(StopStress, DaeIda) { Stress("dae, IDA", "solver: {formulation: dae}\n"); }
 TEST(StopStress, MinimalErk) { Stress("minimal, ERK", "solver: {integrator: erk}\n"); }
+// The accuracy check's table (accuracy_check.c) and the work-precision report's fastest at six
+// digits (#59): several legs in contact on them too.
+TEST(StopStress, MinimalErkTheChecksTable) {
+  Stress("minimal, ERK dormand_prince_8_5",
+         "solver: {integrator: erk, table: dormand_prince_8_5}\n");
+}
+TEST(StopStress, MinimalErkVerner87) {
+  Stress("minimal, ERK verner_8_7", "solver: {integrator: erk, table: verner_8_7}\n");
+}
 TEST(StopStress, MinimalDirk) { Stress("minimal, DIRK", "solver: {integrator: dirk}\n"); }
 
 }  // namespace
