@@ -26,6 +26,8 @@ METHODS = {
     "dae, IDA, analytic": ("F3R_FORMULATION_DAE", "F3R_INTEGRATOR_IDA", ""),
     "minimal, ERK Fehlberg 7(8)": ("F3R_FORMULATION_MINIMAL", "F3R_INTEGRATOR_ERK", ""),
     "minimal, ERK Dormand-Prince 5(4)": ("F3R_FORMULATION_MINIMAL", "F3R_INTEGRATOR_ERK", "ARKODE_DORMAND_PRINCE_7_4_5"),
+    "minimal, ERK DOP853 8(5)": ("F3R_FORMULATION_MINIMAL", "F3R_INTEGRATOR_ERK", "dormand_prince_8_5"),
+    "minimal, ERK Verner 8(7)": ("F3R_FORMULATION_MINIMAL", "F3R_INTEGRATOR_ERK", "verner_8_7"),
     "minimal, ERK Verner 9(8)": ("F3R_FORMULATION_MINIMAL", "F3R_INTEGRATOR_ERK", "verner_9_8"),
     "minimal, DIRK ESDIRK Kvaerno 5(4)": ("F3R_FORMULATION_MINIMAL", "F3R_INTEGRATOR_DIRK", ""),
 }
