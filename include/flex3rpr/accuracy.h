@@ -112,9 +112,10 @@ f3r_status f3r_accuracy_modes(const f3r_scene* scene, unsigned chosen, double ta
  * flexible link's basis richer (a fixed-free link one more mode and the static shapes' pair, a
  * fixed-pinned one two more modes; at most F3R_MAX_MODES functions, so a fixed-free link at 20
  * modes is checked on 18 and the pair), exact kinematics on, ERK with the dormand_prince_8_5
- * table (IDA at BDF order 5 on the dae formulation) and f3r_accuracy_check_rtol. With open_only, what the scene fixed itself (explicit_settings, the
- * BDF order) stays: the next configuration of a run that misses. Returns 1 when *check differs
- * from *run. *check is a view sharing run's tables. */
+ * table (IDA at BDF order 5 on the dae formulation) and f3r_accuracy_check_rtol. With open_only,
+ * what the scene fixed itself (explicit_settings, the BDF order) stays: the next configuration of
+ * a run that misses. Returns 1 when *check differs from *run. *check is a view sharing run's
+ * tables. */
 int f3r_accuracy_check_scene(const f3r_scene* run, int open_only, f3r_scene* check);
 
 /* The check's tolerance: a tenth of the run's, at most the request's value in metres (<= 0: no

@@ -73,8 +73,9 @@ static int richer_link(const f3r_link_scene* run, int open_modes, int open_corre
  * suite (15 scenes x 4 requests, docs/benchmarks/eigenvalues.md, "Fifth session") it measured
  * 0.78 to 1.1 of the true error where IDA's check read 0.70 to 33 (it called a met request unmet
  * on damped_slow_2s), and its checks took 26.0 s of CPU against IDA's 39.1 s. Not everywhere:
- * paper simulation 3 over 1.5 s costs it 1.4 to 1.8 times IDA's, and no cheap test tells the
- * cases apart beforehand. ERK's attempts are made again where a stage is refused (stepper.c). */
+ * paper simulation 3's inputs over 1.5 s cost it 1.1 to 1.8 times IDA's, and no cheap test tells
+ * the cases apart beforehand. ERK's attempts are made again where a stage is refused
+ * (stepper.c). */
 static int check_integrator(f3r_scene* check) {
   static const char kTable[] = "dormand_prince_8_5";
   if (check->formulation != F3R_FORMULATION_MINIMAL) {

@@ -410,7 +410,7 @@ f3r_status f3r_sim_advance(f3r_sim* s, double t_out, f3r_error* err) {
     double t_reached = s->t;
     int event = 0;
     const long asked_before = s->stepper.recoverable;
-    N_VScale(1.0, s->y, s->y_attempt);
+    if (s->stepper.arkode) N_VScale(1.0, s->y, s->y_attempt); /* only ARKODE's attempts retry */
     f3r_status st =
         s->ops->advance(&s->stepper, t_stop, limit, s->y, s->yp, &t_reached, &event, err);
     if (st != F3R_OK && f3r_arkode_retry_refused(&s->stepper, asked_before, &retries, s->y_attempt,
